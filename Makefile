@@ -1,0 +1,46 @@
+# Two commands matter on a fresh clone: `make sweep` and `make test`.
+PYTHON ?= python3.11
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+# Compiled numba code is cached inside the project (works for read-only installs too).
+export NUMBA_CACHE_DIR := $(CURDIR)/.numba_cache
+# One scene per core: threaded BLAS only slows the small dense solves (shared/numerics-notes.md).
+export OMP_NUM_THREADS := 1
+export OPENBLAS_NUM_THREADS := 1
+export MKL_NUM_THREADS := 1
+
+.PHONY: install test test-all sweep quick figures bench clean-cache clean
+
+$(STAMP): pyproject.toml
+	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "error: $(PYTHON) not found; set PYTHON=/path/to/python3.11"; exit 1; }
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e .
+	touch $(STAMP)
+
+install: $(STAMP)
+
+test: $(STAMP)
+	$(PY) -m pytest -q
+
+test-all: $(STAMP)
+	$(PY) -m pytest -q --runslow
+
+sweep: $(STAMP)
+	$(VENV)/bin/ehd sweep sweeps/paper.toml
+
+quick: $(STAMP)
+	$(VENV)/bin/ehd sweep sweeps/quick.toml
+
+figures: $(STAMP)
+	$(VENV)/bin/ehd figures results/paper.zarr --out figures
+
+bench: $(STAMP)
+	$(PY) benchmarks/bench_solver.py
+
+clean-cache:
+	rm -rf .numba_cache
+
+clean: clean-cache
+	rm -rf $(VENV) .pytest_cache

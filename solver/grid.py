@@ -1,0 +1,81 @@
+"""Radial grid for the film: uniform where the contact forms, stretched outside.
+
+Radii are dimensionless (``R = r / sqrt(a x1)``). The grid is built once per resolution in
+*reference units* (uniform inner region ``[0, 1]``) and stretched by a factor ``radius`` for a
+scene, so the elastic matrix is built once per resolution and only rescaled:
+``D(lam R, lam C) = lam D(R, C)`` gives ``K(lam) = lam K_ref``.
+
+The finite volumes live in ``s = R^2 / 2`` (``R dR = ds``); faces sit at the midpoints in ``s``,
+so cell ``i`` covers ``[s_face[i-1], s_face[i]]`` with area ``area[i]`` (``Int P R dR`` of a
+constant cell pressure is ``P * area``). The last node is the outer boundary; its "cell" runs from
+the last face to ``R_L`` and the pressure beyond decays like the rigid far field ``(R_L/R)^4``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from .elasticity import influence_matrix
+
+__all__ = ["RadialGrid", "reference_grid", "scaled_grid"]
+
+
+@dataclass(frozen=True)
+class RadialGrid:
+    """Nodes, faces and cell areas of a radial grid (dimensionless, see module docstring)."""
+
+    radius: np.ndarray  # (N,) node radii R_i, radius[0] = 0
+    s: np.ndarray  # (N,) s_i = R_i^2 / 2
+    s_face: np.ndarray  # (N-1,) face positions in s (midpoints)
+    area: np.ndarray  # (N,) cell areas in s; the last includes the far-field tail R_L^2/2
+    influence: np.ndarray  # (N, N) deflection per unit cell pressure, W = influence @ P
+    inner_radius: float  # end of the uniform inner region
+
+    @property
+    def size(self) -> int:
+        return self.radius.size
+
+
+def _reference_nodes(n_inner: int, stretch: float, outer_extent: float, max_rel: float):
+    """Uniform nodes on [0, 1] with ``n_inner`` cells, then cell sizes growing by ``stretch``
+    (capped at ``max_rel * R``) up to ``outer_extent``."""
+    h = 1.0 / n_inner
+    nodes = list(np.linspace(0.0, 1.0, n_inner + 1))
+    while nodes[-1] < outer_extent:
+        h = min(h * stretch, max_rel * nodes[-1])
+        nodes.append(nodes[-1] + h)
+    return np.array(nodes)
+
+
+@lru_cache(maxsize=16)
+def reference_grid(n_inner: int, stretch: float, outer_extent: float, max_rel: float) -> RadialGrid:
+    """Grid with a uniform inner region ``[0, 1]`` (cached: the elastic matrix is the cost)."""
+    radius = _reference_nodes(n_inner, stretch, outer_extent, max_rel)
+    s = 0.5 * radius**2
+    s_face = 0.5 * (s[1:] + s[:-1])
+    face_radius = np.sqrt(2.0 * s_face)
+    area = np.empty_like(s)
+    area[0] = s_face[0]
+    area[1:-1] = np.diff(s_face)
+    # last cell [s_face[-1], s_L] plus the tail: Int_{R_L}^inf (R_L/R)^4 R dR = R_L^2 / 2
+    area[-1] = (s[-1] - s_face[-1]) + 0.5 * radius[-1] ** 2
+    K = influence_matrix(radius, face_radius)
+    for a in (radius, s, s_face, area, K):
+        a.setflags(write=False)
+    return RadialGrid(radius, s, s_face, area, K, 1.0)
+
+
+def scaled_grid(ref: RadialGrid, radius: float) -> RadialGrid:
+    """The reference grid stretched so that its uniform region ends at ``radius``."""
+    lam = float(radius)
+    return RadialGrid(
+        radius=ref.radius * lam,
+        s=ref.s * lam**2,
+        s_face=ref.s_face * lam**2,
+        area=ref.area * lam**2,
+        influence=ref.influence * lam,
+        inner_radius=lam,
+    )

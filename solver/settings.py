@@ -1,0 +1,112 @@
+"""Accuracy presets and input validation.
+
+A preset fixes every numerical choice that can change an answer: the radial grid (cells across
+the uniform inner region, stretch of the outer cells, how far the grid reaches), the time-step
+tolerance, and the two thresholds that decide where the analytic rigid solution is used
+(``switch``: W(0)/X at which the coupled solution takes over on approach; ``release``: max|W|/X
+below which it hands back on the way out).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, replace
+
+__all__ = ["Numerics", "PRESETS", "resolve", "validate_scene", "STOKES_RANGE", "EPS_RANGE"]
+
+STOKES_RANGE = (0.0, 1.0e4)  # open below, closed above
+EPS_RANGE = (0.0, 0.1)  # eps << 1 is the model's premise; at 0.1 the start x0 is only 2.5 x1
+
+
+@dataclass(frozen=True)
+class Numerics:
+    """Numerical settings of one scene (all dimensionless)."""
+
+    n_inner: int  # cells across the uniform inner region of the grid
+    stretch: float  # growth factor of successive outer cells
+    outer_extent: float  # grid end, in units of the inner region's radius
+    max_rel: float  # largest outer cell relative to its radius
+    inner_factor: float  # inner radius = inner_factor * max(Hertz contact radius, 2)
+    rtol: float  # local error tolerance of the time stepping
+    switch: float  # W(0)/X at which the rigid approach hands over to the coupled solution
+    release: float  # max|W|/X below which the departing spheres are rigid again
+    max_steps: int  # step budget: a scene that needs more fails with status "max_steps"
+    save_profiles: bool = True  # keep P(R), W(R) at every step (sweeps switch this off)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+PRESETS = {
+    "fast": Numerics(n_inner=24, stretch=1.15, outer_extent=60.0, max_rel=0.3, inner_factor=1.5,
+                     rtol=1e-3, switch=0.05, release=0.01, max_steps=20000),
+    "standard": Numerics(n_inner=48, stretch=1.1, outer_extent=60.0, max_rel=0.2, inner_factor=1.5,
+                         rtol=2e-4, switch=0.01, release=0.003, max_steps=50000),
+    "fine": Numerics(n_inner=96, stretch=1.06, outer_extent=80.0, max_rel=0.12, inner_factor=1.5,
+                     rtol=3e-5, switch=0.002, release=0.0005, max_steps=200000),
+}
+
+_BOUNDS = {
+    "n_inner": (4, 2000),
+    "stretch": (1.0, 2.0),
+    "outer_extent": (5.0, 1e4),
+    "max_rel": (0.01, 1.0),
+    "inner_factor": (0.5, 10.0),
+    "rtol": (1e-10, 0.1),
+    "switch": (1e-8, 1.0),
+    "release": (1e-9, 1.0),
+    "max_steps": (10, 10**8),
+}
+
+
+def _check_number(name, value, lo, hi, *, open_lo=True):
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    ok_lo = v > lo if open_lo else v >= lo
+    if not ok_lo or v > hi:
+        lb = "(" if open_lo else "["
+        raise ValueError(f"{name} = {value!r} is outside its valid range {lb}{lo:g}, {hi:g}]")
+    return v
+
+
+def validate_scene(stokes, eps):
+    """Check St and eps; return them as floats or raise ValueError naming the parameter."""
+    st = _check_number("St (Stokes number)", stokes, *STOKES_RANGE)
+    ep = _check_number("eps (elasticity parameter)", eps, *EPS_RANGE)
+    return st, ep
+
+
+def resolve(accuracy: str = "standard", **overrides) -> Numerics:
+    """The preset ``accuracy`` with explicit overrides applied and checked."""
+    if accuracy not in PRESETS:
+        raise ValueError(f"accuracy must be one of {sorted(PRESETS)}, got {accuracy!r}")
+    numerics = PRESETS[accuracy]
+    clean = {}
+    for name, value in overrides.items():
+        if value is None:
+            continue
+        if name == "save_profiles":
+            clean[name] = bool(value)
+            continue
+        if name not in _BOUNDS:
+            valid = sorted([*_BOUNDS, "save_profiles"])
+            raise ValueError(f"unknown numerical setting {name!r}; valid settings: {valid}")
+        lo, hi = _BOUNDS[name]
+        v = _check_number(name, value, lo, hi, open_lo=name not in ("stretch",))
+        if name in ("n_inner", "max_steps"):
+            if v != int(v):
+                raise ValueError(f"{name} must be a whole number, got {value!r}")
+            v = int(v)
+        clean[name] = v
+    numerics = replace(numerics, **clean)
+    if numerics.release >= numerics.switch:
+        raise ValueError(
+            f"release ({numerics.release:g}) must be smaller than switch ({numerics.switch:g}): "
+            "the coupled solution hands back only once the deformation has relaxed below the "
+            "level at which it took over"
+        )
+    return numerics

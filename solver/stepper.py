@@ -1,0 +1,341 @@
+"""The coupled time loop, entirely compiled (``nogil``): variable-step BDF2 on
+Reynolds + elasticity + particle motion, Newton-coupled, with error-controlled steps.
+
+Dimensionless, scale ``x1`` (physics.md); ``T`` is time in units of ``x1 / v0``.
+
+- Step: ``y_{n+1} - a1 y_n - a2 y_{n-1} = b dt f(y_{n+1})`` (variable-step BDF2; the first step is
+  implicit Euler), solved for ``(P, X, V)`` by a chord-Newton iteration whose LU is reused while
+  ``b dt`` stays within 30 % of the factorised value; a stalled iteration first refreshes the
+  Jacobian, then halves the step.
+- Error: the local error is estimated from the distance to the quadratic predictor,
+  ``dt / (t_{n+1} - t_{n-2}) |y_{n+1} - y_pred|``, measured on the gap (relative, floor
+  ``GAP_FLOOR``), the pressure (floor ``PRESSURE_FLOOR`` of its maximum: a purely relative test
+  collapses the step when the pressure passes through zero), ``X`` and ``V``; steps grow at most
+  2x (BDF2 zero-stability needs < 2.41x) and are kept when the proposed growth is under 1.2x, so
+  the LU can be reused.
+- End (rest criterion): the loop stops once the deformation has relaxed, ``max|W| / X < release``
+  with ``X > 0``, and the remaining rigid motion can only relax it further (separating, ``V < 0``,
+  or past the rigid deformation peak, ``V < 0.4/St``). From there the motion is rigid and exact
+  (rigid.py).
+"""
+
+import numpy as np
+
+from ._jit import jit
+from .film import energy_rates, face_fluxes, gap, jacobian, residual
+from .linalg import lu_factor, lu_solve
+
+# status codes of the loop (solver/collision.py maps them to names and messages)
+RUNNING = 0
+OK = 1
+MAX_STEPS = 2
+STEP_UNDERFLOW = 3
+NONFINITE = 4
+
+GAP_FLOOR = 1e-2  # x1 units: below this the gap error counts as absolute
+PRESSURE_FLOOR = 0.05  # fraction of max|P| below which the pressure error counts as absolute
+NEWTON_KAPPA = 0.05  # Newton stops when its predicted remaining error is this fraction of tol
+MAX_NEWTON = 7
+SAFETY = 0.9
+
+# columns of the series array
+SERIES = ("T", "X", "V", "F", "W0", "H_min", "R_H_min", "E_k", "E_s", "dissipated", "H0", "W_absmax")
+N_SERIES = len(SERIES)
+
+
+@jit
+def _grow(a, rows):
+    out = np.empty((rows, a.shape[1]))
+    out[: a.shape[0]] = a
+    return out
+
+
+@jit
+def _norm(dp, dx, dv, dh, p, x, v, h, rtol):
+    """Max-norm of a change, each component relative to ``rtol`` times its own scale."""
+    pmax = 0.0
+    for i in range(p.size):
+        pmax = max(pmax, abs(p[i]))
+    p_floor = PRESSURE_FLOOR * pmax + 1e-12
+    e = abs(dx) / (1.0 + abs(x))
+    e = max(e, abs(dv) / (0.1 + abs(v)))
+    for i in range(h.size):
+        e = max(e, abs(dh[i]) / (abs(h[i]) + GAP_FLOOR))
+        e = max(e, abs(dp[i]) / (abs(p[i]) + p_floor))
+    return e / rtol
+
+
+@jit
+def _matvec(a, x, out):
+    n = x.size
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += a[i, j] * x[j]
+        out[i] = acc
+
+
+@jit
+def integrate(s, s_face, area, influence, stokes, x_init, v_init, p_init, t_init, dissipated_init,
+              rtol, dt_init, dt_min, max_steps, release, save_profiles):
+    """Integrate from ``(T, X, V, P) = (t_init, x_init, v_init, p_init)`` until the deformation
+    has relaxed (module docstring) or a failure.
+
+    Returns
+    -------
+    status : int
+        ``OK``, ``MAX_STEPS``, ``STEP_UNDERFLOW`` or ``NONFINITE``.
+    counters : (5,) int64
+        accepted steps, rejected steps, Newton iterations, LU factorisations, Jacobians.
+    series : (rows, N_SERIES) float
+        One row per accepted step (the first is the initial state); columns ``SERIES``.
+    pressure, deformation : (rows, N) float
+        Profiles at each row when ``save_profiles``, else (0, N).
+    """
+    n = s.size
+    m = n + 2
+    # current and past solutions y = (P, X, V), and gaps
+    y0 = np.empty(m)
+    y0[:n] = p_init
+    y0[n] = x_init
+    y0[n + 1] = v_init
+    y1 = y0.copy()  # history slots: never read uninitialised (0 * NaN garbage is NaN)
+    y2 = y0.copy()
+    w = np.empty(n)
+    h = np.empty(n)
+    gap(s, influence, x_init, p_init, w, h)
+    h0 = h.copy()
+    h1 = h.copy()
+    t0 = t_init
+    t1 = t_init
+    t2 = t_init
+    n_hist = 1
+
+    y = np.empty(m)
+    y_pred = np.empty(m)
+    res = np.empty(m)
+    q = np.empty(n - 1)
+    h_hist = np.empty(n)
+    dh = np.empty(n)
+    kdp = np.empty(n)
+    jac = np.empty((m, m))
+    dres_dh = np.empty((n, 3))
+    piv = np.empty(m, dtype=np.int64)
+    lu_valid = False
+    bh_lu = 1.0
+
+    rows = 256
+    series = np.empty((rows, N_SERIES))
+    n_prof = rows if save_profiles else 0
+    p_hist = np.empty((n_prof, n))
+    w_hist = np.empty((n_prof, n))
+    counters = np.zeros(5, dtype=np.int64)
+
+    # initial row
+    face_fluxes(s, s_face, y0[:n], h, q)
+    strain, diss_rate = energy_rates(s, area, stokes, x_init, y0[:n], w, h, q)
+    dissipated = dissipated_init
+    n_rows = 0
+
+    dt = dt_init
+    status = RUNNING
+    err = 0.0
+    while True:
+        # ---- record the accepted state (also the initial one) -------------------------------
+        if n_rows == rows:
+            rows *= 2
+            series = _grow(series, rows)
+            if save_profiles:
+                p_hist = _grow(p_hist, rows)
+                w_hist = _grow(w_hist, rows)
+        x = y0[n]
+        v = y0[n + 1]
+        force = 0.0
+        imin = 0
+        wmax = 0.0
+        for i in range(n):
+            force += area[i] * y0[i]
+            if h[i] < h[imin]:
+                imin = i
+            wmax = max(wmax, abs(w[i]))
+        row = series[n_rows]
+        row[0] = t0
+        row[1] = x
+        row[2] = v
+        row[3] = force
+        row[4] = w[0]
+        row[5] = h[imin]
+        row[6] = np.sqrt(2.0 * s[imin])
+        row[7] = v * v
+        row[8] = strain
+        row[9] = dissipated
+        row[10] = h[0]
+        row[11] = wmax
+        if save_profiles:
+            p_hist[n_rows] = y0[:n]
+            w_hist[n_rows] = w
+        n_rows += 1
+
+        if status != RUNNING:
+            break
+        if x > 0.0 and wmax < release * x and (v < 0.0 or v < 0.4 / stokes) and counters[0] > 0:
+            status = OK
+            break
+
+        # ---- attempt steps until one is accepted ---------------------------------------------
+        accepted = False
+        while not accepted:
+            if counters[0] >= max_steps:
+                status = MAX_STEPS
+                break
+            if dt < dt_min:
+                status = STEP_UNDERFLOW
+                break
+            t_new = t0 + dt
+            if n_hist == 1:
+                a1 = 1.0
+                a2 = 0.0
+                b = 1.0
+            else:
+                om = dt / (t0 - t1)
+                a1 = (1.0 + om) ** 2 / (1.0 + 2.0 * om)
+                a2 = -(om**2) / (1.0 + 2.0 * om)
+                b = (1.0 + om) / (1.0 + 2.0 * om)
+            bh = b * dt
+            for i in range(n):
+                h_hist[i] = a1 * h0[i] + a2 * h1[i]
+            x_hist = a1 * y0[n] + a2 * y1[n]
+            v_hist = a1 * y0[n + 1] + a2 * y1[n + 1]
+            # predictor: polynomial through the available history
+            if n_hist >= 3:
+                l0 = (t_new - t1) * (t_new - t2) / ((t0 - t1) * (t0 - t2))
+                l1 = (t_new - t0) * (t_new - t2) / ((t1 - t0) * (t1 - t2))
+                l2 = (t_new - t0) * (t_new - t1) / ((t2 - t0) * (t2 - t1))
+                for k in range(m):
+                    y_pred[k] = l0 * y0[k] + l1 * y1[k] + l2 * y2[k]
+                err_fac = dt / (t_new - t2)
+            elif n_hist == 2:
+                l0 = (t_new - t1) / (t0 - t1)
+                for k in range(m):
+                    y_pred[k] = l0 * y0[k] + (1.0 - l0) * y1[k]
+                err_fac = dt / (t_new - t1)
+            else:
+                y_pred[:] = y0
+                err_fac = 0.0
+            y[:] = y_pred
+
+            fresh = False
+            if (not lu_valid) or abs(bh / bh_lu - 1.0) > 0.3:
+                gap(s, influence, y[n], y[:n], w, h)
+                jacobian(s, s_face, area, influence, stokes, bh, y[:n], h, jac, dres_dh)
+                counters[4] += 1
+                counters[3] += 1
+                lu_valid = lu_factor(jac, piv)
+                bh_lu = bh
+                fresh = True
+                if not lu_valid:
+                    status = NONFINITE
+                    break
+
+            converged = False
+            norm_prev = 0.0
+            for it in range(MAX_NEWTON):
+                gap(s, influence, y[n], y[:n], w, h)
+                bad = False
+                for i in range(n):
+                    if not (h[i] > 0.0) or not np.isfinite(h[i]):
+                        bad = True
+                if bad:
+                    break
+                residual(s, s_face, area, stokes, bh, h_hist, x_hist, v_hist, y[n], y[n + 1],
+                         y[:n], h, q, res)
+                for k in range(m):
+                    res[k] = -res[k]
+                lu_solve(jac, piv, res)
+                for k in range(m):
+                    y[k] += res[k]
+                counters[2] += 1
+                _matvec(influence, res[:n], kdp)
+                for i in range(n):
+                    dh[i] = res[n] + kdp[i]
+                norm = _norm(res[:n], res[n], res[n + 1], dh, y[:n], y[n], y[n + 1], h, rtol)
+                if not np.isfinite(norm):
+                    break
+                if it == 0:
+                    if norm < 1e-3 * NEWTON_KAPPA:
+                        converged = True
+                        break
+                else:
+                    rate = norm / norm_prev
+                    if rate >= 1.0:
+                        break
+                    if rate / (1.0 - rate) * norm < NEWTON_KAPPA:
+                        converged = True
+                        break
+                norm_prev = norm
+            if not converged:
+                if fresh:
+                    dt *= 0.5
+                    counters[1] += 1
+                lu_valid = False
+                continue
+
+            gap(s, influence, y[n], y[:n], w, h)
+            positive = True
+            for i in range(n):
+                if not (h[i] > 0.0):
+                    positive = False
+            if not positive:
+                dt *= 0.5
+                counters[1] += 1
+                continue
+            # local error estimate
+            if err_fac > 0.0:
+                for k in range(m):
+                    res[k] = err_fac * (y[k] - y_pred[k])
+                _matvec(influence, res[:n], kdp)
+                for i in range(n):
+                    dh[i] = res[n] + kdp[i]
+                err = _norm(res[:n], res[n], res[n + 1], dh, y[:n], y[n], y[n + 1], h, 1.0) / rtol
+            else:
+                err = 0.0
+            if not np.isfinite(err):
+                status = NONFINITE
+                break
+            if err > 1.0:
+                dt *= max(0.2, SAFETY * err ** (-1.0 / 3.0))
+                counters[1] += 1
+                continue
+            accepted = True
+
+        if not accepted:
+            continue  # records the last state with the failure status, then stops
+
+        # ---- shift history -------------------------------------------------------------------
+        y2[:] = y1
+        y1[:] = y0
+        y0[:] = y
+        h1[:] = h0
+        h0[:] = h
+        t2 = t1
+        t1 = t0
+        t0 = t0 + dt
+        n_hist = min(n_hist + 1, 3)
+        counters[0] += 1
+
+        face_fluxes(s, s_face, y0[:n], h, q)
+        strain_new, diss_new = energy_rates(s, area, stokes, y0[n], y0[:n], w, h, q)
+        dissipated += 0.5 * (diss_rate + diss_new) * dt
+        strain = strain_new
+        diss_rate = diss_new
+
+        if err > 0.0:
+            factor = min(2.0, max(0.2, SAFETY * err ** (-1.0 / 3.0)))
+        else:
+            factor = 2.0
+        if 1.0 <= factor < 1.2:
+            factor = 1.0
+        dt *= factor
+
+    return status, counters, series[:n_rows], p_hist[: min(n_rows, p_hist.shape[0])], \
+        w_hist[: min(n_rows, w_hist.shape[0])]
