@@ -330,9 +330,11 @@ def _coupled(stokes, eps, accuracy, numerics, x_start, x_switch, tau_per_t):
     t_c, x_c, v_c = cols["T"], cols["X"], cols["V"]
 
     # rigid approach (analytic) up to the hand-over
-    x_head = x_start * np.exp(-np.linspace(0.0, math.log(x_start / x_switch), 60))[:-1]
-    t_head, v_head = _rigid_path(x_start, 1.0, 0.0, stokes, x_head)
-    blocks = [_series_block(t_head, x_head, v_head, tau_per_t, 0, 1.0 - v_head**2)]
+    blocks = []
+    if x_switch < x_start:
+        x_head = x_start * np.exp(-np.linspace(0.0, math.log(x_start / x_switch), 60))[:-1]
+        t_head, v_head = _rigid_path(x_start, 1.0, 0.0, stokes, x_head)
+        blocks.append(_series_block(t_head, x_head, v_head, tau_per_t, 0, 1.0 - v_head**2))
     blocks.append(_series_block(
         t_c, x_c, v_c, tau_per_t, 1, cols["dissipated"], h_min=cols["H_min"], w0=cols["W0"],
         force=cols["F"], strain=cols["E_s"], r_h_min=cols["R_H_min"]))
