@@ -10,7 +10,7 @@ export OMP_NUM_THREADS := 1
 export OPENBLAS_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: install test test-all sweep quick figures bench clean-cache clean
+.PHONY: install test test-all sweep quick figures bench bench-sweep clean-cache clean
 
 $(STAMP): pyproject.toml
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "error: $(PYTHON) not found; set PYTHON=/path/to/python3.11"; exit 1; }
@@ -35,9 +35,13 @@ quick: $(STAMP)
 
 figures: $(STAMP)
 	$(VENV)/bin/ehd figures results/paper.zarr --out figures
+	$(VENV)/bin/ehd paper-figures --out figures
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_solver.py
+
+bench-sweep: $(STAMP)
+	$(PY) benchmarks/bench_sweep.py
 
 clean-cache:
 	rm -rf .numba_cache

@@ -1,4 +1,4 @@
-"""Command line: ``ehd run`` (one scene); further subcommands register in ``COMMANDS``.
+"""Command line: ``ehd run`` (one scene); other modules add subcommands (``COMMAND_MODULES``).
 
 Exit codes: 0 success, 1 a scene failed (its status and message are printed), 2 bad input.
 """
@@ -112,16 +112,28 @@ def _build_run(sub) -> None:
     p.set_defaults(func=cmd_run)
 
 
-# name -> builder(subparsers); other modules add their subcommands here
+# name -> builder(subparsers) of the commands defined here
 COMMANDS = {"run": _build_run}
+# modules that add their own subcommands through ``register(subparsers)``
+COMMAND_MODULES = ("pipeline.sweep_commands", "pipeline.scene_commands")
 
 
 def _parser() -> argparse.ArgumentParser:
+    import importlib
+
     parser = argparse.ArgumentParser(
         prog="ehd", description="Elastohydrodynamic collision of two elastic spheres in a viscous fluid.")
     sub = parser.add_subparsers(dest="command", required=True)
     for build in COMMANDS.values():
         build(sub)
+    for name in COMMAND_MODULES:
+        try:
+            module = importlib.import_module(name)
+        except ModuleNotFoundError as exc:
+            if exc.name != name:
+                raise
+            continue
+        module.register(sub)
     return parser
 
 
