@@ -1,16 +1,39 @@
-"""The one place that owns numba's compile flags.
+"""The one place that owns numba's compile flags and cache location.
 
-- ``cache=True`` with ``NUMBA_CACHE_DIR`` set by the Makefile (``make clean-cache`` after editing a
-  kernel that another file imports: numba does not track cross-file changes, numba issue 1833).
+- ``cache=True``, in a cache folder keyed by a hash of every solver source file: numba checks only
+  the defining file's time stamp, so a change in a kernel that another file calls would otherwise
+  run stale machine code (numba issues 1833, 9483). The folder sits under ``NUMBA_CACHE_DIR``
+  (the Makefile points it at ``.numba_cache/`` in the project) or ``~/.cache/ehd-collision``.
 - ``nogil=True`` so threads can run scenes side by side.
 - A NaN-safe fastmath subset: ``fastmath=True`` would make ``np.isfinite`` always true
   (numba issues 2919, 6217), and failure detection depends on it.
 - ``error_model="numpy"``: division by zero gives inf (checked by the caller), not an exception.
 """
 
+import hashlib
+import os
+from pathlib import Path
+
 import numba
 
 FASTMATH = {"nsz", "arcp", "contract", "afn", "reassoc"}
+
+
+def _source_hash() -> str:
+    digest = hashlib.sha256()
+    for path in sorted(Path(__file__).parent.glob("*.py")):
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def _cache_dir() -> str:
+    base = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
+        os.path.expanduser("~"), ".cache", "ehd-collision", "numba")
+    return os.path.join(base, f"solver-{_source_hash()}")
+
+
+numba.config.CACHE_DIR = _cache_dir()
 
 
 def jit(func):

@@ -315,13 +315,13 @@ def _coupled(stokes, eps, accuracy, numerics, x_start, x_switch, tau_per_t):
     v_switch = float(rigid.velocity(x_switch, x_start, 1.0, stokes))
     t_switch = float(rigid.elapsed_time(x_switch, x_start, 1.0, stokes))
 
-    ref = reference_grid(numerics.n_inner, numerics.stretch, numerics.outer_extent,
+    ref = reference_grid(numerics.n_inner, numerics.axis_ratio, numerics.stretch, numerics.outer_extent,
                          numerics.max_rel)
     grid = scaled_grid(ref, inner_radius(stokes, numerics))
     p_init = 3.0 * v_switch / (x_switch + grid.s) ** 2  # rigid pressure; K p = asymptotic W
     time_scale = x_switch / max(v_switch, 1e-3)
     code, counters, rows, p_hist, w_hist = stepper.integrate(
-        grid.s, grid.s_face, grid.area, grid.influence, stokes, x_switch, v_switch, p_init,
+        grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, stokes, x_switch, v_switch, p_init,
         t_switch, 1.0 - v_switch**2, numerics.rtol, 1e-3 * time_scale, 1e-12 * time_scale,
         numerics.max_steps, numerics.release, numerics.save_profiles)
     name, message = STATUS[code]
@@ -376,19 +376,23 @@ def _coupled(stokes, eps, accuracy, numerics, x_start, x_switch, tau_per_t):
         t_pk, v_pk = _parabolic_peak(tau, v_c, i)
         result.v_r = float(-v_pk)
         result.tau_max_rebound = float(t_pk)
-    below = np.nonzero(v_c <= 0.0)[0]
-    if below.size:
-        j = int(below[0])
-        result.tau_v_zero = float(tau[j - 1] + (tau[j] - tau[j - 1]) * v_c[j - 1] / (v_c[j - 1] - v_c[j]))
-        approach = slice(0, j + 1)
-    else:
-        result.tau_v_zero = math.inf  # rigid creep to rest: v reaches 0 only as t -> inf
-        approach = slice(0, len(v_c))
     h_min = cols["H_min"]
     i = int(np.argmin(h_min))
     result.h_m_x1 = float(_parabolic_peak(tau, h_min, i)[1])
-    ia = int(np.argmin(h_min[approach]))
-    result.h_m_approach_x1 = float(_parabolic_peak(tau[approach], h_min[approach], ia)[1])
+    below = np.nonzero(v_c <= 0.0)[0]
+    if below.size:
+        # approach phase ends at the interpolated v = 0 between rows j-1 and j
+        j = int(below[0])
+        frac = v_c[j - 1] / (v_c[j - 1] - v_c[j])
+        result.tau_v_zero = float(tau[j - 1] + (tau[j] - tau[j - 1]) * frac)
+        h_at_stop = h_min[j - 1] + (h_min[j] - h_min[j - 1]) * frac
+        ia = int(np.argmin(h_min[:j]))
+        h_app = _parabolic_peak(tau[:j], h_min[:j], ia)[1] if ia < j - 1 else h_min[j - 1]
+        result.h_m_approach_x1 = float(min(h_app, h_at_stop))
+    else:
+        result.tau_v_zero = math.inf  # rigid creep to rest: v reaches 0 only as t -> inf
+        ia = int(np.argmin(h_min))
+        result.h_m_approach_x1 = float(_parabolic_peak(tau, h_min, ia)[1])
     if v_rel > 0.0:  # still approaching when released: rigid creep down to x_e
         result.h_m_x1 = min(result.h_m_x1, math.exp(ln_x_e))
         if below.size == 0:

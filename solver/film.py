@@ -15,6 +15,7 @@ pressure ``3V/H^2`` on any grid, so the stretched far field costs no accuracy. T
 node keeps ``P H^2`` equal to its neighbour's (rigid far field, ``P = 3V/H^2``); the pressure
 beyond it is the tail ``P_L (R_L/R)^4``, counted in force, deflection and energies.
 
+Force ``Int P R dR = weight @ P`` (pressure linear between nodes, elasticity.py).
 The unknowns of a step are ``y = (P_0..P_{N-1}, X, V)``; rows are scaled to gap units
 (``bh/area`` for the cells, ``bh`` for the motion) where ``bh`` is the implicit BDF coefficient
 times the step.
@@ -48,7 +49,7 @@ def face_fluxes(s, s_face, p, h, q_out):
 
 
 @jit
-def residual(s, s_face, area, stokes, bh, h_hist, x_hist, v_hist, x, v, p, h, q, res):
+def residual(s, s_face, area, weight, stokes, bh, h_hist, x_hist, v_hist, x, v, p, h, q, res):
     """Scaled residual of one implicit step: ``H - H_hist = bh dq/ds`` per cell, the far-field
     boundary row, ``X - X_hist = -bh V`` and ``V - V_hist = -bh F/(3 St)``."""
     n = s.size
@@ -60,13 +61,13 @@ def residual(s, s_face, area, stokes, bh, h_hist, x_hist, v_hist, x, v, p, h, q,
     res[n - 1] = p[n - 1] - p[n - 2] * ratio * ratio
     force = 0.0
     for i in range(n):
-        force += area[i] * p[i]
+        force += weight[i] * p[i]
     res[n] = x - x_hist + bh * v
     res[n + 1] = v - v_hist + bh * force / (3.0 * stokes)
 
 
 @jit
-def jacobian(s, s_face, area, influence, stokes, bh, p, h, jac, dres_dh):
+def jacobian(s, s_face, area, weight, influence, stokes, bh, p, h, jac, dres_dh):
     """Exact Jacobian of ``residual`` with respect to ``(P, X, V)`` into ``jac`` (N+2, N+2).
 
     The cell rows depend on the gap at three nodes, and the gap on every pressure through ``K``:
@@ -119,26 +120,31 @@ def jacobian(s, s_face, area, influence, stokes, bh, p, h, jac, dres_dh):
     jac[n, n] = 1.0
     jac[n, n + 1] = bh
     for j in range(n):
-        jac[n + 1, j] = bh * area[j] / (3.0 * stokes)
+        jac[n + 1, j] = bh * weight[j] / (3.0 * stokes)
     jac[n + 1, n + 1] = 1.0
 
 
 @jit
-def energy_rates(s, area, stokes, x, p, w, h, q):
+def energy_rates(s, s_face, weight, stokes, x, p, w, h, q):
     """Strain energy ``E_s = (1/(3St)) Int P W R dR`` and dissipation rate
-    ``D = (2/(3St)) Int q dP/ds ds`` (both relative to the initial kinetic energy), with the
+    ``D = (2/(3St)) Int q dP/ds ds`` (both relative to the initial kinetic energy; equal to
+    ``(1/(18 St)) Int H^3 (dP/dR)^2 R dR`` of physics.md), with the
     far-field tail: ``W ~ W_L R_L/R`` and, for ``D``, the rigid film of velocity ``P_L H_L^2/3``.
     ``q`` must hold the face fluxes of ``p, h``."""
     n = s.size
     strain = 0.0
     for i in range(n):
-        strain += area[i] * p[i] * w[i]
+        strain += weight[i] * p[i] * w[i]
     s_last = s[n - 1]
-    # area[-1] counted the tail as P_L W_L R_L^2/2; the 1/R decay of W gives R_L^2/3 instead
+    # weight[-1] counted the tail as P_L W_L R_L^2/2; the 1/R decay of W gives R_L^2/3 instead
     strain -= p[n - 1] * w[n - 1] * (2.0 * s_last) / 6.0
+    # Int q dP/ds ds over a face interval, with q ~ s and H linear in s as in the face flux:
+    # q_f dP s_bar / s_f, s_bar the mean of s under H^-3 (exact for the rigid film; the plain
+    # q_f dP overestimates it on stretched cells)
     diss = 0.0
     for f in range(n - 1):
-        diss += q[f] * (p[f + 1] - p[f])
+        s_bar = s[f] + (s[f + 1] - s[f]) * h[f] / (h[f] + h[f + 1])
+        diss += q[f] * (p[f + 1] - p[f]) * s_bar / s_face[f]
     v_far = p[n - 1] * h[n - 1] * h[n - 1] / 3.0
     xs = x + s_last
     diss += 6.0 * v_far * v_far * (1.0 / xs - x / (2.0 * xs * xs))

@@ -9,6 +9,7 @@ The finite volumes live in ``s = R^2 / 2`` (``R dR = ds``); faces sit at the mid
 so cell ``i`` covers ``[s_face[i-1], s_face[i]]`` with area ``area[i]`` (``Int P R dR`` of a
 constant cell pressure is ``P * area``). The last node is the outer boundary; its "cell" runs from
 the last face to ``R_L`` and the pressure beyond decays like the rigid far field ``(R_L/R)^4``.
+Force and deflection see the pressure as linear between nodes (elasticity.py).
 """
 
 from __future__ import annotations
@@ -18,9 +19,13 @@ from functools import lru_cache
 
 import numpy as np
 
-from .elasticity import influence_matrix
+from .elasticity import force_weights, influence_matrix
 
-__all__ = ["RadialGrid", "reference_grid", "scaled_grid"]
+__all__ = ["RadialGrid", "reference_grid", "scaled_grid", "SHAPE_WIDTH"]
+
+# Pressure between nodes follows (SHAPE_WIDTH + R^2/2)^-2 (reference units, inner radius 1):
+# the rigid far field of a film about as wide as the contact region (elasticity.influence_matrix).
+SHAPE_WIDTH = 0.25
 
 
 @dataclass(frozen=True)
@@ -30,7 +35,8 @@ class RadialGrid:
     radius: np.ndarray  # (N,) node radii R_i, radius[0] = 0
     s: np.ndarray  # (N,) s_i = R_i^2 / 2
     s_face: np.ndarray  # (N-1,) face positions in s (midpoints)
-    area: np.ndarray  # (N,) cell areas in s; the last includes the far-field tail R_L^2/2
+    area: np.ndarray  # (N,) finite-volume cell areas in s (the last one ends at R_L)
+    force_weight: np.ndarray  # (N,) Int P R dR = force_weight @ P, far-field tail included
     influence: np.ndarray  # (N, N) deflection per unit cell pressure, W = influence @ P
     inner_radius: float  # end of the uniform inner region
 
@@ -39,11 +45,24 @@ class RadialGrid:
         return self.radius.size
 
 
-def _reference_nodes(n_inner: int, stretch: float, outer_extent: float, max_rel: float):
-    """Uniform nodes on [0, 1] with ``n_inner`` cells, then cell sizes growing by ``stretch``
-    (capped at ``max_rel * R``) up to ``outer_extent``."""
-    h = 1.0 / n_inner
-    nodes = list(np.linspace(0.0, 1.0, n_inner + 1))
+def _reference_nodes(n_inner: int, axis_ratio: float, stretch: float, outer_extent: float,
+                     max_rel: float):
+    """``n_inner`` cells on [0, 1] whose size grows geometrically from ``axis_ratio`` times the
+    last one at the axis (1: uniform), then cell sizes growing by ``stretch`` (capped at
+    ``max_rel * R``) up to ``outer_extent``.
+
+    Inner cell k has size ``h_k = h g^k`` with ``g = axis_ratio^(-1/n_inner)``: the film pinches
+    at the axis during rebound (tension), where the gap is smallest and steepest."""
+    if axis_ratio == 1.0:
+        nodes = list(np.linspace(0.0, 1.0, n_inner + 1))
+        h = 1.0 / n_inner
+    else:
+        g = axis_ratio ** (-1.0 / n_inner)
+        sizes = g ** np.arange(n_inner)
+        sizes /= sizes.sum()
+        nodes = list(np.concatenate(([0.0], np.cumsum(sizes))))
+        nodes[-1] = 1.0
+        h = sizes[-1]
     while nodes[-1] < outer_extent:
         h = min(h * stretch, max_rel * nodes[-1])
         nodes.append(nodes[-1] + h)
@@ -51,21 +70,22 @@ def _reference_nodes(n_inner: int, stretch: float, outer_extent: float, max_rel:
 
 
 @lru_cache(maxsize=16)
-def reference_grid(n_inner: int, stretch: float, outer_extent: float, max_rel: float) -> RadialGrid:
-    """Grid with a uniform inner region ``[0, 1]`` (cached: the elastic matrix is the cost)."""
-    radius = _reference_nodes(n_inner, stretch, outer_extent, max_rel)
+def reference_grid(n_inner: int, axis_ratio: float, stretch: float, outer_extent: float,
+                   max_rel: float) -> RadialGrid:
+    """Grid with its inner region on ``[0, 1]`` (cached: the elastic matrix is the cost)."""
+    radius = _reference_nodes(n_inner, axis_ratio, stretch, outer_extent, max_rel)
     s = 0.5 * radius**2
     s_face = 0.5 * (s[1:] + s[:-1])
-    face_radius = np.sqrt(2.0 * s_face)
     area = np.empty_like(s)
     area[0] = s_face[0]
     area[1:-1] = np.diff(s_face)
     # last cell [s_face[-1], s_L] plus the tail: Int_{R_L}^inf (R_L/R)^4 R dR = R_L^2 / 2
-    area[-1] = (s[-1] - s_face[-1]) + 0.5 * radius[-1] ** 2
-    K = influence_matrix(radius, face_radius)
-    for a in (radius, s, s_face, area, K):
+    area[-1] = s[-1] - s_face[-1]
+    weight = force_weights(radius, SHAPE_WIDTH)
+    K = influence_matrix(radius, SHAPE_WIDTH)
+    for a in (radius, s, s_face, area, weight, K):
         a.setflags(write=False)
-    return RadialGrid(radius, s, s_face, area, K, 1.0)
+    return RadialGrid(radius, s, s_face, area, weight, K, 1.0)
 
 
 def scaled_grid(ref: RadialGrid, radius: float) -> RadialGrid:
@@ -76,6 +96,7 @@ def scaled_grid(ref: RadialGrid, radius: float) -> RadialGrid:
         s=ref.s * lam**2,
         s_face=ref.s_face * lam**2,
         area=ref.area * lam**2,
+        force_weight=ref.force_weight * lam**2,
         influence=ref.influence * lam,
         inner_radius=lam,
     )

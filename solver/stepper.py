@@ -76,7 +76,7 @@ def _matvec(a, x, out):
 
 
 @jit
-def integrate(s, s_face, area, influence, stokes, x_init, v_init, p_init, t_init, dissipated_init,
+def integrate(s, s_face, area, weight, influence, stokes, x_init, v_init, p_init, t_init, dissipated_init,
               rtol, dt_init, dt_min, max_steps, release, save_profiles):
     """Integrate from ``(T, X, V, P) = (t_init, x_init, v_init, p_init)`` until the deformation
     has relaxed (module docstring) or a failure.
@@ -133,7 +133,7 @@ def integrate(s, s_face, area, influence, stokes, x_init, v_init, p_init, t_init
 
     # initial row
     face_fluxes(s, s_face, y0[:n], h, q)
-    strain, diss_rate = energy_rates(s, area, stokes, x_init, y0[:n], w, h, q)
+    strain, diss_rate = energy_rates(s, s_face, weight, stokes, x_init, y0[:n], w, h, q)
     dissipated = dissipated_init
     n_rows = 0
 
@@ -154,7 +154,7 @@ def integrate(s, s_face, area, influence, stokes, x_init, v_init, p_init, t_init
         imin = 0
         wmax = 0.0
         for i in range(n):
-            force += area[i] * y0[i]
+            force += weight[i] * y0[i]
             if h[i] < h[imin]:
                 imin = i
             wmax = max(wmax, abs(w[i]))
@@ -227,7 +227,7 @@ def integrate(s, s_face, area, influence, stokes, x_init, v_init, p_init, t_init
             fresh = False
             if (not lu_valid) or abs(bh / bh_lu - 1.0) > 0.3:
                 gap(s, influence, y[n], y[:n], w, h)
-                jacobian(s, s_face, area, influence, stokes, bh, y[:n], h, jac, dres_dh)
+                jacobian(s, s_face, area, weight, influence, stokes, bh, y[:n], h, jac, dres_dh)
                 counters[4] += 1
                 counters[3] += 1
                 lu_valid = lu_factor(jac, piv)
@@ -237,17 +237,19 @@ def integrate(s, s_face, area, influence, stokes, x_init, v_init, p_init, t_init
                     status = NONFINITE
                     break
 
+            # Newton: the gap update of an iterate is the next iterate's gap minus this one's,
+            # so each iteration costs one K-product (in gap) and one LU solve
             converged = False
             norm_prev = 0.0
+            gap(s, influence, y[n], y[:n], w, h)
             for it in range(MAX_NEWTON):
-                gap(s, influence, y[n], y[:n], w, h)
                 bad = False
                 for i in range(n):
                     if not (h[i] > 0.0) or not np.isfinite(h[i]):
                         bad = True
                 if bad:
                     break
-                residual(s, s_face, area, stokes, bh, h_hist, x_hist, v_hist, y[n], y[n + 1],
+                residual(s, s_face, area, weight, stokes, bh, h_hist, x_hist, v_hist, y[n], y[n + 1],
                          y[:n], h, q, res)
                 for k in range(m):
                     res[k] = -res[k]
@@ -255,9 +257,11 @@ def integrate(s, s_face, area, influence, stokes, x_init, v_init, p_init, t_init
                 for k in range(m):
                     y[k] += res[k]
                 counters[2] += 1
-                _matvec(influence, res[:n], kdp)
                 for i in range(n):
-                    dh[i] = res[n] + kdp[i]
+                    dh[i] = h[i]
+                gap(s, influence, y[n], y[:n], w, h)
+                for i in range(n):
+                    dh[i] = h[i] - dh[i]
                 norm = _norm(res[:n], res[n], res[n + 1], dh, y[:n], y[n], y[n + 1], h, rtol)
                 if not np.isfinite(norm):
                     break
@@ -280,7 +284,6 @@ def integrate(s, s_face, area, influence, stokes, x_init, v_init, p_init, t_init
                 lu_valid = False
                 continue
 
-            gap(s, influence, y[n], y[:n], w, h)
             positive = True
             for i in range(n):
                 if not (h[i] > 0.0):
@@ -324,7 +327,7 @@ def integrate(s, s_face, area, influence, stokes, x_init, v_init, p_init, t_init
         counters[0] += 1
 
         face_fluxes(s, s_face, y0[:n], h, q)
-        strain_new, diss_new = energy_rates(s, area, stokes, y0[n], y0[:n], w, h, q)
+        strain_new, diss_new = energy_rates(s, s_face, weight, stokes, y0[n], y0[:n], w, h, q)
         dissipated += 0.5 * (diss_rate + diss_new) * dt
         strain = strain_new
         diss_rate = diss_new
