@@ -315,7 +315,7 @@ def _coupled(stokes, eps, accuracy, numerics, x_start, x_switch, tau_per_t):
     v_switch = float(rigid.velocity(x_switch, x_start, 1.0, stokes))
     t_switch = float(rigid.elapsed_time(x_switch, x_start, 1.0, stokes))
 
-    ref = reference_grid(numerics.n_inner, numerics.axis_ratio, numerics.stretch, numerics.outer_extent,
+    ref = reference_grid(numerics.n_inner, numerics.axis_ratio, numerics.axis_extent, numerics.stretch, numerics.outer_extent,
                          numerics.max_rel)
     grid = scaled_grid(ref, inner_radius(stokes, numerics))
     p_init = 3.0 * v_switch / (x_switch + grid.s) ** 2  # rigid pressure; K p = asymptotic W

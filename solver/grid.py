@@ -45,24 +45,26 @@ class RadialGrid:
         return self.radius.size
 
 
-def _reference_nodes(n_inner: int, axis_ratio: float, stretch: float, outer_extent: float,
-                     max_rel: float):
-    """``n_inner`` cells on [0, 1] whose size grows geometrically from ``axis_ratio`` times the
-    last one at the axis (1: uniform), then cell sizes growing by ``stretch`` (capped at
-    ``max_rel * R``) up to ``outer_extent``.
+def _reference_nodes(n_inner: int, axis_ratio: float, axis_extent: float, stretch: float,
+                     outer_extent: float, max_rel: float):
+    """Nodes in reference units (inner region [0, 1]).
 
-    Inner cell k has size ``h_k = h g^k`` with ``g = axis_ratio^(-1/n_inner)``: the film pinches
-    at the axis during rebound (tension), where the gap is smallest and steepest."""
-    if axis_ratio == 1.0:
-        nodes = list(np.linspace(0.0, 1.0, n_inner + 1))
-        h = 1.0 / n_inner
-    else:
-        g = axis_ratio ** (-1.0 / n_inner)
-        sizes = g ** np.arange(n_inner)
-        sizes /= sizes.sum()
-        nodes = list(np.concatenate(([0.0], np.cumsum(sizes))))
-        nodes[-1] = 1.0
-        h = sizes[-1]
+    - Inner region: cells of size ``1/n_inner``, refined towards the axis inside
+      ``R < axis_extent``, where the size grows linearly from ``axis_ratio / n_inner`` at the
+      axis: during rebound the tension pinches the film at the axis into a narrow cone whose
+      tip sets the minimum gap.
+    - Outer region: cell sizes growing by ``stretch``, capped at ``max_rel * R``, up to
+      ``outer_extent``.
+    """
+    h_edge = 1.0 / n_inner
+    nodes = [0.0]
+    if axis_ratio < 1.0 and axis_extent > 0.0:
+        while nodes[-1] < axis_extent:
+            r = nodes[-1]
+            nodes.append(r + h_edge * (axis_ratio + (1.0 - axis_ratio) * r / axis_extent))
+    m = max(1, int(np.ceil((1.0 - nodes[-1]) / h_edge - 0.5)))
+    nodes.extend(np.linspace(nodes[-1], 1.0, m + 1)[1:])
+    h = nodes[-1] - nodes[-2]
     while nodes[-1] < outer_extent:
         h = min(h * stretch, max_rel * nodes[-1])
         nodes.append(nodes[-1] + h)
@@ -70,10 +72,10 @@ def _reference_nodes(n_inner: int, axis_ratio: float, stretch: float, outer_exte
 
 
 @lru_cache(maxsize=16)
-def reference_grid(n_inner: int, axis_ratio: float, stretch: float, outer_extent: float,
-                   max_rel: float) -> RadialGrid:
+def reference_grid(n_inner: int, axis_ratio: float, axis_extent: float, stretch: float,
+                   outer_extent: float, max_rel: float) -> RadialGrid:
     """Grid with its inner region on ``[0, 1]`` (cached: the elastic matrix is the cost)."""
-    radius = _reference_nodes(n_inner, axis_ratio, stretch, outer_extent, max_rel)
+    radius = _reference_nodes(n_inner, axis_ratio, axis_extent, stretch, outer_extent, max_rel)
     s = 0.5 * radius**2
     s_face = 0.5 * (s[1:] + s[:-1])
     area = np.empty_like(s)

@@ -1,61 +1,47 @@
-"""Dense LU with partial pivoting, compiled, so a factorisation can be reused across Newton
-iterations and time steps (numba's ``np.linalg.solve`` refactorises at every call)."""
+"""Dense LU factorisation kept across Newton iterations and time steps (numba's
+``np.linalg.solve`` refactorises at every call).
 
+LAPACK's ``dgetrf``/``dgetrs`` from SciPy's Cython bindings, called from compiled code (no GIL):
+5-6x faster than a plain compiled triple loop at N ~ 130 on this machine. They are bound by
+symbol name (``llvmlite.binding.add_symbol`` + ``ExternalFunction``), not as ctypes pointers,
+so the calling functions stay cacheable. The arrays are C-ordered, so LAPACK factors the
+transpose, and the solve uses ``trans = 'T'``.
+"""
+
+import llvmlite.binding as llvm
 import numpy as np
+from numba import types
+from numba.extending import get_cython_function_address
 
 from ._jit import jit
+
+for _name in ("dgetrf", "dgetrs"):
+    llvm.add_symbol(f"ehd_{_name}", get_cython_function_address("scipy.linalg.cython_lapack", _name))
+
+_p = types.voidptr
+_dgetrf = types.ExternalFunction("ehd_dgetrf", types.void(_p, _p, _p, _p, _p, _p))
+_dgetrs = types.ExternalFunction("ehd_dgetrs", types.void(_p, _p, _p, _p, _p, _p, _p, _p, _p))
 
 
 @jit
 def lu_factor(a, piv):
-    """Factor ``a`` (n, n) in place into unit-lower L and upper U with row pivots ``piv`` (n,).
-
-    Returns False when a zero pivot makes the matrix singular."""
-    n = a.shape[0]
-    for k in range(n):
-        p = k
-        big = abs(a[k, k])
-        for i in range(k + 1, n):
-            if abs(a[i, k]) > big:
-                big = abs(a[i, k])
-                p = i
-        piv[k] = p
-        if big == 0.0:
-            return False
-        if p != k:
-            for j in range(n):
-                t = a[k, j]
-                a[k, j] = a[p, j]
-                a[p, j] = t
-        inv = 1.0 / a[k, k]
-        for i in range(k + 1, n):
-            a[i, k] *= inv
-        for i in range(k + 1, n):
-            f = a[i, k]
-            if f != 0.0:
-                for j in range(k + 1, n):
-                    a[i, j] -= f * a[k, j]
-    return True
+    """Factor ``a`` (n, n, C order) in place; ``piv`` (n,) int32. False if singular."""
+    n = np.empty(1, np.int32)
+    n[0] = a.shape[0]
+    info = np.zeros(1, np.int32)
+    _dgetrf(n.ctypes, n.ctypes, a.ctypes, n.ctypes, piv.ctypes, info.ctypes)
+    return info[0] == 0
 
 
 @jit
 def lu_solve(lu, piv, b):
-    """Solve ``A x = b`` in place in ``b`` given ``lu_factor``'s output."""
-    n = lu.shape[0]
-    for k in range(n):
-        p = piv[k]
-        if p != k:
-            t = b[k]
-            b[k] = b[p]
-            b[p] = t
-    for i in range(n):
-        acc = b[i]
-        for j in range(i):
-            acc -= lu[i, j] * b[j]
-        b[i] = acc
-    for i in range(n - 1, -1, -1):
-        acc = b[i]
-        for j in range(i + 1, n):
-            acc -= lu[i, j] * b[j]
-        b[i] = acc / lu[i, i]
+    """Solve ``A x = b`` in place in ``b`` given ``lu_factor``'s output for ``A``."""
+    trans = np.empty(1, np.uint8)
+    trans[0] = ord("T")  # LAPACK holds the factors of A^T (C order read as Fortran order)
+    n = np.empty(1, np.int32)
+    n[0] = lu.shape[0]
+    one = np.ones(1, np.int32)
+    info = np.zeros(1, np.int32)
+    _dgetrs(trans.ctypes, n.ctypes, one.ctypes, lu.ctypes, n.ctypes, piv.ctypes, b.ctypes,
+            n.ctypes, info.ctypes)
     return b

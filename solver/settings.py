@@ -23,7 +23,8 @@ class Numerics:
     """Numerical settings of one scene (all dimensionless)."""
 
     n_inner: int  # cells across the inner (contact) region of the grid
-    axis_ratio: float  # inner cell size at the axis relative to the one at the contact edge
+    axis_ratio: float  # cell size at the axis relative to the inner region's
+    axis_extent: float  # refined zone near the axis, as a fraction of the inner radius
     stretch: float  # growth factor of successive outer cells
     outer_extent: float  # grid end, in units of the inner region's radius
     max_rel: float  # largest outer cell relative to its radius
@@ -39,17 +40,22 @@ class Numerics:
 
 
 PRESETS = {
-    "fast": Numerics(n_inner=24, axis_ratio=1.0, stretch=1.15, outer_extent=60.0, max_rel=0.3, inner_factor=1.5,
-                     rtol=1e-3, switch=0.05, release=0.01, max_steps=20000),
-    "standard": Numerics(n_inner=48, axis_ratio=1.0, stretch=1.1, outer_extent=60.0, max_rel=0.2, inner_factor=1.5,
-                         rtol=2e-4, switch=0.01, release=0.003, max_steps=50000),
-    "fine": Numerics(n_inner=96, axis_ratio=1.0, stretch=1.06, outer_extent=80.0, max_rel=0.12, inner_factor=1.5,
-                     rtol=3e-5, switch=0.002, release=0.0005, max_steps=200000),
+    # measured against a converged reference in benchmarks/ (accuracy.md); ~10 / 30 / 120 ms
+    "fast": Numerics(n_inner=32, axis_ratio=0.1, axis_extent=0.25, stretch=1.25, outer_extent=30.0,
+                     max_rel=0.3, inner_factor=1.5, rtol=3e-4, switch=0.02, release=0.005,
+                     max_steps=20000),
+    "standard": Numerics(n_inner=64, axis_ratio=0.1, axis_extent=0.25, stretch=1.2,
+                         outer_extent=30.0, max_rel=0.3, inner_factor=1.5, rtol=5e-5, switch=0.005,
+                         release=0.001, max_steps=50000),
+    "fine": Numerics(n_inner=128, axis_ratio=0.1, axis_extent=0.25, stretch=1.1, outer_extent=30.0,
+                     max_rel=0.2, inner_factor=1.5, rtol=1e-5, switch=0.002, release=0.0003,
+                     max_steps=200000),
 }
 
 _BOUNDS = {
     "n_inner": (4, 2000),
     "axis_ratio": (0.01, 1.0),
+    "axis_extent": (0.0, 1.0),
     "stretch": (1.0, 2.0),
     "outer_extent": (5.0, 1e4),
     "max_rel": (0.01, 1.0),

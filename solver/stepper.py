@@ -120,7 +120,7 @@ def integrate(s, s_face, area, weight, influence, stokes, x_init, v_init, p_init
     kdp = np.empty(n)
     jac = np.empty((m, m))
     dres_dh = np.empty((n, 3))
-    piv = np.empty(m, dtype=np.int64)
+    piv = np.empty(m, dtype=np.int32)
     lu_valid = False
     bh_lu = 1.0
 
