@@ -1,0 +1,184 @@
+"""Named solids and fluids for scenes: the shipped table plus the user's own.
+
+The shipped table is ``pipeline/data/materials.toml``; every entry has a ``source``. Users add or
+replace entries without editing code, with TOML files of the same form (``[materials.NAME]`` and
+``[fluids.NAME]`` tables), found in this order (later files override earlier ones):
+
+1. ``~/.config/ehd/materials.toml`` (``$XDG_CONFIG_HOME/ehd/materials.toml`` if that is set),
+2. the files listed in ``$EHD_MATERIALS`` (separated by ``os.pathsep``),
+3. files passed with ``ehd scene --materials FILE`` (repeatable),
+4. ``[materials.*]`` / ``[fluids.*]`` tables inside the scene file itself.
+
+All values are stored in SI units: solids ``youngs_modulus`` [Pa], ``poisson_ratio`` [-],
+``density`` [kg/m^3], optional ``yield_strength`` [Pa]; fluids ``viscosity`` [Pa s], ``density``
+[kg/m^3], optional ``vapour_pressure`` [Pa] and ``mean_free_path`` [m].
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+from .units import FieldSpec, UnitError, to_si
+
+__all__ = ["Solid", "FluidProps", "MaterialTable", "SOLID_FIELDS", "FLUID_FIELDS",
+           "load_table", "user_table_paths", "MaterialError"]
+
+
+class MaterialError(ValueError):
+    """A materials file or entry that cannot be used (the message names file and field)."""
+
+
+# Field name -> (spec, required). Ranges are those of the physics: a Poisson ratio of an isotropic
+# solid lies in (-1, 0.5]; pressures and moduli are positive.
+SOLID_FIELDS = {
+    "youngs_modulus": (FieldSpec("[pressure]", "70 GPa", si_unit="Pa"), True),
+    "poisson_ratio": (FieldSpec("", "0.22", -1.0, 0.5, hi_open=False), True),
+    "density": (FieldSpec("[mass] / [length] ** 3", "2500 kg/m^3", si_unit="kg/m^3"), True),
+    "yield_strength": (FieldSpec("[pressure]", "250 MPa", si_unit="Pa"), False),
+}
+FLUID_FIELDS = {
+    "viscosity": (FieldSpec("[pressure] * [time]", "1 mPa s", si_unit="Pa*s"), True),
+    "density": (FieldSpec("[mass] / [length] ** 3", "998 kg/m^3", si_unit="kg/m^3"), True),
+    "vapour_pressure": (FieldSpec("[pressure]", "2.34 kPa", lo_open=False, si_unit="Pa"), False),
+    "mean_free_path": (FieldSpec("[length]", "67 nm", si_unit="m"), False),
+}
+_TEXT_FIELDS = ("description", "source")
+
+
+@dataclass(frozen=True)
+class Solid:
+    """Elastic properties of one body's material (SI)."""
+
+    name: str
+    youngs_modulus: float  # Pa
+    poisson_ratio: float
+    density: float | None  # kg/m^3 (None only for a wall given without one)
+    yield_strength: float | None = None  # Pa, None = not known / not applicable
+    source: str = ""
+    description: str = ""
+
+    @property
+    def compliance(self) -> float:
+        """This solid's share of ``theta``: ``(1 - nu^2) / (pi E)`` [1/Pa]."""
+        return (1.0 - self.poisson_ratio**2) / (math.pi * self.youngs_modulus)
+
+    @property
+    def sound_speed(self) -> float | None:
+        """Bar wave speed ``c = sqrt(E / rho)`` [m/s] (None without a density)."""
+        if self.density is None:
+            return None
+        return math.sqrt(self.youngs_modulus / self.density)
+
+
+@dataclass(frozen=True)
+class FluidProps:
+    """Properties of the fluid filling the gap (SI)."""
+
+    name: str
+    viscosity: float  # Pa s
+    density: float  # kg/m^3
+    vapour_pressure: float | None = None  # Pa
+    mean_free_path: float | None = None  # m
+    source: str = ""
+    description: str = ""
+
+
+def _parse_entry(kind, name, raw, where):
+    fields = SOLID_FIELDS if kind == "materials" else FLUID_FIELDS
+    if not isinstance(raw, dict):
+        raise MaterialError(f"{where}: [{kind}.{name}] must be a table of values")
+    unknown = sorted(set(raw) - set(fields) - set(_TEXT_FIELDS))
+    if unknown:
+        raise MaterialError(f"{where}: [{kind}.{name}] has unknown field(s) {unknown}; valid fields: "
+                            f"{sorted([*fields, *_TEXT_FIELDS])}")
+    if not str(raw.get("source", "")).strip():
+        raise MaterialError(f"{where}: [{kind}.{name}] needs a 'source' saying where its values "
+                            "come from (a reference, a data sheet, or 'own measurement')")
+    values = {}
+    for field, (spec, required) in fields.items():
+        if field not in raw:
+            if required:
+                raise MaterialError(f"{where}: [{kind}.{name}] is missing the field '{field}' "
+                                    f"(e.g. {field} = '{spec.example}')")
+            values[field] = None
+            continue
+        try:
+            values[field] = to_si(raw[field], spec, f"{kind}.{name}.{field}")
+        except UnitError as exc:
+            raise MaterialError(f"{where}: {exc}") from None
+    text = {k: str(raw.get(k, "")) for k in _TEXT_FIELDS}
+    cls = Solid if kind == "materials" else FluidProps
+    return cls(name=name, **values, **text)
+
+
+class MaterialTable:
+    """Named solids and fluids; later ``add`` calls override earlier entries of the same name."""
+
+    def __init__(self):
+        self.solids: dict[str, Solid] = {}
+        self.fluids: dict[str, FluidProps] = {}
+        self.origins: dict[tuple[str, str], str] = {}  # (kind, name) -> file it came from
+
+    def add(self, data: dict, where: str) -> None:
+        """Add the ``materials`` and ``fluids`` tables of one parsed TOML document."""
+        for kind in ("materials", "fluids"):
+            section = data.get(kind, {})
+            if not isinstance(section, dict):
+                raise MaterialError(f"{where}: '{kind}' must be a table of named entries")
+            target = self.solids if kind == "materials" else self.fluids
+            for name, raw in section.items():
+                target[name] = _parse_entry(kind, name, raw, where)
+                self.origins[(kind, name)] = where
+
+    def solid(self, name: str, where: str) -> Solid:
+        if name not in self.solids:
+            raise MaterialError(f"{where}: unknown material {name!r}; known materials: "
+                                f"{sorted(self.solids)} (add your own with --materials FILE)")
+        return self.solids[name]
+
+    def fluid(self, name: str, where: str) -> FluidProps:
+        if name not in self.fluids:
+            raise MaterialError(f"{where}: unknown fluid {name!r}; known fluids: "
+                                f"{sorted(self.fluids)} (add your own with --materials FILE)")
+        return self.fluids[name]
+
+
+def _read_toml(path: Path) -> dict:
+    try:
+        with open(path, "rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise MaterialError(f"materials file {str(path)!r} not found") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise MaterialError(f"materials file {str(path)!r} is not valid TOML: {exc}") from None
+
+
+def user_table_paths(environ=None) -> list[Path]:
+    """User materials files that exist in the documented places (see the module docstring)."""
+    env = os.environ if environ is None else environ
+    config = Path(env.get("XDG_CONFIG_HOME") or Path.home() / ".config")
+    paths = []
+    default = config / "ehd" / "materials.toml"
+    if default.is_file():
+        paths.append(default)
+    for item in env.get("EHD_MATERIALS", "").split(os.pathsep):
+        if item.strip():
+            paths.append(Path(item.strip()))  # listed explicitly: a missing one is an error
+    return paths
+
+
+def load_table(extra_files=(), *, user_files: bool = True, environ=None) -> MaterialTable:
+    """The shipped table, then user files, then ``extra_files`` (each overriding the previous)."""
+    table = MaterialTable()
+    shipped = resources.files("pipeline").joinpath("data", "materials.toml")
+    table.add(tomllib.loads(shipped.read_text(encoding="utf-8")), "pipeline/data/materials.toml")
+    paths = list(user_table_paths(environ)) if user_files else []
+    paths += [Path(p) for p in extra_files]
+    for path in paths:
+        table.add(_read_toml(path), str(path))
+    return table

@@ -1,0 +1,322 @@
+"""``ehd scene`` (a collision given in physical units) and ``ehd paper-figures`` (figures 2-11).
+
+``ehd scene FILE.toml`` reads a scene file (format in docs/scenes.md); every field can also be
+given, or overridden, by a flag (``--radius1 '50 um'``). Exit codes: 0 success, 1 the solve failed
+(or, with ``--strict``, a validity check warned), 2 bad input.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import tomllib
+from pathlib import Path
+
+__all__ = ["register", "cmd_scene", "cmd_paper_figures", "load_scene", "format_report"]
+
+# flag dest -> (section or None for top level, key)
+_FLAG_FIELDS = {
+    "title": (None, "title"), "v0": (None, "v0"), "x0": (None, "x0"),
+    "x0_over_a": (None, "x0_over_a"),
+    "fluid": ("fluid", "name"), "viscosity": ("fluid", "viscosity"),
+    "fluid_density": ("fluid", "density"), "vapour_pressure": ("fluid", "vapour_pressure"),
+    "mean_free_path": ("fluid", "mean_free_path"), "ambient_pressure": ("fluid", "ambient_pressure"),
+}
+_BODY_FLAGS = {"material": "material", "radius": "radius", "density": "density",
+               "youngs_modulus": "youngs_modulus", "poisson_ratio": "poisson_ratio",
+               "yield_strength": "yield_strength"}
+for _n in (1, 2):
+    for _flag, _key in _BODY_FLAGS.items():
+        _FLAG_FIELDS[f"{_flag}{_n}"] = (f"body{_n}", _key)
+
+
+def _usage_error(msg):
+    from .cli import UsageError
+
+    return UsageError(msg)
+
+
+def _read_scene_file(path: str) -> dict:
+    try:
+        with open(path, "rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise _usage_error(f"scene file {path!r} not found") from None
+    except IsADirectoryError:
+        raise _usage_error(f"scene file {path!r} is a directory") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise _usage_error(f"scene file {path!r} is not valid TOML: {exc}") from None
+
+
+def load_scene(path=None, flags: dict | None = None, materials=(), *, user_files=True):
+    """Scene from a file and/or flag values (flags override the file).
+
+    Parameters
+    ----------
+    path : str, optional
+        TOML scene file.
+    flags : dict, optional
+        ``{flag dest: value}`` as in ``_FLAG_FIELDS`` (None values ignored); ``wall2=True``
+        makes body2 a plane wall.
+    materials : sequence of str
+        Extra materials files (``--materials``).
+
+    Returns
+    -------
+    pipeline.scene.Scene
+
+    Raises
+    ------
+    ValueError
+        With a message naming the field (SceneError, UnitError, MaterialError).
+    """
+    from .materials import load_table
+    from .scene import scene_from_dict
+
+    data = _read_scene_file(path) if path else {}
+    for dest, value in (flags or {}).items():
+        if value is None or value is False:
+            continue
+        if dest == "wall2":
+            body = data.setdefault("body2", {})
+            body["wall"] = True
+            body.pop("radius", None)
+            continue
+        section, key = _FLAG_FIELDS[dest]
+        target = data if section is None else data.setdefault(section, {})
+        if not isinstance(target, dict):
+            raise ValueError(f"{section} must be a table in the scene file")
+        target[key] = value
+    table = load_table(materials, user_files=user_files)
+    inline = {k: data.pop(k) for k in ("materials", "fluids") if k in data}
+    if inline:
+        table.add(inline, f"{path or 'scene'} (inline tables)")
+    return scene_from_dict(data, table)
+
+
+def _q(value, unit, spec=".4g"):
+    """A value with a readable SI prefix, e.g. '25 µm'."""
+    from .units import format_quantity
+
+    return format_quantity(value, unit, spec)
+
+
+def _g(value, spec=".4g"):
+    if value is None:
+        return "-"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    return format(value, spec)
+
+
+def format_report(d: dict) -> str:
+    """Human-readable report of ``SceneResult.to_dict()``."""
+    ins = d["inputs"]
+    lines = []
+    if d["title"]:
+        lines.append(d["title"])
+    for label in ("body1", "body2"):
+        b = ins[label]
+        shape = "plane wall" if b["wall"] else f"sphere, radius {_q(b['radius_m'], 'm')}"
+        extra = "" if b["yield_strength_Pa"] is None else f", yield {_q(b['yield_strength_Pa'], 'Pa')}"
+        lines.append(f"  {label}: {shape}, {b['material']} (E = {_q(b['youngs_modulus_Pa'], 'Pa')}, "
+                     f"nu = {b['poisson_ratio']:g}, rho = {_g(b['density_kg_per_m3'], 'g')} kg/m^3"
+                     f"{extra})")
+    f = ins["fluid"]
+    lines.append(f"  fluid: {f['name']} (mu = {_q(f['viscosity_Pa_s'], 'Pa*s')}, "
+                 f"rho = {f['density_kg_per_m3']:g} kg/m^3)")
+    lines.append(f"  v0 = {_q(ins['v0_m_per_s'], 'm/s')}, x0 = {_q(d['x0_m'], 'm')} "
+                 f"(x0/a = {d['x0_over_a']:.3g})")
+    rows = [
+        ("reduced radius a", _q(d["reduced_radius_m"], "m")),
+        ("reduced mass m", _q(d["reduced_mass_kg"], "kg")),
+        ("theta", f"{d['theta_per_Pa']:.4g} 1/Pa (E* = {_q(d['effective_modulus_Pa'], 'Pa')})"),
+        ("film scale x1", _q(d["x1_m"], "m")),
+        ("St", _g(d["St"])), ("eps", _g(d["eps"])),
+        ("Re (Re x0/a)", f"{d['Re']:.4g} ({d['Re_x0_over_a']:.3g})"),
+        ("(v0/c)^(1/5)", "-" if d["wave_parameter"] is None else
+         f"{d['wave_parameter']:.3g} (c = {_q(d['sound_speed_m_per_s'], 'm/s')})"),
+    ]
+    results = [
+        ("max rebound speed", f"{_q(d['rebound_speed_m_per_s'], 'm/s')} (v_r = {_g(d['v_r'])} v0)"),
+        ("closest approach", f"{_g(d['closest_approach_nm'])} nm "
+                             f"(h_m/x1 = {_g(d['dimensionless']['h_m_x1'])})"),
+        ("  during approach", f"{_g(d['closest_approach_on_approach_nm'])} nm"),
+        ("equilibrium separation",
+         f"beyond x0: the rebound carries the spheres apart, no sticking (model value "
+         f"10^{d['log10_equilibrium_separation_m']:.3g} m)" if d["escaped"]
+         else _q(d["equilibrium_separation_m"], "m")),
+        ("time to stop (v = 0)", "never in finite time (creeps to rest)"
+         if d["time_to_stop_s"] is None else _q(d["time_to_stop_s"], "s")),
+        ("time of max rebound", _q(d["time_of_max_rebound_s"], "s")),
+        ("peak force", _q(d["peak_force_N"], "N")),
+        ("peak film pressure", _q(d["peak_pressure_Pa"], "Pa")),
+        ("min film pressure", _q(d["min_pressure_Pa"], "Pa")),
+        ("max central deformation", f"{_g(d['max_central_deformation_nm'])} nm"),
+        ("min separation x", f"{_g(d['min_separation_nm'])} nm (negative: flattened overlap)"),
+        ("dimple", _g(d["dimple"]) + (f" (depth {_g(d['dimple_depth_nm'])} nm)" if d["dimple"] else "")),
+    ]
+    width = max(len(k) for k, _ in rows + results)
+    lines.append("derived")
+    lines += [f"  {k:<{width}}  {v}" for k, v in rows]
+    lines.append(f"model: {d['model_reason']}")
+    if d["status"] != "ok":
+        lines.append(f"solve FAILED ({d['status']}): {d['message']}")
+    else:
+        lines.append("results")
+        lines += [f"  {k:<{width}}  {v}" for k, v in results]
+    if d["warnings"]:
+        lines.append(f"validity warnings ({len(d['warnings'])}):")
+        lines += [f"  - [{w['check']}] {w['message']}" for w in d["warnings"]]
+    else:
+        lines.append("validity: all checks passed")
+    lines += [f"note: {n}" for n in d["notes"]]
+    return "\n".join(lines)
+
+
+def cmd_scene(args) -> int:
+    from .scene import run_scene
+
+    if args.list_materials:
+        return _list_materials(args)
+    flags = {dest: getattr(args, dest) for dest in _FLAG_FIELDS}
+    flags["wall2"] = args.wall
+    if args.file is None and not any(v for v in flags.values()):
+        raise _usage_error("give a scene file (ehd scene FILE.toml) or the scene as flags "
+                           "(see ehd scene --help)")
+    try:
+        scene = load_scene(args.file, flags, args.materials or ())
+    except ValueError as exc:
+        raise _usage_error(str(exc)) from None
+    from .cli import _numerics_overrides
+
+    try:
+        result = run_scene(scene, accuracy=args.accuracy, **_numerics_overrides(args))
+    except ValueError as exc:
+        raise _usage_error(str(exc)) from None
+    except ArithmeticError as exc:  # a numerical failure inside the solver: report, no traceback
+        print(f"ehd scene: the solver failed for St = {scene.stokes:.4g}, eps = {scene.eps:.3g}: "
+              f"{type(exc).__name__}: {exc}", file=sys.stderr)
+        return 1
+    d = result.to_dict()
+    if args.json:
+        print(json.dumps(d))
+        for w in d["warnings"]:
+            print(f"warning: [{w['check']}] {w['message']}", file=sys.stderr)
+    else:
+        print(format_report(d))
+    if args.plot and result.collision.ok:
+        from .scene_plots import plot_scene
+
+        paths = plot_scene(result.collision, args.plot, title=scene.title)
+        if not args.json:
+            print(f"figures: {', '.join(str(p) for p in paths if p.suffix == '.png')}")
+    if not result.collision.ok:
+        return 1
+    if args.strict and d["warnings"]:
+        print(f"ehd scene: {len(d['warnings'])} validity warning(s) (--strict)", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _list_materials(args) -> int:
+    from .materials import load_table
+
+    try:
+        table = load_table(args.materials or ())
+    except ValueError as exc:
+        raise _usage_error(str(exc)) from None
+    print("materials (solids):")
+    for name, s in sorted(table.solids.items()):
+        y = "" if s.yield_strength is None else f", yield {_q(s.yield_strength, 'Pa')}"
+        print(f"  {name:<20} E = {_q(s.youngs_modulus, 'Pa')}, nu = {s.poisson_ratio:g}, "
+              f"rho = {s.density:g} kg/m^3{y}")
+        print(f"  {'':<20} source: {s.source} [{table.origins[('materials', name)]}]")
+    print("fluids:")
+    for name, f in sorted(table.fluids.items()):
+        extra = ""
+        if f.vapour_pressure is not None:
+            extra += f", vapour pressure {_q(f.vapour_pressure, 'Pa')}"
+        if f.mean_free_path is not None:
+            extra += f", mean free path {_q(f.mean_free_path, 'm')}"
+        print(f"  {name:<20} mu = {_q(f.viscosity, 'Pa*s')}, rho = {f.density:g} kg/m^3{extra}")
+        print(f"  {'':<20} source: {f.source} [{table.origins[('fluids', name)]}]")
+    return 0
+
+
+def cmd_paper_figures(args) -> int:
+    from .paper_figures import paper_figures
+
+    try:
+        paths = paper_figures(args.out, accuracy=args.accuracy)
+    except ValueError as exc:
+        raise _usage_error(str(exc)) from None
+    except RuntimeError as exc:
+        print(f"ehd paper-figures: {exc}", file=sys.stderr)
+        return 1
+    print(f"wrote {len(paths)} files to {args.out}: "
+          f"{', '.join(p.name for p in paths if p.suffix == '.png')}")
+    return 0
+
+
+def _build_scene(sub) -> None:
+    from .cli import _add_numerics_flags
+
+    p = sub.add_parser(
+        "scene", help="solve a collision given in physical units (bodies, fluid, speed)",
+        description="Solve one collision given in physical units, check the model's premises, "
+                    "and report the results in SI and in the scalings. Values are SI numbers or "
+                    "strings with units ('50 um', '10 cm/s', '1 mPa s'). Flags override the file.")
+    p.add_argument("file", nargs="?", default=None, help="scene file (TOML; see docs/scenes.md)")
+    p.add_argument("--title", default=None, help="a line describing the scene")
+    for n in (1, 2):
+        g = p.add_argument_group(f"body{n}" + (" (a sphere, or a plane wall with --wall)" if n == 2 else " (a sphere)"))
+        g.add_argument(f"--material{n}", default=None, help="named material (--list-materials)")
+        g.add_argument(f"--radius{n}", default=None, help="sphere radius, e.g. '50 um' (inf: wall)")
+        g.add_argument(f"--density{n}", default=None, help="density, e.g. '2600 kg/m^3'")
+        g.add_argument(f"--youngs-modulus{n}", dest=f"youngs_modulus{n}", default=None,
+                       help="Young's modulus, e.g. '70 GPa'")
+        g.add_argument(f"--poisson-ratio{n}", dest=f"poisson_ratio{n}", default=None,
+                       help="Poisson ratio in (-1, 0.5]")
+        g.add_argument(f"--yield-strength{n}", dest=f"yield_strength{n}", default=None,
+                       help="yield strength (enables the plasticity check)")
+    p.add_argument("--wall", action="store_true", help="body2 is a plane wall (infinite radius and mass)")
+    g = p.add_argument_group("fluid")
+    g.add_argument("--fluid", default=None, help="named fluid (--list-materials)")
+    g.add_argument("--viscosity", default=None, help="dynamic viscosity, e.g. '1 mPa s'")
+    g.add_argument("--fluid-density", dest="fluid_density", default=None, help="e.g. '998 kg/m^3'")
+    g.add_argument("--vapour-pressure", dest="vapour_pressure", default=None, help="e.g. '2.3 kPa'")
+    g.add_argument("--mean-free-path", dest="mean_free_path", default=None, help="gases, e.g. '67 nm'")
+    g.add_argument("--ambient-pressure", dest="ambient_pressure", default=None,
+                   help="absolute ambient pressure (enables the cavitation check), e.g. '1 atm'")
+    g = p.add_argument_group("approach")
+    g.add_argument("--v0", default=None, help="approach speed, e.g. '10 cm/s'")
+    g.add_argument("--x0", default=None, help="starting gap, e.g. '250 nm' (default 0.01 a)")
+    g.add_argument("--x0-over-a", dest="x0_over_a", default=None, help="starting gap as x0/a")
+    p.add_argument("--materials", action="append", metavar="FILE",
+                   help="extra materials/fluids TOML file (repeatable; overrides shipped entries)")
+    p.add_argument("--list-materials", action="store_true",
+                   help="print the known materials and fluids with their sources, then exit")
+    _add_numerics_flags(p)
+    p.add_argument("--json", action="store_true",
+                   help="print exactly one JSON object (keys in docs/scenes.md)")
+    p.add_argument("--plot", metavar="DIR", default=None,
+                   help="write the scene's figures (PNG and PDF) into DIR")
+    p.add_argument("--strict", action="store_true",
+                   help="exit 1 when any validity check warns")
+    p.set_defaults(func=cmd_scene)
+
+
+def _build_paper_figures(sub) -> None:
+    p = sub.add_parser("paper-figures", help="write the in-depth figures 2-11 (kernel, I(xi), "
+                                             "St = 2.5/5/10 at eps = 0.01)")
+    p.add_argument("--out", required=True, metavar="DIR", help="output directory")
+    p.add_argument("--accuracy", default="standard", help="solver preset: fast, standard or fine")
+    p.set_defaults(func=cmd_paper_figures)
+
+
+def register(subparsers) -> None:
+    """Add ``scene`` and ``paper-figures`` to the ``ehd`` command line."""
+    _build_scene(subparsers)
+    _build_paper_figures(subparsers)

@@ -1,0 +1,364 @@
+"""Scenes in physical units: hand-computed parameters, wall equivalence, validity checks, errors."""
+
+import json
+import math
+
+import pytest
+
+from pipeline.cli import main
+from pipeline.materials import MaterialError, load_table
+from pipeline.scene import (RESULT_KEYS, THRESHOLDS, SceneError, premise_checks, run_scene,
+                            scene_from_dict)
+from pipeline.units import FieldSpec, UnitError, to_si
+
+
+@pytest.fixture(scope="module")
+def table():
+    return load_table(user_files=False)
+
+
+@pytest.fixture(autouse=True)
+def _no_user_materials(monkeypatch, tmp_path):
+    """Tests must not see the developer's own ~/.config/ehd/materials.toml or $EHD_MATERIALS."""
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "config"))
+    monkeypatch.delenv("EHD_MATERIALS", raising=False)
+
+
+def sandstone(**top):
+    """physics.md's worked example: 50 um radius sandstone grains, mu = 1 mPa s, v0 = 0.1 m/s."""
+    data = {
+        "v0": "0.1 m/s",
+        "body1": {"material": "sandstone", "radius": "50 um"},
+        "body2": {"material": "sandstone", "radius": "50 um"},
+        "fluid": {"viscosity": "1 mPa s", "density": "1000 kg/m^3"},
+    }
+    data.update(top)
+    return data
+
+
+# ---- the worked example, by hand ------------------------------------------------------------
+def test_worked_example_matches_hand_computation(table):
+    s = scene_from_dict(sandstone(), table)
+    # Hand computation (physics.md values: a1 = a2 = 50 um, rho = 2600, E = 5.7e10, nu = 0.1,
+    # mu = 1e-3, v0 = 0.1, x0 = 0.01 a):
+    #   a = 25 um; m = m1/2 = 2600 * (4/3) pi (50e-6)^3 / 2 = 6.80678e-10 kg
+    #   St = m v0 / (6 pi mu a^2) = (4/9) rho a1 v0 / mu = (4/9) * 13 = 52/9 = 5.77778
+    #   theta = 2 (1 - 0.01) / (pi 5.7e10) = 1.98 / 1.790708e11 = 1.105708e-11 1/Pa
+    #   x1 = (4 theta mu a^1.5 v0)^0.4, a^1.5 = 1.25e-7: (5.528540e-22)^0.4 = 3.14083e-9 m
+    #   eps = (x1 / x0)^2.5 = (3.14083e-9 / 2.5e-7)^2.5 = 1.76913e-5
+    #   Re = rho_f v0 a / mu = 1000 * 0.1 * 25e-6 / 1e-3 = 2.5
+    # Tolerances: the exact ones (a, St, Re) only see float rounding of "50 um" -> 1e-12; the
+    # six-digit literals are good to half a unit in their last digit (5e-6 relative).
+    assert s.reduced_radius == pytest.approx(25e-6, rel=1e-12)
+    assert s.reduced_mass == pytest.approx(6.80678e-10, rel=5e-6)
+    assert s.stokes == pytest.approx(52.0 / 9.0, rel=1e-12)
+    assert s.theta == pytest.approx(1.105708e-11, rel=5e-6)
+    assert s.x1 == pytest.approx(3.14083e-9, rel=5e-6)
+    assert s.eps == pytest.approx(1.76913e-5, rel=5e-6)
+    assert s.x0 == pytest.approx(2.5e-7, rel=1e-12)
+    assert s.reynolds == pytest.approx(2.5, rel=1e-12)
+    # eps and x1 are tied: eps = (x1/x0)^(5/2) (physics.md); two independent formulas in Scene
+    assert s.eps == pytest.approx((s.x1 / s.x0) ** 2.5, rel=1e-12)
+
+
+def test_physical_results_are_the_dimensionless_ones_rescaled(table):
+    r = run_scene(scene_from_dict(sandstone(), table), accuracy="fast")
+    d, c, s = r.to_dict(), r.collision, r.scene
+    assert tuple(d) == RESULT_KEYS
+    assert c.ok and c.model == "ehd"
+    # conversions are single multiplications: only float rounding separates them
+    assert d["closest_approach_nm"] == pytest.approx(c.h_m_x1 * s.x1 * 1e9, rel=1e-12)
+    assert d["rebound_speed_m_per_s"] == pytest.approx(c.v_r * 0.1, rel=1e-12)
+    assert d["peak_force_N"] == pytest.approx(
+        c.peak_force * 6 * math.pi * 1e-3 * (25e-6) ** 2 * 0.1 / s.x1, rel=1e-12)
+    assert d["time_to_stop_s"] == pytest.approx(c.tau_v_zero * 2.5e-7 / 0.1, rel=1e-12)
+    # the peak film pressure is at least the largest profile value, and a rebounding collision
+    # has film tension
+    assert d["peak_pressure_Pa"] >= c.pressure.max() * s.pressure_scale * (1 - 1e-12)
+    assert d["min_pressure_Pa"] < 0 and c.v_r > 0
+
+
+def test_equal_spheres_equal_sphere_on_wall_with_reduced_radius_and_mass(table):
+    pair = scene_from_dict(sandstone(), table)
+    # sphere of the reduced radius 25 um with the reduced mass m1/2: its density must be
+    # (m1/2) / ((4/3) pi (a1/2)^3) = 4 rho; the wall has the same E, nu so theta is unchanged
+    wall = scene_from_dict(sandstone(
+        body1={"material": "sandstone", "radius": "25 um", "density": "10400 kg/m^3"},
+        body2={"material": "sandstone", "wall": True},
+        x0="250 nm"), table)
+    for name in ("reduced_radius", "reduced_mass", "theta", "stokes", "eps", "x1"):
+        assert getattr(wall, name) == pytest.approx(getattr(pair, name), rel=1e-12), name
+    a = run_scene(pair, accuracy="fast").to_dict()
+    b = run_scene(wall, accuracy="fast").to_dict()
+    for key in ("St", "eps", "x1_m", "v_r", "closest_approach_nm", "equilibrium_separation_m",
+                "time_to_stop_s", "peak_force_N", "peak_pressure_Pa", "min_pressure_Pa",
+                "dimple_depth_nm"):
+        # same (St, eps) up to rounding -> the same solve; 1e-9 allows for the rounding of the
+        # inputs propagating through the adaptive stepping
+        assert b[key] == pytest.approx(a[key], rel=1e-9), key
+    assert (b["model"], b["dimple"], b["escaped"]) == (a["model"], a["dimple"], a["escaped"])
+
+
+def test_wall_given_first_is_moved_to_body2(table):
+    s = scene_from_dict(sandstone(body1={"material": "glass", "wall": True}), table)
+    assert s.body2.wall and not s.body1.wall
+    assert s.reduced_radius == pytest.approx(50e-6) and s.reduced_mass == s.body1.mass
+
+
+def test_rigid_scene_reports_why(table):
+    # steel ball on a glass wall in glycerol, slowly: St = 0.18, start deformation 5.23 eps ~ 1e-3
+    data = {"v0": "10 cm/s", "body1": {"material": "chrome_steel", "radius": "1.5 mm"},
+            "body2": {"material": "glass", "wall": True}, "fluid": {"name": "glycerol"}}
+    r = run_scene(scene_from_dict(data, table), accuracy="fast")
+    d = r.to_dict()
+    assert d["model"] == "rigid" and d["model_reason"].startswith("rigid")
+    assert d["St"] < 0.4 and d["v_r"] == 0.0 and d["time_to_stop_s"] is None
+    # rigid creep ends at x0 exp(-St) (physics.md)
+    assert d["closest_approach_nm"] == pytest.approx(d["x0_m"] * math.exp(-d["St"]) * 1e9, rel=1e-9)
+
+
+# ---- validity checks ----------------------------------------------------------------------------
+def names(checks):
+    return {c.check for c in checks}
+
+
+def test_clean_scene_passes_every_check(table):
+    r = run_scene(scene_from_dict(sandstone(), table), accuracy="fast")
+    assert r.warnings == []
+
+
+def test_eps_check(table):
+    # x0 = 10 nm: eps = (3.14083 / 10)^2.5 = 0.0553 > 0.0096 (still inside the solver's 0.1)
+    s = scene_from_dict(sandstone(x0="10 nm"), table)
+    checks = premise_checks(s)
+    assert names(checks) == {"eps"}
+    assert checks[0].value == pytest.approx(s.eps) and checks[0].threshold == THRESHOLDS["eps"]
+
+
+def test_x0_over_a_check(table):
+    # a 10 mPa s fluid keeps Re x0/a = 0.25 * 0.1 = 0.025 quiet
+    fluid = {"viscosity": "10 mPa s", "density": "1000 kg/m^3"}
+    checks = premise_checks(scene_from_dict(sandstone(x0_over_a=0.1, fluid=fluid), table))
+    assert names(checks) == {"x0_over_a"} and checks[0].value == pytest.approx(0.1)
+
+
+def test_fluid_inertia_check(table):
+    # v0 = 1 m/s: Re = 25, Re x0/a = 0.25 > 0.1; eps = 1.8e-4 and (v0/c)^0.2 = 0.19 stay small
+    checks = premise_checks(scene_from_dict(sandstone(v0="1 m/s"), table))
+    assert names(checks) == {"Re_x0_over_a"} and checks[0].value == pytest.approx(0.25, rel=1e-9)
+
+
+def test_elastic_wave_check(table):
+    # steel ball (c = sqrt(210e9/7810) = 5185 m/s) at 6 m/s: (6/5185)^0.2 = 0.259 > 0.25, in a
+    # 10 Pa s oil (Re x0/a = 0.026) starting at x0 = 0.03 a (eps = 0.006): only waves warn
+    data = {"v0": "6 m/s", "x0_over_a": 0.03,
+            "body1": {"material": "chrome_steel", "radius": "1.5 mm"},
+            "body2": {"material": "glass", "wall": True},
+            "fluid": {"viscosity": "10 Pa s", "density": "970 kg/m^3"}}
+    s = scene_from_dict(data, table)
+    checks = premise_checks(s)
+    assert names(checks) == {"wave_parameter"}
+    assert checks[0].value == pytest.approx((6.0 / math.sqrt(210e9 / 7810)) ** 0.2, rel=1e-9)
+
+
+def test_yield_check_fires_and_stays_quiet_below_yield(table):
+    def alu(v0):
+        return scene_from_dict({"v0": v0, "body1": {"material": "aluminium", "radius": "100 um"},
+                                "body2": {"material": "aluminium", "radius": "100 um"},
+                                "fluid": {"name": "water"}}, table)
+
+    fast = run_scene(alu("10 cm/s"), accuracy="fast")
+    assert fast.peak_pressure > 276e6  # 6061-T6 yield; the check must then fire for both bodies
+    assert {"yield_body1", "yield_body2"} <= names(fast.warnings)
+    slow = run_scene(alu("1 mm/s"), accuracy="fast")
+    assert slow.peak_pressure < 276e6 and not any(w.check.startswith("yield") for w in slow.warnings)
+
+
+def test_cavitation_check(table):
+    fires = run_scene(scene_from_dict(sandstone(fluid={"name": "water", "ambient_pressure": "1 atm"}),
+                                      table), accuracy="fast")
+    (w,) = [w for w in fires.warnings if w.check == "cavitation"]
+    assert w.value == pytest.approx(101325.0 + fires.min_pressure) and w.threshold == 2339.0
+    # an ambient pressure above the largest tension (~100 MPa here) suppresses cavitation
+    quiet = run_scene(scene_from_dict(sandstone(fluid={"name": "water",
+                                                       "ambient_pressure": "1 GPa"}), table),
+                      accuracy="fast")
+    assert "cavitation" not in names(quiet.warnings)
+    # no ambient pressure given: not checked, and the notes say so
+    unchecked = run_scene(scene_from_dict(sandstone(fluid={"name": "water"}), table),
+                          accuracy="fast")
+    assert "cavitation" not in names(unchecked.warnings)
+    assert any("ambient_pressure" in n for n in unchecked.notes)
+
+
+def test_mean_free_path_check(table):
+    air = {"v0": "10 cm/s", "body1": {"material": "glass", "radius": "50 um"},
+           "body2": {"material": "glass", "wall": True}, "fluid": {"name": "air"}}
+    r = run_scene(scene_from_dict(air, table), accuracy="fast")
+    (w,) = [w for w in r.warnings if w.check == "mean_free_path"]
+    assert w.threshold == pytest.approx(67.30e-9) and w.value < w.threshold
+    air["fluid"] = {"name": "air", "mean_free_path": "0.001 nm"}
+    r = run_scene(scene_from_dict(air, table), accuracy="fast")
+    assert "mean_free_path" not in names(r.warnings)
+
+
+def test_out_of_range_scene_is_refused_not_solved(table):
+    with pytest.raises(SceneError, match=r"eps = .* outside the model's range"):
+        run_scene(scene_from_dict(sandstone(x0="2 nm"), table))
+
+
+# ---- bad input ------------------------------------------------------------------------------------
+@pytest.mark.parametrize("change, field", [
+    ({"body1": {"material": "sandstone"}}, "body1: missing the field 'radius'"),
+    ({"body1": {"material": "sandstone", "radius": "-5 um"}}, "body1.radius"),
+    ({"body1": {"material": "unobtainium", "radius": "5 um"}}, "unknown material 'unobtainium'"),
+    ({"body1": {"material": "sandstone", "radius": "10 m/s"}}, "body1.radius: '10 m/s' has units"),
+    ({"body1": {"material": "sandstone", "radius": "5 furlongs per"}}, "body1.radius: cannot read"),
+    ({"body1": {"material": "sandstone", "radius": "5 um", "colour": "red"}}, "unknown field"),
+    ({"body1": {"radius": "5 um", "youngs_modulus": "1 GPa"}}, "body1: missing the field 'poisson_ratio'"),
+    ({"body1": {"material": "sandstone", "radius": "5 um", "poisson_ratio": 0.7}}, r"poisson_ratio = 0.7 is outside"),
+    ({"fluid": {"name": "water", "viscosity": "1 m"}}, "fluid.viscosity"),
+    ({"v0": "fast"}, "v0: cannot read"),
+    ({"x0": "1 um", "x0_over_a": 0.01}, "either x0"),
+    ({"body1": {"wall": True, "material": "glass"}, "body2": {"wall": True, "material": "glass"}}, "both plane walls"),
+])
+def test_bad_scene_names_the_field(table, change, field):
+    data = sandstone()
+    data.update(change)
+    with pytest.raises(ValueError, match=field):
+        scene_from_dict(data, table)
+
+
+def test_missing_v0(table):
+    data = sandstone()
+    del data["v0"]
+    with pytest.raises(SceneError, match="missing the field 'v0'"):
+        scene_from_dict(data, table)
+
+
+def test_units_parse_and_convert():
+    length = FieldSpec("[length]", "50 um", si_unit="m")
+    assert to_si("100 um", length, "r") == pytest.approx(1e-4, rel=1e-12)
+    assert to_si("3 mm", length, "r") == pytest.approx(3e-3, rel=1e-12)
+    assert to_si(2e-5, length, "r") == 2e-5  # bare numbers are SI
+    assert to_si("2e-5", length, "r") == 2e-5  # so are quoted numbers (command-line flags)
+    visc = FieldSpec("[pressure] * [time]", "1 mPa s", si_unit="Pa*s")
+    assert to_si("1 cP", visc, "mu") == pytest.approx(1e-3, rel=1e-12)
+    assert to_si("1.41 Pa s", visc, "mu") == pytest.approx(1.41, rel=1e-12)
+    with pytest.raises(UnitError, match="mu: '1 m/s' has units"):
+        to_si("1 m/s", visc, "mu")
+    with pytest.raises(UnitError, match="expected a number"):
+        to_si(True, visc, "mu")
+
+
+# ---- the command line -------------------------------------------------------------------------
+def write(tmp_path, text, name="scene.toml"):
+    p = tmp_path / name
+    p.write_text(text)
+    return str(p)
+
+
+SCENE = """
+title = "sandstone"
+v0 = "10 cm/s"
+[body1]
+material = "sandstone"
+radius = "50 um"
+[body2]
+material = "sandstone"
+radius = "50 um"
+[fluid]
+name = "water"
+"""
+
+
+def test_cli_json_is_one_object_with_documented_keys(tmp_path, capsys):
+    assert main(["scene", write(tmp_path, SCENE), "--json", "--accuracy", "fast"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert tuple(d) == RESULT_KEYS and d["model"] == "ehd" and d["warnings"] == []
+
+
+def test_cli_flags_override_the_file_and_build_a_scene_alone(tmp_path, capsys):
+    assert main(["scene", write(tmp_path, SCENE), "--json", "--accuracy", "fast",
+                 "--v0", "1 m/s"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["inputs"]["v0_m_per_s"] == 1.0
+    assert main(["scene", "--material1", "glass", "--radius1", "1 mm", "--wall",
+                 "--material2", "glass", "--fluid", "water", "--v0", "1 cm/s", "--json",
+                 "--accuracy", "fast"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["inputs"]["body2"]["wall"] and d["reduced_radius_m"] == pytest.approx(1e-3)
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda t: t.replace('v0 = "10 cm/s"', ""), "missing the field 'v0'"),
+    (lambda t: t.replace('radius = "50 um"', 'radius = "-50 um"', 1), "body1.radius"),
+    (lambda t: t.replace('material = "sandstone"', 'material = "kryptonite"', 1), "unknown material"),
+    (lambda t: t.replace('radius = "50 um"', 'radius = "50 kg"', 1), "body1.radius: '50 kg' has units"),
+    (lambda t: t + "[[oops", "not valid TOML"),
+])
+def test_cli_bad_file_exits_2_with_one_line(tmp_path, capsys, edit, message):
+    assert main(["scene", write(tmp_path, edit(SCENE))]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and "Traceback" not in err and len(err.splitlines()) == 1
+
+
+def test_cli_missing_file_and_no_scene(capsys, tmp_path):
+    assert main(["scene", str(tmp_path / "nope.toml")]) == 2
+    assert "not found" in capsys.readouterr().err
+    assert main(["scene"]) == 2
+    assert "give a scene file" in capsys.readouterr().err
+
+
+def test_cli_strict_exits_1_on_warnings(tmp_path, capsys):
+    path = write(tmp_path, SCENE.replace('name = "water"', 'name = "water"\nambient_pressure = "1 atm"'))
+    assert main(["scene", path, "--accuracy", "fast"]) == 0
+    out = capsys.readouterr().out
+    assert "[cavitation]" in out
+    assert main(["scene", path, "--accuracy", "fast", "--strict"]) == 1
+
+
+# ---- materials ------------------------------------------------------------------------------------
+def test_every_shipped_entry_has_a_source_and_sane_values(table):
+    assert {"glass", "quartz", "sandstone", "steel", "aluminium", "pmma", "polystyrene"} <= set(table.solids)
+    assert {"water", "air", "glycerol", "glycerol_water_50", "silicone_oil_100cst"} <= set(table.fluids)
+    for s in table.solids.values():
+        assert len(s.source) > 20 and 1e8 < s.youngs_modulus < 1e12 and 500 < s.density < 2e4
+    for f in table.fluids.values():
+        assert len(f.source) > 20 and 1e-6 < f.viscosity < 1e3
+
+
+def test_user_materials_file_env_and_inline(tmp_path, monkeypatch, capsys):
+    mine = write(tmp_path, """
+[materials.unobtainium]
+youngs_modulus = "1 TPa"
+poisson_ratio = 0.1
+density = "1000 kg/m^3"
+source = "own measurement"
+""", "mine.toml")
+    scene = SCENE.replace('material = "sandstone"', 'material = "unobtainium"', 1)
+    path = write(tmp_path, scene)
+    assert main(["scene", path, "--json", "--accuracy", "fast"]) == 2  # not known yet
+    assert "unknown material 'unobtainium'" in capsys.readouterr().err
+    assert main(["scene", path, "--json", "--accuracy", "fast", "--materials", mine]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["inputs"]["body1"]["youngs_modulus_Pa"] == 1e12
+    monkeypatch.setenv("EHD_MATERIALS", mine)
+    assert main(["scene", path, "--json", "--accuracy", "fast"]) == 0
+    capsys.readouterr()
+    monkeypatch.delenv("EHD_MATERIALS")
+    inline = scene + '\n[materials.unobtainium]\nyoungs_modulus = "1 TPa"\npoisson_ratio = 0.1\n' \
+                     'density = 1000\nsource = "inline"\n'
+    assert main(["scene", write(tmp_path, inline), "--json", "--accuracy", "fast"]) == 0
+
+
+def test_user_entry_without_source_is_refused(tmp_path):
+    bad = write(tmp_path, '[fluids.goo]\nviscosity = "1 Pa s"\ndensity = 1000\n', "bad.toml")
+    with pytest.raises(MaterialError, match=r"\[fluids.goo\] needs a 'source'"):
+        load_table([bad], user_files=False)
+
+
+def test_list_materials(capsys):
+    assert main(["scene", "--list-materials"]) == 0
+    out = capsys.readouterr().out
+    assert "sandstone" in out and "source:" in out and "water" in out
