@@ -74,6 +74,8 @@ def _print_scene(d: dict) -> None:
 def cmd_run(args) -> int:
     from solver import collide
 
+    if args.save and not args.save.endswith((".nc", ".zarr")):
+        raise UsageError(f"--save: unknown file type {args.save!r}; use a .nc or .zarr path")
     try:
         result = collide(args.St, args.eps, accuracy=args.accuracy,
                          save_profiles=bool(args.save), **_numerics_overrides(args))
@@ -94,10 +96,8 @@ def cmd_run(args) -> int:
 def _save_dataset(ds, path: str) -> None:
     if path.endswith(".zarr"):
         ds.to_zarr(path, mode="w")
-    elif path.endswith(".nc"):
-        ds.to_netcdf(path, engine="scipy")
     else:
-        raise UsageError(f"--save: unknown file type {path!r}; use a .nc or .zarr path")
+        ds.to_netcdf(path, engine="scipy")  # netCDF3 via scipy: no extra dependency
 
 
 def _build_run(sub) -> None:

@@ -220,10 +220,26 @@ def _parabolic_peak(t, f, i):
     return tv, fv
 
 
-def inner_radius(stokes, numerics: Numerics) -> float:
-    """Radius of the uniform inner grid region: covers the Hertz contact radius
-    ``sqrt(delta_H)`` (and at least 2, the film's width at small St)."""
-    return numerics.inner_factor * max(math.sqrt(hertz_overlap(stokes)), 2.0)
+FAR_FIELD_REACH = 8.0  # the grid reaches this many film widths sqrt(2 X) beyond the axis
+
+
+def scene_grid(stokes, x_switch, numerics: Numerics):
+    """The radial grid of a scene.
+
+    The inner region covers the Hertz contact radius ``sqrt(delta_H)`` (at least 2, the film's
+    width at small St). The grid must also reach well beyond the widest film the coupled phase
+    sees, ``sqrt(2 X)`` at the hand-over and at the release (where ``W(0)/X = release`` on the
+    rigid path with ``V <= 1``); its extent doubles until it does (a few outer cells each time).
+    """
+    inner = numerics.inner_factor * max(math.sqrt(hertz_overlap(stokes)), 2.0)
+    x_release = (rigid.HANDOVER_COEFF / numerics.release) ** 0.4
+    reach = FAR_FIELD_REACH * math.sqrt(2.0 * max(x_switch, x_release)) / inner
+    extent = numerics.outer_extent
+    while extent < reach:
+        extent *= 2.0
+    ref = reference_grid(numerics.n_inner, numerics.axis_ratio, numerics.axis_extent,
+                         numerics.stretch, extent, numerics.max_rel)
+    return scaled_grid(ref, inner)
 
 
 def collide(St, eps, *, accuracy: str = "standard", **overrides) -> Collision:
@@ -315,9 +331,7 @@ def _coupled(stokes, eps, accuracy, numerics, x_start, x_switch, tau_per_t):
     v_switch = float(rigid.velocity(x_switch, x_start, 1.0, stokes))
     t_switch = float(rigid.elapsed_time(x_switch, x_start, 1.0, stokes))
 
-    ref = reference_grid(numerics.n_inner, numerics.axis_ratio, numerics.axis_extent, numerics.stretch, numerics.outer_extent,
-                         numerics.max_rel)
-    grid = scaled_grid(ref, inner_radius(stokes, numerics))
+    grid = scene_grid(stokes, x_switch, numerics)
     p_init = 3.0 * v_switch / (x_switch + grid.s) ** 2  # rigid pressure; K p = asymptotic W
     time_scale = x_switch / max(v_switch, 1e-3)
     code, counters, rows, p_hist, w_hist = stepper.integrate(
@@ -350,6 +364,7 @@ def _coupled(stokes, eps, accuracy, numerics, x_start, x_switch, tau_per_t):
         result.deformation = w_hist
         result.profile_x = x_c
     if name != "ok":
+        result.v_r = math.nan
         result.series = _concat(blocks)
         result.message = (f"{message} (St={stokes:g}, eps={eps:g}, after {counters[0]} steps at "
                           f"tau={t_c[-1] * tau_per_t:.4g})")

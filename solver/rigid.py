@@ -34,20 +34,20 @@ HANDOVER_COEFF = 3.0 * I0  # W(0)/X = HANDOVER_COEFF * V * X**-2.5 along the rig
 
 
 def _scaled_ei(z):
-    """``exp(-z) Ei(z)``, without overflow for large ``z`` (asymptotic series past z = 40)."""
+    """``exp(-z) Ei(z)`` without overflow: for ``|z| > 40`` the asymptotic series
+    ``(1/z) sum_k k!/z^k`` (terms fall until k ~ |z|; truncation error ~ exp(-|z|))."""
     z = np.asarray(z, dtype=float)
     out = np.empty_like(z)
-    small = z < 40.0
-    out[small] = np.exp(-z[small]) * special.expi(z[small])
-    zl = z[~small]
+    mid = np.abs(z) <= 40.0
+    out[mid] = np.exp(-z[mid]) * special.expi(z[mid])
+    zl = z[~mid]
     if zl.size:
-        # exp(-z) Ei(z) = (1/z) sum_k k!/z^k; terms fall until k ~ z, truncation error ~ exp(-z)
         term = np.ones_like(zl)
         total = np.ones_like(zl)
-        for k in range(1, 40):
+        for k in range(1, 30):
             term = term * k / zl
             total += term
-        out[~small] = total / zl
+        out[~mid] = total / zl
     return out
 
 

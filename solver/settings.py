@@ -61,8 +61,8 @@ _BOUNDS = {
     "max_rel": (0.01, 1.0),
     "inner_factor": (0.5, 10.0),
     "rtol": (1e-10, 0.1),
-    "switch": (1e-8, 1.0),
-    "release": (1e-9, 1.0),
+    "switch": (1e-12, 1.0),
+    "release": (1e-13, 1.0),
     "max_steps": (10, 10**8),
 }
 

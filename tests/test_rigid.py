@@ -1,0 +1,61 @@
+"""Analytic rigid-sphere motion (the cheap model and the hand-over) against direct integration."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy import integrate, special
+
+from solver import rigid
+
+
+@pytest.mark.parametrize("stokes, x_from, v_from", [(2.0, 10.0, 1.0), (30.0, 3.0, 1.0),
+                                                     (5.0, 0.5, -0.4), (300.0, 2.0, -0.8)])
+def test_velocity_and_time_match_ode(stokes, x_from, v_from):
+    # dX/dT = -V, dV/dT = -V/(St X) (force 3V/X, physics.md) integrated to 1e-12
+    def rhs(t, y):
+        return [-y[1], -y[1] / (stokes * y[0])]
+
+    t_end = 0.5 * abs(rigid.elapsed_time(x_from * math.exp(-0.5 * stokes * v_from), x_from,
+                                         v_from, stokes))
+    sol = integrate.solve_ivp(rhs, (0.0, t_end), [x_from, v_from], rtol=1e-12, atol=1e-14,
+                              dense_output=True)
+    t = np.linspace(0.0, t_end, 7)[1:]
+    x, v = sol.sol(t)
+    assert rigid.velocity(x, x_from, v_from, stokes) == pytest.approx(v, rel=1e-9, abs=1e-11)
+    assert rigid.elapsed_time(x, x_from, v_from, stokes) == pytest.approx(t, rel=1e-8)
+
+
+def test_rest_separation_is_where_velocity_vanishes():
+    ln_xe = rigid.rest_separation(4.0, -0.3, 10.0)
+    assert rigid.velocity(math.exp(ln_xe), 4.0, -0.3, 10.0) == pytest.approx(0.0, abs=1e-14)
+    assert ln_xe == pytest.approx(math.log(4.0) + 3.0)
+
+
+def test_scaled_ei_is_continuous_at_the_series_switch():
+    # exp(-z) Ei(z) from scipy inside |z| <= 40, asymptotic series outside
+    for z in (40.0, -40.0):
+        inner = math.exp(-z) * special.expi(z)
+        outer = rigid._scaled_ei(np.array([z * (1 + 1e-12)]))[0]
+        assert outer == pytest.approx(inner, rel=1e-12)
+
+
+def test_handover_on_the_rigid_path():
+    x0, stokes, threshold = 1e-6**-0.4, 10.0, 0.01
+    x = rigid.handover_separation(x0, stokes, threshold)
+    v = rigid.velocity(x, x0, 1.0, stokes)
+    assert rigid.deformation_ratio(x, v) == pytest.approx(threshold, rel=1e-10)
+    # first crossing: before the rigid path's deformation peak at x0 exp(0.4 - St)
+    assert x > x0 * math.exp(0.4 - stokes)
+
+
+def test_handover_peak_and_never():
+    x0 = 1e-6**-0.4
+    # physics.md: W/X peaks at 3 pi^2 eps exp(2.5 St - 1)/(10 sqrt 2 St) for St > 0.4
+    stokes = 5.0
+    peak = 3 * math.pi**2 * 1e-6 * math.exp(2.5 * stokes - 1) / (10 * math.sqrt(2) * stokes)
+    assert rigid.handover_separation(x0, stokes, 0.999 * peak) is not None
+    assert rigid.handover_separation(x0, stokes, 1.001 * peak) is None
+    # St <= 0.4: the ratio only falls from its start value 3 I0 eps = 5.2e-6
+    assert rigid.handover_separation(x0, 0.3, 1e-5) is None
+    assert rigid.handover_separation(1.0, 0.3, 1.0) == 1.0  # already past the threshold
