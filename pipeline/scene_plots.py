@@ -98,6 +98,11 @@ def plot_profiles(ax, c, quantity: str, rows=None, r_max=None):
         ax.plot(c.radius[keep], data[i, keep], color=color, label=rf"$\tau$ = {c.profile_tau[i]:.3g}")
     if quantity == "P":
         ax.axhline(0.0, color="0.5", lw=0.8)
+    if quantity == "H":
+        # the parabolic far field would set the scale; keep the contact region readable
+        lo = min(float(data[i, keep].min()) for i in rows)
+        top = 1.3 * max(float(data[i, 0]) for i in rows)
+        ax.set_ylim(min(0.0, lo) - 0.03 * top, top)
     ax.set_xlim(0.0, r_max)
     ax.set_xlabel(LABELS["R"])
     ax.set_ylabel(LABELS[quantity])
