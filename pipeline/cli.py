@@ -78,7 +78,7 @@ def cmd_run(args) -> int:
         raise UsageError(f"--save: unknown file type {args.save!r}; use a .nc or .zarr path")
     try:
         result = collide(args.St, args.eps, accuracy=args.accuracy,
-                         save_profiles=bool(args.save), **_numerics_overrides(args))
+                         save_profiles=bool(args.save or args.plot), **_numerics_overrides(args))
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     d = result.to_dict()
@@ -90,6 +90,12 @@ def cmd_run(args) -> int:
         _save_dataset(result.to_xarray(), args.save)
         if not args.json:
             print(f"saved {args.save}")
+    if args.plot and result.ok:
+        from .scene_plots import plot_scene
+
+        paths = plot_scene(result, args.plot)
+        if not args.json:
+            print(f"figures: {', '.join(str(p) for p in paths if p.suffix == '.png')}")
     return 0 if result.ok else 1
 
 
@@ -109,6 +115,8 @@ def _build_run(sub) -> None:
     p.add_argument("--json", action="store_true", help="print exactly one JSON object")
     p.add_argument("--save", metavar="FILE", default=None,
                    help="write time series and profiles (.nc or .zarr)")
+    p.add_argument("--plot", metavar="DIR", default=None,
+                   help="write the collision's figures (PNG and PDF) into DIR")
     p.set_defaults(func=cmd_run)
 
 

@@ -84,3 +84,11 @@ def test_cli_scene_plot_and_paper_figures_bad_accuracy(tmp_path, capsys):
     assert (tmp_path / "f" / "motion.png").exists()
     assert main(["paper-figures", "--out", str(tmp_path / "p"), "--accuracy", "sloppy"]) == 2
     assert "accuracy" in capsys.readouterr().err
+
+
+def test_cli_run_plot(tmp_path, capsys):
+    assert main(["run", "--St", "5", "--eps", "0.01", "--accuracy", "fast",
+                 "--plot", str(tmp_path)]) == 0
+    assert "figures:" in capsys.readouterr().out
+    assert {p.stem for p in tmp_path.glob("*.png")} >= {"gap", "deformation", "pressure",
+                                                        "motion", "energy"}
