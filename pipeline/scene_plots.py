@@ -136,6 +136,10 @@ def plot_motion(fig, c):
     axes[2].plot(tau, np.asarray(s["H_min"])[m], color="C1", ls="--",
                  label=r"$h_{\min}/x_1$ (film, smallest over $r$)")
     axes[2].axhline(0.0, color="0.5", lw=0.8)
+    if np.max(np.asarray(s["X"])[m]) > 20.0:
+        # small eps: the start (x0/x1 = eps^-0.4) would flatten the contact region to a line;
+        # symlog keeps the approach and the (possibly negative) overlap both visible
+        axes[2].set_yscale("symlog", linthresh=1.0)
     axes[2].set_ylabel(LABELS["X"])
     axes[2].set_xlabel(LABELS["tau"])
     axes[2].legend()
