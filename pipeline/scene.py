@@ -35,7 +35,7 @@ from .units import FieldSpec, format_quantity, to_si
 __all__ = [
     "SceneError", "Body", "Scene", "Check", "SceneResult", "scene_from_dict", "run_scene",
     "pressure_extremes", "premise_checks", "outcome_checks", "THRESHOLDS", "RESULT_KEYS",
-    "DEFAULT_X0_OVER_A",
+    "DEFAULT_X0_OVER_A", "model_reason", "check_solvable",
 ]
 
 

@@ -8,10 +8,8 @@ given, or overridden, by a flag (``--radius1 '50 um'``). Exit codes: 0 success, 
 from __future__ import annotations
 
 import json
-import math
 import sys
 import tomllib
-from pathlib import Path
 
 __all__ = ["register", "cmd_scene", "cmd_paper_figures", "load_scene", "format_report"]
 
