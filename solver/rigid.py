@@ -80,13 +80,15 @@ def handover_separation(x_start, stokes, threshold):
     With ``u = ln(X0/X)``, ``W(0)/X = c (1 - u/St) X0^-2.5 exp(2.5 u)`` peaks at ``u = St - 0.4``.
     """
 
-    def ratio_minus(u):
-        return HANDOVER_COEFF * (1.0 - u / stokes) * x_start**-2.5 * math.exp(2.5 * u) - threshold
+    log_c = math.log(HANDOVER_COEFF) - 2.5 * math.log(x_start) - math.log(threshold)
 
-    if ratio_minus(0.0) >= 0.0:
+    def log_ratio(u):  # ln(W(0)/X / threshold), in logs: exp(2.5 u) overflows at large St
+        return log_c + math.log1p(-u / stokes) + 2.5 * u
+
+    if log_ratio(0.0) >= 0.0:
         return x_start
     u_peak = stokes - 0.4
-    if u_peak <= 0.0 or ratio_minus(u_peak) < 0.0:
+    if u_peak <= 0.0 or log_ratio(u_peak) < 0.0:
         return None
-    u = optimize.brentq(ratio_minus, 0.0, u_peak, xtol=1e-14, rtol=1e-14)
+    u = optimize.brentq(log_ratio, 0.0, u_peak, xtol=1e-14, rtol=1e-14)
     return x_start * math.exp(-u)
