@@ -40,15 +40,15 @@ class Numerics:
 
 
 PRESETS = {
-    # measured against a converged reference in benchmarks/ (accuracy.md); ~10 / 30 / 120 ms
+    # chosen from the accuracy study in benchmarks/accuracy.md (errors and times per preset)
     "fast": Numerics(n_inner=32, axis_ratio=0.1, axis_extent=0.25, stretch=1.25, outer_extent=30.0,
-                     max_rel=0.3, inner_factor=1.5, rtol=3e-4, switch=0.02, release=0.005,
+                     max_rel=0.3, inner_factor=1.2, rtol=3e-4, switch=0.01, release=0.003,
                      max_steps=20000),
     "standard": Numerics(n_inner=64, axis_ratio=0.1, axis_extent=0.25, stretch=1.2,
-                         outer_extent=30.0, max_rel=0.3, inner_factor=1.5, rtol=5e-5, switch=0.005,
-                         release=0.001, max_steps=50000),
+                         outer_extent=30.0, max_rel=0.3, inner_factor=1.2, rtol=5e-5, switch=0.001,
+                         release=0.0003, max_steps=50000),
     "fine": Numerics(n_inner=128, axis_ratio=0.1, axis_extent=0.25, stretch=1.1, outer_extent=30.0,
-                     max_rel=0.2, inner_factor=1.5, rtol=1e-5, switch=0.002, release=0.0003,
+                     max_rel=0.2, inner_factor=1.2, rtol=1e-5, switch=0.0002, release=0.00005,
                      max_steps=200000),
 }
 
