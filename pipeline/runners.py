@@ -1,0 +1,118 @@
+"""Executors: where the scenes of a sweep run. Chosen at run time; they never change a result.
+
+Every runner offers the same thing, ``run.unordered(fn, jobs)``: an iterator of
+``(tag, record)`` in completion order, so the sweep has one loop (progress bar, store writes)
+whatever runs the scenes:
+
+- ``serial``: in this process, one scene after another (tests, debugging);
+- ``threads``: a dask LocalCluster of threads in this process (the solver's time loop is compiled
+  ``nogil``, so threads run scenes side by side);
+- ``processes`` (default): a dask LocalCluster of worker processes, one thread each;
+- an existing dask.distributed scheduler (``address`` or ``scheduler_file``), e.g. on SLURM.
+
+dask futures go through ``client.get_executor()``, a standard ``concurrent.futures`` executor, and
+``concurrent.futures.as_completed``. Compiled code is warmed once in this process *before* any
+worker starts (it writes the on-disk numba cache), then every worker loads it before its first
+scene (``client.run``), so no worker compiles on its own.
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import as_completed
+from contextlib import contextmanager
+
+__all__ = ["open_runner", "default_workers", "RUNNERS", "Runner"]
+
+RUNNERS = ("processes", "threads", "serial")
+
+
+def default_workers() -> int:
+    """Cores this process may use (respects taskset/cgroup affinity)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return os.cpu_count() or 1
+
+
+class Runner:
+    """Runs jobs; ``description`` says where (for the progress header)."""
+
+    def __init__(self, description: str, executor=None, client=None):
+        self.description = description
+        self._executor = executor
+        self.client = client
+
+    def unordered(self, fn, jobs):
+        """Yield ``(tag, result)`` for ``jobs = [(tag, args), ...]`` as they finish.
+
+        An exception raised by ``fn`` (or a lost worker) is yielded as the exception object, so
+        the caller can store it as a failed scene and go on.
+        """
+        if self._executor is None:
+            for tag, args in jobs:  # lazily: each result reaches the store before the next runs
+                try:
+                    yield tag, fn(*args)
+                except Exception as exc:
+                    yield tag, exc
+            return
+        futures = {self._executor.submit(fn, *args): tag for tag, args in jobs}
+        try:
+            for fut in as_completed(futures):
+                exc = fut.exception()
+                yield futures.pop(fut), (exc if exc is not None else fut.result())
+        finally:
+            for fut in futures:  # interrupted: do not leave scenes running on a shared cluster
+                fut.cancel()
+
+
+@contextmanager
+def open_runner(kind: str | None = "processes", workers: int | None = None,
+                address: str | None = None, scheduler_file: str | None = None, warm=None):
+    """Start (or connect to) an executor and yield a :class:`Runner`.
+
+    Parameters
+    ----------
+    kind : {"processes", "threads", "serial"} or None
+        Local executor; ignored when ``address`` or ``scheduler_file`` is given.
+    workers : int, optional
+        Local: worker processes (or threads); default all usable cores. Existing scheduler: wait
+        until this many workers are connected before submitting.
+    address, scheduler_file : str, optional
+        Connect to an existing dask.distributed scheduler instead of starting one.
+    warm : callable, optional
+        Called once here before any worker starts, then on every worker (``client.run``).
+    """
+    if warm is not None:
+        warm()  # compile once, here: writes the on-disk numba cache the workers will load
+    if address is None and scheduler_file is None and kind == "serial":
+        yield Runner("serial (this process)")
+        return
+
+    from dask.distributed import Client, LocalCluster
+
+    if address is not None or scheduler_file is not None:
+        target = address if address is not None else f"scheduler file {scheduler_file}"
+        try:
+            client = Client(address, timeout="30s") if address is not None else \
+                Client(scheduler_file=scheduler_file, timeout="30s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise ConnectionError(f"cannot reach the dask scheduler ({target}): {exc}") from None
+        with client:
+            if workers:
+                client.wait_for_workers(workers)
+            yield _dask_runner(client, f"dask scheduler {client.scheduler.address}", warm)
+        return
+
+    n = workers or default_workers()
+    processes = kind == "processes"
+    cluster = LocalCluster(n_workers=n if processes else 1, threads_per_worker=1 if processes else n,
+                           processes=processes, dashboard_address=None)
+    with cluster, Client(cluster) as client:
+        yield _dask_runner(client, f"local {'processes' if processes else 'threads'} x{n}", warm)
+
+
+def _dask_runner(client, description: str, warm) -> Runner:
+    if warm is not None:
+        client.run(warm)  # each worker process loads the cached kernels before its first scene
+    return Runner(description, executor=client.get_executor(pure=False), client=client)

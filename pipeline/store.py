@@ -1,0 +1,550 @@
+"""The sweep store: one zarr store per sweep, dims ``(eps, St)``, and its single writer.
+
+Layout (``STORE_SCHEMA``): every variable of ``VARIABLES`` is a 2-D ``(eps, St)`` array, chunked
+one eps row per chunk; coordinates are sorted ascending. ``status`` (``STATUS_CODES``; 0 = not
+run) is written *after* a cell's data, so a cell with a non-zero status always has its data.
+Root attrs carry the solver version, the cache key and the resolved numerics, the sweep file
+verbatim, package versions and the creation time.
+
+Rules this module enforces (docs/pipeline.md):
+
+- Cache: a store belongs to one cache key (solver version + numerics). Opening it for a sweep with
+  another key raises :class:`StoreMismatch`: old and new results never mix. A new grid is laid out
+  as the union of the old and the new coordinates, existing cells copied over.
+- One writer: :class:`SweepStore` is the only code that writes a store; an exclusive lock
+  (``<store>.lock``, released by the OS even after ``kill -9``) keeps a second sweep out.
+- Crash safety: each finished scene is appended to a journal (``<store>.journal``, one JSON line,
+  flushed to the OS) before anything else, then merged into the store in batches; a new run
+  merges a journal left by a killed run first, so no finished scene is ever computed twice.
+  New layouts are written to a temporary directory and moved into place by ``rename``; zarr
+  writes each chunk atomically, so a reader always sees a valid store.
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import math
+import os
+import shutil
+import warnings
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+
+from .tasks import COUNT_FIELDS, FAILURE_FIELDS, FLAG_FIELDS, FLOAT_FIELDS
+
+__all__ = ["open_results", "SweepStore", "StoreMismatch", "StoreBusy", "STATUS_CODES",
+           "MODEL_CODES", "VARIABLES", "STORE_SCHEMA", "pending_journal", "zarr_warnings"]
+
+STORE_SCHEMA = 1  # bump when variables or their meaning change (an old store is then refused)
+
+STATUS_CODES = {"not_run": 0, "ok": 1, "max_steps": 2, "step_underflow": 3, "nonfinite": 4,
+                "error": 5}
+MODEL_CODES = {"unknown": 0, "rigid": 1, "ehd": 2}
+RTOL_COORD = 1e-9  # grid values this close are the same scene (geomspace round-off is ~1e-16)
+FLUSH_SECONDS = 2.0  # journal -> store merge interval: the journal already makes results durable
+
+# name: (dtype, long_name, units); flags are int8 0/1 with fill -1 (read back as NaN: unknown)
+VARIABLES = {
+    "v_r": ("f8", "maximum rebound (separation) velocity max(-v)/v0, 0 without rebound", "v0"),
+    "h_m_x1": ("f8", "closest approach of the deformed surfaces, whole collision", "x1"),
+    "h_m_x0": ("f8", "closest approach of the deformed surfaces, whole collision", "x0"),
+    "h_m_approach_x1": ("f8", "closest approach until v first reaches 0", "x1"),
+    "h_m_approach_x0": ("f8", "closest approach until v first reaches 0", "x0"),
+    "x_e_x1": ("f8", "equilibrium separation of the undeformed surfaces (inf: exp overflow, "
+               "see ln_x_e_x1)", "x1"),
+    "x_e_x0": ("f8", "equilibrium separation of the undeformed surfaces (inf: exp overflow, "
+               "see ln_x_e_x0)", "x0"),
+    "ln_x_e_x1": ("f8", "natural log of x_e/x1 (finite where x_e/x1 overflows)", "1"),
+    "ln_x_e_x0": ("f8", "natural log of x_e/x0; > 0 means escaped", "1"),
+    "escaped": ("i1", "rebound carries the spheres back beyond x0 (x_e > x0): no sticking", "1"),
+    "tau_max_deformation": ("f8", "time of the largest central deformation W(0)", "x0/v0"),
+    "tau_v_zero": ("f8", "first time v = 0 (inf: the spheres never stop in finite time)",
+                   "x0/v0"),
+    "tau_max_rebound": ("f8", "time of the largest rebound speed (NaN: no rebound)", "x0/v0"),
+    "tau_peak_force": ("f8", "time of the peak film force", "x0/v0"),
+    "peak_force": ("f8", "peak film force", "6 pi mu a^2 v0 / x1"),
+    "w0_max_x1": ("f8", "largest central deformation W(0)", "x1"),
+    "x_min_x1": ("f8", "smallest separation X of the undeformed surfaces (< 0: overlap)", "x1"),
+    "dimple": ("i1", "a dimple forms (central gap above the minimum by more than 1e-3 x1)", "1"),
+    "dimple_depth_x1": ("f8", "largest dimple depth H(0) - min_R H", "x1"),
+    "tau_dimple": ("f8", "first time the dimple is deeper than 1e-3 x1", "x0/v0"),
+    "energy_error": ("f8", "max energy-closure error of the coupled phase", "m v0^2 / 2"),
+    "model": ("i1", "model that answered the scene", "1"),
+    "status": ("i1", "scene status (0 = not run; see flag_meanings)", "1"),
+    "message": ("str", "solver message or failure reason", ""),
+    "wall_s": ("f8", "wall time of the scene on its worker", "s"),
+    "steps": ("i4", "accepted time steps of the coupled solve", "1"),
+    "rejected_steps": ("i4", "rejected time steps of the coupled solve", "1"),
+    "newton_iterations": ("i4", "Newton iterations of the coupled solve", "1"),
+    "lu_factorizations": ("i4", "LU factorisations of the coupled solve", "1"),
+}
+assert set(VARIABLES) == {*FLOAT_FIELDS, *FLAG_FIELDS, *COUNT_FIELDS, "model", "status", "message"}
+
+SCALING = ("lengths along the axis in x1 = (4 theta mu a^1.5 v0)^0.4 (suffix _x1) or x0 (suffix "
+           "_x0); eps = (x1/x0)^2.5; tau = v0 t / x0; velocity / v0; force / (6 pi mu a^2 v0 / x1); "
+           "energies / (m v0^2 / 2)")
+
+
+class StoreMismatch(ValueError):
+    """The store belongs to another solver version, numerics or schema: refuse to mix."""
+
+
+class StoreBusy(RuntimeError):
+    """Another process is writing the store."""
+
+
+@contextmanager
+def zarr_warnings():
+    """The one place that silences zarr 3's notice that consolidated metadata is not part of the
+    v3 spec: we consolidate on purpose, so plain ``xr.open_zarr(path)`` opens the store without
+    falling back (and warning) to listing every array."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="Consolidated metadata is currently not part",
+                                category=UserWarning)
+        yield
+
+
+def _journal_path(path: Path) -> Path:
+    return path.with_name(path.name + ".journal")
+
+
+def _lock_path(path: Path) -> Path:
+    return path.with_name(path.name + ".lock")
+
+
+def _old_path(path: Path) -> Path:
+    return path.with_name(path.name + ".old")
+
+
+def _tmp_path(path: Path) -> Path:
+    return path.with_name(f"{path.name}.tmp-{os.getpid()}")
+
+
+def pending_journal(path) -> int:
+    """Finished scenes of an interrupted sweep not yet merged into the store at ``path``."""
+    return len(_read_journal(_journal_path(Path(path))))
+
+
+def open_results(path):
+    """Open a sweep store for analysis.
+
+    Parameters
+    ----------
+    path : str or Path
+        The store directory (e.g. ``results/paper.zarr``).
+
+    Returns
+    -------
+    xarray.Dataset
+        Lazily loaded, dims ``(eps, St)``. Use ``ds.status == 1`` for valid cells (codes in
+        ``ds.status.attrs["flag_meanings"]``); ``escaped``/``dimple`` read as float (NaN unknown).
+        Plain ``xarray.open_zarr(path)`` gives the same Dataset.
+
+    Raises
+    ------
+    FileNotFoundError
+        No sweep store at ``path``.
+    """
+    import xarray as xr
+
+    path = Path(path)
+    if not (path / "zarr.json").is_file():
+        hint = " (an interrupted re-layout left it in .old; run the sweep again)" \
+            if _old_path(path).exists() else ""
+        raise FileNotFoundError(f"no sweep store at {str(path)!r}{hint}")
+    with zarr_warnings():
+        ds = xr.open_zarr(path, consolidated=True)
+    if "store_schema" not in ds.attrs:
+        raise FileNotFoundError(f"{str(path)!r} is a zarr store but not an ehd sweep store")
+    n = pending_journal(path)
+    if n:
+        warnings.warn(f"{n} finished scenes of an interrupted sweep are in {_journal_path(path)} "
+                      "and not yet in the store; run the sweep again to merge them",
+                      stacklevel=2)
+    return ds
+
+
+def _read_journal(jpath: Path) -> list:
+    """Records of a journal; a line cut short by a kill is ignored (its scene runs again)."""
+    if not jpath.exists():
+        return []
+    out = []
+    with jpath.open() as f:
+        for line in f:
+            try:
+                rec = json.loads(line)
+            except json.JSONDecodeError:
+                continue
+            if isinstance(rec, dict) and "St" in rec and "eps" in rec and "status" in rec:
+                out.append(rec)
+    return out
+
+
+def _package_versions() -> dict:
+    import platform
+    from importlib.metadata import PackageNotFoundError, version
+
+    out = {"python": platform.python_version()}
+    for name in ("numpy", "scipy", "numba", "dask", "distributed", "xarray", "zarr"):
+        try:
+            out[name] = version(name)
+        except PackageNotFoundError:
+            out[name] = None
+    return out
+
+
+def _now() -> str:
+    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+
+
+def _fill(dtype: str):
+    return {"f8": math.nan, "i1": 0, "i4": 0, "str": ""}[dtype]
+
+
+def empty_dataset(St, eps, attrs: dict):
+    """An in-memory store layout with every cell "not run" (decoded form, as read back)."""
+    import xarray as xr
+
+    St = np.asarray(St, dtype=float)
+    eps = np.asarray(eps, dtype=float)
+    shape = (eps.size, St.size)
+    data = {}
+    for name, (dtype, long_name, units) in VARIABLES.items():
+        if name in FLAG_FIELDS:
+            arr = np.full(shape, np.nan, dtype="f4")  # decoded view of int8 with fill -1
+        elif dtype == "str":
+            arr = np.full(shape, "", dtype=object)
+        else:
+            arr = np.full(shape, _fill(dtype), dtype=dtype)
+        var_attrs = {"long_name": long_name, "units": units}
+        if name == "status":
+            var_attrs.update(flag_values=list(STATUS_CODES.values()),
+                             flag_meanings=" ".join(STATUS_CODES))
+        elif name == "model":
+            var_attrs.update(flag_values=list(MODEL_CODES.values()),
+                             flag_meanings=" ".join(MODEL_CODES))
+        elif name in FLAG_FIELDS:
+            var_attrs.update(flag_values=[0, 1], flag_meanings="no yes",
+                             comment="missing (NaN when read) where status != 1")
+        elif name not in FAILURE_FIELDS:
+            var_attrs["comment"] = "NaN where status != 1 (not run or failed)"
+        data[name] = (("eps", "St"), arr, var_attrs)
+    coords = {
+        "eps": ("eps", eps, {"long_name": "elasticity parameter 4 theta mu v0 a^1.5 / x0^2.5",
+                             "units": "1"}),
+        "St": ("St", St, {"long_name": "Stokes number m v0 / (6 pi mu a^2)", "units": "1"}),
+    }
+    return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def _encoding(ds) -> dict:
+    row = (1, ds.sizes["St"])  # one chunk per eps row: a flush rewrites only the rows it touched
+    enc = {}
+    for name in VARIABLES:
+        enc[name] = {"chunks": row}
+        if name in FLAG_FIELDS:
+            enc[name].update(dtype="i1", _FillValue=-1)
+    return enc
+
+
+def _write_new(ds, path: Path) -> None:
+    """Write a complete store next to ``path`` and move it into place (readers never see a
+    half-written layout). An existing store at ``path`` is replaced only after the new one is
+    complete; a kill in between is repaired by :func:`_recover`."""
+    tmp = _tmp_path(path)
+    shutil.rmtree(tmp, ignore_errors=True)
+    with zarr_warnings():
+        # one call is enough: nobody sees the temporary directory until the rename below
+        ds.to_zarr(tmp, mode="w-", consolidated=True, encoding=_encoding(ds))
+    if path.exists():
+        old = _old_path(path)
+        path.rename(old)
+        tmp.rename(path)
+        shutil.rmtree(old)
+    else:
+        tmp.rename(path)
+
+
+def _recover(path: Path) -> None:
+    """Finish or undo a re-layout interrupted by a kill; drop temporary leftovers."""
+    old = _old_path(path)
+    if old.exists():
+        if path.exists():
+            shutil.rmtree(old)  # the new layout was already in place
+        else:
+            old.rename(path)  # killed between the two renames: the old store is intact
+    for tmp in path.parent.glob(f"{path.name}.tmp-*"):
+        shutil.rmtree(tmp, ignore_errors=True)
+    if path.exists():  # a kill during zarr's atomic write leaves its temporary file behind
+        for partial in path.rglob("*.partial"):
+            partial.unlink(missing_ok=True)
+
+
+def _union(old: np.ndarray, new) -> np.ndarray:
+    """Sorted union of grid values, keeping the old values where a new one matches."""
+    extra = [v for v in new if not np.any(np.isclose(old, v, rtol=RTOL_COORD, atol=0.0))]
+    return np.sort(np.concatenate([old, np.asarray(extra, dtype=float)]))
+
+
+def _index(coord: np.ndarray, values) -> np.ndarray:
+    idx = []
+    for v in values:
+        hit = np.nonzero(np.isclose(coord, v, rtol=RTOL_COORD, atol=0.0))[0]
+        if hit.size != 1:
+            raise KeyError(f"{v!r} is not on the store's grid")
+        idx.append(int(hit[0]))
+    return np.asarray(idx, dtype=int)
+
+
+class SweepStore:
+    """The single writer of a sweep store (use :meth:`open` as a context manager).
+
+    Parameters
+    ----------
+    path : Path
+        Store directory.
+    key : str
+        Cache key of the sweep (sha256 hex).
+    flush_seconds : float
+        Interval of journal -> store merges.
+    """
+
+    def __init__(self, path: Path, key: str, flush_seconds: float = FLUSH_SECONDS):
+        self.path = Path(path)
+        self.key = key
+        self.flush_seconds = flush_seconds
+        self._journal = None
+        self._lock = None
+        self._dirty_rows: set[int] = set()
+        self._last_flush = 0.0
+        self.ds = None
+
+    # ---- opening --------------------------------------------------------------------------------
+    @classmethod
+    @contextmanager
+    def open(cls, sweep, path=None, flush_seconds: float = FLUSH_SECONDS):
+        """Lock, recover, check, extend and load the store of ``sweep``; flush and unlock on exit.
+
+        Raises
+        ------
+        StoreMismatch
+            The store at ``path`` was computed with another solver version, numerics or schema.
+        StoreBusy
+            Another process holds the store's lock.
+        """
+        path = Path(path if path is not None else sweep.store)
+        self = cls(path, sweep.cache_key(), flush_seconds)
+        self._acquire_lock()
+        try:
+            self._prepare(sweep)
+            try:
+                yield self
+            finally:
+                # also on Ctrl-C or an error: everything finished so far is merged (and if this
+                # flush fails, the journal still holds it for the next run)
+                self.flush()
+        finally:
+            self._close_journal()
+            self._release_lock()
+
+    def _acquire_lock(self) -> None:
+        import fcntl
+
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        f = _lock_path(self.path).open("a+")
+        try:
+            fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            f.seek(0)
+            holder = f.read().strip() or "another process"
+            f.close()
+            raise StoreBusy(f"store {str(self.path)!r} is being written by {holder}; wait for it "
+                            "to finish (only one sweep writes a store)") from None
+        f.seek(0)
+        f.truncate()
+        f.write(f"pid {os.getpid()}\n")
+        f.flush()
+        self._lock = f
+
+    def _release_lock(self) -> None:
+        if self._lock is not None:
+            self._lock.close()  # closing releases the flock
+            self._lock = None
+
+    def _attrs(self, sweep) -> dict:
+        return {
+            "title": "ehd-collision sweep: elastohydrodynamic collision of two elastic spheres",
+            "store_schema": STORE_SCHEMA,
+            "solver_version": sweep.solver_version(),
+            "cache_key": self.key,
+            "accuracy": sweep.accuracy,
+            "numerics": sweep.numerics(),
+            "sweep_name": sweep.name,
+            "sweep_path": str(sweep.path) if sweep.path is not None else "",
+            "sweep_file": sweep.source,
+            "package_versions": _package_versions(),
+            "created": _now(),
+            "scaling": SCALING,
+        }
+
+    def _prepare(self, sweep) -> None:
+        _recover(self.path)
+        if not self.path.exists():
+            _write_new(empty_dataset(sweep.St, sweep.eps, self._attrs(sweep)), self.path)
+        elif not (self.path / "zarr.json").is_file():
+            raise StoreMismatch(f"{str(self.path)!r} exists but is not a zarr store; choose "
+                                "another --store")
+        self._load()
+        self._check(sweep)
+        self._replay()
+        self._extend(sweep)
+        if self.ds.attrs.get("sweep_file") != sweep.source:
+            self._set_attrs(sweep_file=sweep.source, sweep_name=sweep.name,
+                            sweep_path=str(sweep.path) if sweep.path is not None else "")
+
+    def _load(self) -> None:
+        import xarray as xr
+
+        with zarr_warnings():
+            self.ds = xr.open_zarr(self.path, consolidated=True).load()
+
+    def _check(self, sweep) -> None:
+        attrs = self.ds.attrs
+        if attrs.get("store_schema") != STORE_SCHEMA:
+            raise StoreMismatch(
+                f"{str(self.path)!r} has store schema {attrs.get('store_schema')!r}, this "
+                f"pipeline writes schema {STORE_SCHEMA}; move the old store aside or use --store")
+        if attrs.get("cache_key") == self.key:
+            return
+        old_num, new_num = attrs.get("numerics", {}), sweep.numerics()
+        diffs = []
+        if attrs.get("solver_version") != sweep.solver_version():
+            diffs.append(f"solver_version {attrs.get('solver_version')} -> {sweep.solver_version()}")
+        diffs += [f"{k} {old_num.get(k)!r} -> {new_num.get(k)!r}"
+                  for k in sorted(set(old_num) | set(new_num)) if old_num.get(k) != new_num.get(k)]
+        version = attrs.get("solver_version", "old")
+        raise StoreMismatch(
+            f"store {str(self.path)!r} holds results of another solver version or numerics "
+            f"({'; '.join(diffs) or 'cache key differs'}); results never mix: keep the old store "
+            f"(e.g. mv {self.path} {self.path.with_name(self.path.stem + '-' + version)}"
+            f"{self.path.suffix}) or write this sweep elsewhere with --store PATH")
+
+    def _set_attrs(self, **attrs) -> None:
+        import zarr
+
+        with zarr_warnings():
+            group = zarr.open_group(self.path, mode="r+")
+            group.attrs.update(attrs)
+            zarr.consolidate_metadata(self.path)
+        self.ds.attrs.update(attrs)
+
+    def _extend(self, sweep) -> None:
+        """Re-lay the store out on the union grid if the sweep adds St or eps values."""
+        St_old, eps_old = self.ds["St"].values, self.ds["eps"].values
+        St_new, eps_new = _union(St_old, sweep.St), _union(eps_old, sweep.eps)
+        if St_new.size == St_old.size and eps_new.size == eps_old.size:
+            return
+        fills = {}
+        for name, (dtype, _, _) in VARIABLES.items():
+            fills[name] = math.nan if name in FLAG_FIELDS else _fill(dtype)
+        grown = self.ds.reindex(St=St_new, eps=eps_new, fill_value=fills)
+        for name in VARIABLES:  # reindex keeps values; restore dtypes the fill may have widened
+            grown[name] = grown[name].astype(self.ds[name].dtype)
+        grown.attrs.update(updated=_now())
+        _write_new(grown, self.path)
+        self._load()
+
+    # ---- work list ------------------------------------------------------------------------------
+    def cells(self, sweep):
+        """Store indices ``(i_eps, j_St)`` of every scene of ``sweep`` (row-major)."""
+        ie = _index(self.ds["eps"].values, sweep.eps)
+        js = _index(self.ds["St"].values, sweep.St)
+        return [(int(i), int(j)) for i in ie for j in js]
+
+    def status_of(self, cells) -> np.ndarray:
+        st = self.ds["status"].values
+        return np.array([st[i, j] for i, j in cells], dtype=int)
+
+    def scene(self, cell) -> tuple:
+        i, j = cell
+        return float(self.ds["St"].values[j]), float(self.ds["eps"].values[i])
+
+    # ---- writing --------------------------------------------------------------------------------
+    def record(self, cell, rec: dict, now: float | None = None) -> None:
+        """Keep one finished scene: journal first (durable), then the in-memory copy; merge into
+        the store when the flush interval has passed."""
+        import time
+
+        St, eps = self.scene(cell)
+        if self._journal is None:
+            self._journal = _journal_path(self.path).open("a")
+        self._journal.write(json.dumps({"St": St, "eps": eps, "key": self.key, **rec}) + "\n")
+        self._journal.flush()  # in the OS page cache: survives the process being killed
+        self._apply(cell, rec)
+        now = time.monotonic() if now is None else now
+        if now - self._last_flush >= self.flush_seconds:
+            self.flush()
+
+    def _apply(self, cell, rec: dict) -> None:
+        i, j = cell
+        status = rec.get("status")
+        message = str(rec.get("message", ""))
+        code = STATUS_CODES.get(status)
+        if code is None or code == 0:
+            code = STATUS_CODES["error"]
+            message = f"unknown solver status {status!r}: {message}"
+        ok = code == STATUS_CODES["ok"]
+        ds = self.ds
+        for name in FLOAT_FIELDS:
+            keep = ok or name in FAILURE_FIELDS
+            ds[name].values[i, j] = float(rec.get(name, math.nan)) if keep else math.nan
+        for name in FLAG_FIELDS:
+            ds[name].values[i, j] = float(bool(rec[name])) if ok and name in rec else math.nan
+        for name in COUNT_FIELDS:
+            ds[name].values[i, j] = int(rec.get(name, 0))
+        ds["model"].values[i, j] = MODEL_CODES.get(rec.get("model"), 0)
+        ds["message"].values[i, j] = message
+        ds["status"].values[i, j] = code
+        self._dirty_rows.add(i)
+
+    def _replay(self) -> None:
+        """Merge the journal of an interrupted run (records of this cache key only)."""
+        recs = _read_journal(_journal_path(self.path))
+        St, eps = self.ds["St"].values, self.ds["eps"].values
+        for rec in recs:
+            if rec.get("key") != self.key:
+                continue
+            try:
+                cell = (int(_index(eps, [rec["eps"]])[0]), int(_index(St, [rec["St"]])[0]))
+            except KeyError:
+                continue
+            self._apply(cell, {k: v for k, v in rec.items() if k not in ("St", "eps", "key")})
+        self.flush(force=True)
+
+    def flush(self, force: bool = False) -> None:
+        """Write the touched rows: data first, status last; then drop the merged journal."""
+        import time
+
+        if self._dirty_rows:
+            rows = slice(min(self._dirty_rows), max(self._dirty_rows) + 1)
+            block = self.ds.isel(eps=rows).drop_vars(["eps", "St"])
+            region = {"eps": rows, "St": slice(None)}
+            with zarr_warnings():
+                block.drop_vars("status").to_zarr(self.path, region=region, mode="r+",
+                                                  consolidated=False)
+                block[["status"]].to_zarr(self.path, region=region, mode="r+",
+                                          consolidated=False)
+            self._dirty_rows.clear()
+            force = True
+        if force:
+            self._close_journal()
+            _journal_path(self.path).unlink(missing_ok=True)
+        self._last_flush = time.monotonic()
+
+    def _close_journal(self) -> None:
+        if self._journal is not None:
+            self._journal.close()
+            self._journal = None

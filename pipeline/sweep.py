@@ -1,0 +1,177 @@
+"""Run a sweep: plan the scenes the store lacks, run them on an executor, keep every result.
+
+Orchestration only: the physics is in ``solver``, the storage rules in :mod:`pipeline.store`, the
+executors in :mod:`pipeline.runners`. One loop consumes finished scenes in completion order, hands
+each to the store's single writer and updates the progress bar.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .progress import Progress
+from .runners import open_runner
+from .store import MODEL_CODES, STATUS_CODES, SweepStore
+from .tasks import ensure_environment, solve_scene, warm
+
+__all__ = ["run_sweep", "Summary", "EXIT_OK", "EXIT_FAILED"]
+
+EXIT_OK = 0
+EXIT_FAILED = 3  # the sweep finished, but some of its scenes are stored as failed
+
+_CODE_NAMES = {v: k for k, v in STATUS_CODES.items()}
+
+
+@dataclass
+class Summary:
+    """What a sweep run did. Counts are over the sweep's own grid."""
+
+    name: str
+    store: str
+    shape: tuple  # (n_eps, n_St)
+    runner: str = "-"
+    scenes: int = 0
+    cached: int = 0  # already in the store (ok or failed) and not recomputed
+    computed: int = 0  # computed in this run
+    computed_failed: int = 0
+    done: int = 0  # stored as ok
+    failed: int = 0  # stored as failed (this run or before)
+    not_run: int = 0  # still missing (an interrupted run)
+    rigid: int = 0  # answered by the rigid solution, no PDE solve
+    rigid_computed: int = 0
+    wall_s: float = 0.0
+    failures: list = field(default_factory=list)  # (St, eps, status, message), at most 20
+
+    @property
+    def exit_code(self) -> int:
+        return EXIT_FAILED if self.failed or self.not_run else EXIT_OK
+
+    @property
+    def rate(self) -> float:
+        return self.computed / self.wall_s if self.wall_s > 0 else float("nan")
+
+    def text(self) -> str:
+        n_eps, n_st = self.shape
+        lines = [
+            f"sweep {self.name!r}: {self.scenes} scenes ({n_eps} eps x {n_st} St) in {self.store}",
+            f"  done        {self.done:6d}   (computed now {self.computed - self.computed_failed}, "
+            f"cached {self.done - (self.computed - self.computed_failed)})",
+            f"  failed      {self.failed:6d}   (now {self.computed_failed})",
+            f"  rigid-only  {self.rigid:6d}   (answered analytically, no PDE solve; "
+            f"{self.rigid_computed} of them computed now)",
+        ]
+        if self.not_run:
+            lines.append(f"  not run     {self.not_run:6d}")
+        lines.append(f"  runner      {self.runner}; {self.computed} scenes in {self.wall_s:.1f} s"
+                     + (f" ({self.rate:.1f} scenes/s)" if self.computed else ""))
+        for St, eps, status, message in self.failures:
+            lines.append(f"  failed: St={St:.6g} eps={eps:.3g} {status}: {message}")
+        if self.failed > len(self.failures):
+            lines.append(f"  ... {self.failed - len(self.failures)} more (ehd status {self.store})")
+        if self.failed:
+            lines.append("  rerun only the failed scenes with --retry-failed")
+        return "\n".join(lines)
+
+
+def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: int | None = None,
+              address: str | None = None, scheduler_file: str | None = None,
+              retry_failed: bool = False, solve=solve_scene, warm_up: bool | None = None,
+              progress=sys.stderr, flush_seconds: float | None = None) -> Summary:
+    """Compute every scene of ``sweep`` that its store lacks.
+
+    Parameters
+    ----------
+    sweep : pipeline.config.Sweep
+        Grid, numerics, store location.
+    store : path, optional
+        Store location overriding ``sweep.store``.
+    runner : {"processes", "threads", "serial"}
+        Local executor (ignored with ``address``/``scheduler_file``).
+    workers : int, optional
+        Local workers (default: usable cores); with a scheduler, workers to wait for.
+    address, scheduler_file : str, optional
+        An existing dask.distributed scheduler.
+    retry_failed : bool
+        Also rerun scenes stored as failed (otherwise they count as cached).
+    solve : callable
+        ``solve(St, eps, accuracy, overrides) -> record``; the real solver by default (tests pass
+        a stand-in). Must be importable by workers.
+    warm_up : bool, optional
+        Warm the compiled solver before workers start; default: only for the real solver.
+    progress : file or None
+        Stream for the progress bar.
+    flush_seconds : float, optional
+        Journal -> store merge interval (default ``store.FLUSH_SECONDS``).
+
+    Returns
+    -------
+    Summary
+        Counts; ``summary.exit_code`` is ``EXIT_FAILED`` (3) when failed scenes remain.
+    """
+    ensure_environment()
+    t0 = time.monotonic()
+    kwargs = {} if flush_seconds is None else {"flush_seconds": flush_seconds}
+    if warm_up is None:
+        warm_up = solve is solve_scene
+    overrides = dict(sweep.overrides)
+    with SweepStore.open(sweep, store, **kwargs) as st:
+        summary = Summary(name=sweep.name, store=str(st.path), shape=(len(sweep.eps), len(sweep.St)))
+        cells = st.cells(sweep)
+        status = st.status_of(cells)
+        rerun = (status == 0) | (retry_failed & (status >= 2))
+        todo = [c for c, r in zip(cells, rerun) if r]
+        summary.scenes, summary.cached = len(cells), len(cells) - len(todo)
+        if todo:
+            jobs = [(cell, (*st.scene(cell), sweep.accuracy, overrides)) for cell in todo]
+            bar = Progress(len(jobs), stream=progress)
+            warm_fn = _Warm(sweep.accuracy, overrides) if warm_up else None
+            try:
+                with open_runner(runner, workers, address, scheduler_file, warm=warm_fn) as run:
+                    summary.runner = run.description
+                    if progress is not None:
+                        print(f"{len(jobs)} scenes to compute ({summary.cached} cached) on "
+                              f"{run.description}", file=progress, flush=True)
+                    bar.start = time.monotonic()
+                    for cell, rec in run.unordered(solve, jobs):
+                        if isinstance(rec, BaseException):
+                            rec = {"status": "error", "model": "unknown",
+                                   "message": f"task failed: {type(rec).__name__}: {rec}"}
+                        st.record(cell, rec)
+                        summary.computed += 1
+                        summary.computed_failed += rec.get("status") != "ok"
+                        summary.rigid_computed += rec.get("model") == "rigid"
+                        bar.update(rec.get("status"), rec.get("model"))
+            finally:
+                bar.close()
+        _count(summary, st, cells)
+    summary.wall_s = time.monotonic() - t0
+    return summary
+
+
+class _Warm:
+    """Picklable warm-up call (sent to every worker by ``client.run``)."""
+
+    def __init__(self, accuracy, overrides):
+        self.accuracy, self.overrides = accuracy, overrides
+
+    def __call__(self):
+        return warm(self.accuracy, self.overrides)
+
+
+def _count(summary: Summary, st, cells) -> None:
+    ie = np.array([c[0] for c in cells], dtype=int)
+    js = np.array([c[1] for c in cells], dtype=int)
+    status = st.ds["status"].values[ie, js]
+    model = st.ds["model"].values[ie, js]
+    summary.done = int(np.sum(status == STATUS_CODES["ok"]))
+    summary.failed = int(np.sum(status >= 2))
+    summary.not_run = int(np.sum(status == 0))
+    summary.rigid = int(np.sum((status == STATUS_CODES["ok"]) & (model == MODEL_CODES["rigid"])))
+    for k in np.nonzero(status >= 2)[0][:20]:
+        St, eps = st.scene(cells[k])
+        summary.failures.append((St, eps, _CODE_NAMES.get(int(status[k]), "?"),
+                                 str(st.ds["message"].values[ie[k], js[k]])))

@@ -1,0 +1,113 @@
+"""The task a worker runs: one scene -> one plain record (a dict of numbers and strings).
+
+This is the only code that runs on workers. It is a plain importable function (dask pickles it by
+reference; no numba dispatchers or closures are shipped), and it never raises: an exception inside
+the solver becomes a record with status ``"error"`` and the exception text, so a sweep with a bad
+scene finishes and stores the failure.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import traceback
+from pathlib import Path
+
+__all__ = ["solve_scene", "warm", "ensure_environment", "FAILURE_FIELDS", "FLOAT_FIELDS",
+           "FLAG_FIELDS", "COUNT_FIELDS"]
+
+# observables and diagnostics copied from a Collision (JSON_KEYS minus labels held elsewhere:
+# St/eps are coordinates, accuracy/solver_version are store attrs)
+FLOAT_FIELDS = (
+    "v_r", "h_m_x1", "h_m_x0", "h_m_approach_x1", "h_m_approach_x0", "x_e_x1", "x_e_x0",
+    "ln_x_e_x1", "ln_x_e_x0", "tau_max_deformation", "tau_v_zero", "tau_max_rebound",
+    "tau_peak_force", "peak_force", "w0_max_x1", "x_min_x1", "dimple_depth_x1", "tau_dimple",
+    "energy_error", "wall_s",
+)
+FLAG_FIELDS = ("dimple", "escaped")
+COUNT_FIELDS = ("steps", "rejected_steps", "newton_iterations", "lu_factorizations")
+# what a failed scene keeps: the solver's observables of a failed scene are defaults (v_r = 0,
+# escaped = False, ...), not measurements, so they are stored as missing, never as a guess
+FAILURE_FIELDS = ("model", "status", "message", "wall_s", *COUNT_FIELDS)
+
+_REPO = Path(__file__).resolve().parent.parent
+
+
+def ensure_environment() -> None:
+    """Settings every process that solves scenes needs; called before numba is imported.
+
+    - ``NUMBA_CACHE_DIR``: compiled kernels are cached in the project folder (as the Makefile
+      does), so a worker loads the kernels the parent compiled instead of compiling again, and
+      read-only installs still cache.
+    - one BLAS/OpenMP thread: the sweep runs one scene per core; threaded BLAS only slows the
+      small dense solves.
+    Existing settings are respected.
+    """
+    os.environ.setdefault("NUMBA_CACHE_DIR", str(_REPO / ".numba_cache"))
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
+
+
+def solve_scene(St: float, eps: float, accuracy: str, overrides: dict) -> dict:
+    """Solve one scene with the real solver and return its record.
+
+    Parameters
+    ----------
+    St, eps : float
+        The scene.
+    accuracy : str
+        Solver preset.
+    overrides : dict
+        ``solver.Numerics`` overrides (``save_profiles`` is forced off).
+
+    Returns
+    -------
+    dict
+        ``status`` ("ok", a solver failure code, or "error"), ``message``, ``model``, and the
+        fields of ``FLOAT_FIELDS``, ``FLAG_FIELDS``, ``COUNT_FIELDS``. Floats keep ``inf``
+        (``tau_v_zero = inf``: the spheres never stop; ``x_e_x1 = inf``: exp overflow, see
+        ``ln_x_e_x1``), which ``Collision.to_dict`` would turn into None.
+    """
+    ensure_environment()
+    try:
+        from solver import collide
+
+        c = collide(St, eps, accuracy=accuracy, **{**overrides, "save_profiles": False})
+        return collision_record(c)
+    except Exception as exc:  # a bug or a bad scene must not stop the sweep: store it as data
+        tb = traceback.extract_tb(exc.__traceback__)
+        where = f" at {Path(tb[-1].filename).name}:{tb[-1].lineno}" if tb else ""
+        return {"status": "error", "model": "unknown", "wall_s": math.nan,
+                "message": f"{type(exc).__name__}: {exc}{where}"}
+
+
+def collision_record(c) -> dict:
+    """The record of a ``solver.Collision`` (see :func:`solve_scene`)."""
+    record = {"status": c.status, "message": c.message, "model": c.model}
+    for name in FLOAT_FIELDS:
+        record[name] = float(getattr(c, name))
+    for name in FLAG_FIELDS:
+        record[name] = bool(getattr(c, name))
+    for name in COUNT_FIELDS:
+        record[name] = int(getattr(c, name))
+    return record
+
+
+def warm(accuracy: str = "fast", overrides: dict | None = None) -> float:
+    """Compile (or load from the on-disk cache) the solver's kernels in this process.
+
+    Runs one small scene that takes the coupled (EHD) path, so every kernel a sweep uses is
+    compiled. Returns the wall time in seconds.
+    """
+    import time
+
+    ensure_environment()
+    t = time.perf_counter()
+    from solver import collide
+
+    # eps = 0.01, St = 5 deforms early: the coupled solve runs (a rigid-only scene would not
+    # touch the compiled code)
+    c = collide(5.0, 0.01, accuracy=accuracy, **{**(overrides or {}), "save_profiles": False})
+    if c.model != "ehd":  # pragma: no cover - guards the choice of warm-up scene
+        raise RuntimeError("warm-up scene did not reach the coupled solver")
+    return time.perf_counter() - t
