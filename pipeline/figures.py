@@ -1,0 +1,383 @@
+"""Figures of a sweep store (a pure function of the store: nothing is computed, same store -> same
+bytes).
+
+- Figure 12: maximum rebound velocity ``v_r/v0`` against St, one curve per eps;
+- Figure 13: closest approach ``h_m/x1`` against St; Figure 14: equilibrium separation ``x_e/x1``
+  against St (drawn from ``ln_x_e_x1``: ``x_e`` can overflow a float at large St), with each
+  eps's start separation ``x0/x1 = eps^-0.4`` for reference (``x_e > x0``: the spheres escape);
+- the same three quantities as maps over the (St, eps) plane;
+- stick or rebound: the map of ``escaped`` with the critical Stokes number St_c(eps) against the
+  experimental St ~ 10, and the St_c table as CSV.
+
+Maps are drawn in log10 coordinates (linear axes labelled in powers of ten): cell edges are the
+midpoints of neighbouring log10 grid values, and contours are interpolated in log coordinates
+(matplotlib's ``shading="nearest"`` would take arithmetic edges, and ``contour`` on log axes
+interpolates in data coordinates: shared/stack-notes.md). Failed scenes are drawn in a colour
+outside the colour map and counted in the legend; scenes not run are left grey.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .analysis import (EXPERIMENT_REFERENCE, EXPERIMENT_ST_C, critical_stokes,
+                       critical_stokes_csv, valid)
+
+__all__ = ["render_all", "update_figures", "fingerprint", "FIGURES"]
+
+FIGURES = ("fig12_rebound_velocity", "fig13_closest_approach", "fig14_equilibrium_separation",
+           "map_rebound_velocity", "map_closest_approach", "map_equilibrium_separation",
+           "stick_or_rebound")
+CSV_NAME = "critical_stokes.csv"
+STAMP_NAME = ".sweep-figures.sha256"  # fingerprint of what the figures in a folder were drawn from
+FORMATS = ("png", "pdf")
+DPI = 150
+FAILED_COLOR = "#d62728"
+NOT_RUN_COLOR = "#d9d9d9"
+# reproducible bytes: no timestamps or version strings in the files, fixed SVG hash salt
+_METADATA = {"png": {"Software": None},
+             "pdf": {"Creator": None, "Producer": None, "CreationDate": None}}
+_RC = {"svg.hashsalt": "ehd-collision", "figure.dpi": DPI, "font.size": 9,
+       "axes.titlesize": 10, "legend.fontsize": 8}
+
+
+def render_all(ds, out) -> list:
+    """Render every sweep figure of ``ds`` into ``out``; return the written paths.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep store (``pipeline.open_results``).
+    out : str or Path
+        Output folder (created).
+    """
+    import matplotlib
+    import matplotlib.style
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    ds = ds.load()
+    paths = []
+    # the default style, not the user's matplotlibrc: the figures depend on the store only
+    with matplotlib.style.context("default"), matplotlib.rc_context(_RC):
+        for name, draw in (("fig12_rebound_velocity", _fig12), ("fig13_closest_approach", _fig13),
+                           ("fig14_equilibrium_separation", _fig14),
+                           ("map_rebound_velocity", _map_vr), ("map_closest_approach", _map_hm),
+                           ("map_equilibrium_separation", _map_xe),
+                           ("stick_or_rebound", _stick_or_rebound)):
+            fig = draw(ds)
+            _footer(fig, ds)
+            for fmt in FORMATS:
+                path = out / f"{name}.{fmt}"
+                fig.savefig(path, format=fmt, dpi=DPI, metadata=_METADATA[fmt])
+                paths.append(path)
+    csv_path = out / CSV_NAME
+    csv_path.write_text(critical_stokes_csv(critical_stokes(ds)))
+    paths.append(csv_path)
+    return paths
+
+
+def fingerprint(ds) -> str:
+    """sha256 of everything the figures depend on: the store's data, coordinates and attrs, the
+    figure code and the matplotlib version."""
+    import hashlib
+    import json
+
+    import matplotlib
+
+    h = hashlib.sha256()
+    for module in ("figures.py", "analysis.py"):
+        h.update((Path(__file__).parent / module).read_bytes())
+    h.update(matplotlib.__version__.encode())
+    h.update(json.dumps(ds.attrs, sort_keys=True, default=str).encode())
+    for name in sorted(ds.variables):
+        values = np.asarray(ds[name].values)
+        h.update(f"{name}|{values.dtype}|{values.shape}|".encode())
+        if values.dtype.kind in "OTU":  # strings: no fixed-width buffer to hash
+            h.update("\0".join(map(str, values.ravel())).encode())
+        else:
+            h.update(np.ascontiguousarray(values).tobytes())
+    return h.hexdigest()
+
+
+def update_figures(ds, out) -> tuple[list, bool]:
+    """Render the figures of ``ds`` into ``out`` unless that folder already holds them for the
+    same store contents and figure code (a rerun of ``make sweep`` with nothing new then takes a
+    second, not the ten a full render needs). Returns ``(paths, rendered)``."""
+    out = Path(out)
+    ds = ds.load()
+    key = fingerprint(ds)
+    stamp = out / STAMP_NAME
+    expected = [out / f"{n}.{f}" for n in FIGURES for f in FORMATS] + [out / CSV_NAME]
+    if stamp.is_file() and stamp.read_text().strip() == key and all(p.is_file() for p in expected):
+        return expected, False
+    out.mkdir(parents=True, exist_ok=True)
+    stamp.unlink(missing_ok=True)  # a render cut short must not leave a valid stamp behind
+    paths = render_all(ds, out)
+    stamp.write_text(key + "\n")
+    return paths, True
+
+
+# ---- helpers --------------------------------------------------------------------------------------
+def _figure(figsize=(6.0, 4.2)):
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=figsize, layout="constrained")
+
+
+def _footer(fig, ds) -> None:
+    a = ds.attrs
+    fig.get_layout_engine().set(rect=(0.0, 0.03, 1.0, 0.97))  # keep a strip for the footer
+    fig.text(0.995, 0.004, f"sweep {a.get('sweep_name', '?')}, solver {a.get('solver_version', '?')}"
+             f", accuracy {a.get('accuracy', '?')}", ha="right", va="bottom", fontsize=6,
+             color="0.45")
+
+
+def _eps_label(eps: float) -> str:
+    k = math.log10(eps)
+    if abs(k - round(k)) < 1e-9:
+        return rf"$\varepsilon = 10^{{{int(round(k))}}}$"
+    return rf"$\varepsilon = {eps:.3g}$"
+
+
+def _eps_colors(n):
+    import matplotlib
+
+    cmap = matplotlib.colormaps["viridis"]
+    return [cmap(x) for x in (np.linspace(0.0, 0.9, n) if n > 1 else [0.0])]
+
+
+def _failed(ds) -> np.ndarray:
+    return np.asarray(ds["status"].values >= 2)
+
+
+def _not_run(ds) -> np.ndarray:
+    return np.asarray(ds["status"].values == 0)
+
+
+def _field(ds, name) -> np.ndarray:
+    """Values where the scene is ok, NaN elsewhere."""
+    values = np.asarray(ds[name].values, dtype=float)
+    return np.where(valid(ds), values, np.nan)
+
+
+def _log10_x_e(ds) -> np.ndarray:
+    return _field(ds, "ln_x_e_x1") / math.log(10.0)
+
+
+def _curves(ds, y, ax, ylabel, *, logy=False, title=""):
+    """One curve per eps against St (log axis); failed scenes marked under the curves."""
+    St = ds["St"].values
+    eps = ds["eps"].values
+    failed = _failed(ds)
+    colors = _eps_colors(eps.size)
+    # largest eps first in the legend, as in the classic figures
+    for i in range(eps.size - 1, -1, -1):
+        ax.plot(St, y[i], color=colors[i], lw=1.3, marker="o", ms=2.0, label=_eps_label(eps[i]))
+    ax.set_xscale("log")
+    if logy:
+        ax.set_yscale("log")
+    ax.set_xlabel(r"Stokes number $St = m v_0 / (6 \pi \mu a^2)$")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.grid(True, which="major", lw=0.4, alpha=0.5)
+    if failed.any():
+        rows, cols = np.nonzero(failed)
+        ax.plot(St[cols], np.zeros(cols.size), ls="none", marker="x", color=FAILED_COLOR, ms=6,
+                transform=ax.get_xaxis_transform(), clip_on=False,
+                label=f"failed scene ({cols.size})")
+    ax.legend(loc="best", frameon=False)
+    return ax
+
+
+def _fig12(ds):
+    fig = _figure()
+    ax = fig.add_subplot()
+    _curves(ds, _field(ds, "v_r"), ax, r"maximum rebound velocity $v_r / v_0$",
+            title="Fig. 12: rebound velocity")
+    ax.set_ylim(bottom=0.0)
+    return fig
+
+
+def _fig13(ds):
+    fig = _figure()
+    ax = fig.add_subplot()
+    _curves(ds, _field(ds, "h_m_x1"), ax, r"closest approach $h_m / x_1$", logy=True,
+            title="Fig. 13: closest approach of the deformed surfaces")
+    return fig
+
+
+def _power_formatter():
+    from matplotlib.ticker import FuncFormatter
+
+    return FuncFormatter(lambda v, _: rf"$10^{{{v:g}}}$")
+
+
+def _fig14(ds):
+    from matplotlib.ticker import MaxNLocator
+
+    fig = _figure()
+    ax = fig.add_subplot()
+    y = _log10_x_e(ds)
+    _curves(ds, y, ax, r"equilibrium separation $x_e / x_1$",
+            title="Fig. 14: equilibrium separation")
+    colors = _eps_colors(ds.sizes["eps"])
+    for i, eps in enumerate(ds["eps"].values):  # x0/x1 = eps^-0.4: above it the spheres escape
+        ax.axhline(-0.4 * math.log10(eps), color=colors[i], lw=0.8, ls=":")
+    ax.text(0.01, 0.99, r"dotted: start separation $x_0/x_1 = \varepsilon^{-2/5}$",
+            transform=ax.transAxes, va="top", fontsize=7, color="0.3")
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True, nbins=8))
+    ax.yaxis.set_major_formatter(_power_formatter())
+    return fig
+
+
+def _edges(log_centres: np.ndarray) -> np.ndarray:
+    """Cell edges in log10 coordinates: midpoints between centres, half a step beyond the ends
+    (half a decade for a single point)."""
+    c = np.asarray(log_centres, dtype=float)
+    if c.size == 1:
+        return np.array([c[0] - 0.5, c[0] + 0.5])
+    mid = 0.5 * (c[1:] + c[:-1])
+    return np.concatenate([[c[0] - (mid[0] - c[0])], mid, [c[-1] + (c[-1] - mid[-1])]])
+
+
+def _log_axes(ax, ds):
+    """Axes in log10 St, log10 eps with ticks labelled as numbers."""
+    from matplotlib.ticker import FixedLocator, FuncFormatter, MaxNLocator
+
+    lx = np.log10(ds["St"].values)
+    nice = np.array([0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000])
+    ticks = np.log10(nice[(nice >= 10 ** lx.min() / 1.2) & (nice <= 10 ** lx.max() * 1.2)])
+    ax.xaxis.set_major_locator(FixedLocator(ticks))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{10 ** v:g}"))
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.yaxis.set_major_formatter(_power_formatter())
+    ax.set_xlabel(r"Stokes number $St$ (log scale)")
+    ax.set_ylabel(r"elasticity parameter $\varepsilon$ (log scale)")
+
+
+def _map(ds, z, title, cbar_label, levels, *, cbar_power=False, cmap="viridis", norm=None):
+    """A (St, eps) map of ``z`` (NaN where not ok) with contours, failed and missing cells."""
+    import matplotlib
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    fig = _figure((6.4, 4.4))
+    ax = fig.add_subplot()
+    ax.set_facecolor(NOT_RUN_COLOR)  # cells not run stay uncovered
+    lx, ly = np.log10(ds["St"].values), np.log10(ds["eps"].values)
+    ex, ey = _edges(lx), _edges(ly)
+    zm = np.ma.masked_invalid(z)
+    cm = matplotlib.colormaps[cmap]
+    mesh = ax.pcolormesh(ex, ey, zm, cmap=cm, norm=norm, shading="flat")
+    failed = _failed(ds)
+    if failed.any():
+        ax.pcolormesh(ex, ey, np.ma.masked_where(~failed, np.ones(failed.shape)),
+                      cmap=ListedColormap([FAILED_COLOR]), shading="flat")
+    if ly.size > 1 and lx.size > 1 and np.isfinite(z).sum() >= 4:
+        finite = z[np.isfinite(z)]
+        lv = [v for v in levels if finite.min() < v < finite.max()]
+        if lv:
+            cs = ax.contour(lx, ly, zm, levels=lv, colors="white", linewidths=0.8,
+                            linestyles="solid")
+            ax.clabel(cs, fmt=(lambda v: f"$10^{{{v:g}}}$") if cbar_power else "%g", fontsize=7)
+    cb = fig.colorbar(mesh, ax=ax)
+    cb.set_label(cbar_label)
+    if cbar_power:
+        finite = z[np.isfinite(z)]
+        if finite.size:
+            cb.set_ticks([v for v in levels if finite.min() <= v <= finite.max()])
+        cb.formatter = _power_formatter()
+        cb.update_ticks()
+    _log_axes(ax, ds)
+    ax.set_xlim(ex[0], ex[-1])
+    ax.set_ylim(ey[0], ey[-1])
+    ax.set_title(title)
+    handles = [Patch(color=FAILED_COLOR, label=f"failed ({int(failed.sum())})"),
+               Patch(color=NOT_RUN_COLOR, label=f"not run ({int(_not_run(ds).sum())})")]
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.0, -0.13), ncol=2,
+              frameon=False)
+    return fig
+
+
+def _map_vr(ds):
+    return _map(ds, _field(ds, "v_r"), r"rebound velocity $v_r/v_0$", r"$v_r / v_0$",
+                levels=[0.01, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9])
+
+
+def _map_hm(ds):
+    z = np.log10(_field(ds, "h_m_x1"))
+    return _map(ds, z, r"closest approach $h_m/x_1$", r"$h_m / x_1$",
+                levels=[-0.5, 0, 0.5, 1, 1.5, 2, 2.5, 3], cbar_power=True,
+                cmap="magma")
+
+
+def _map_xe(ds):
+    from matplotlib.colors import SymLogNorm
+
+    z = _log10_x_e(ds)
+    # x_e/x1 spans ~1e-1 .. 1e37 on the paper grid: colour log10 of it on a symlog scale (linear
+    # within one decade of x1, logarithmic beyond) so the stick region keeps some contrast
+    norm = SymLogNorm(linthresh=1.0, base=10) if np.isfinite(z).any() else None
+    return _map(ds, z, r"equilibrium separation $x_e/x_1$", r"$x_e / x_1$",
+                levels=[-1, 0, 1, 2, 5, 10, 20, 30], cbar_power=True, cmap="cividis", norm=norm)
+
+
+def _stick_or_rebound(ds):
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(10.0, 4.4), layout="constrained")
+    ax, ax2 = fig.subplots(1, 2, width_ratios=[1.35, 1.0])
+    ax.set_facecolor(NOT_RUN_COLOR)
+    lx, ly = np.log10(ds["St"].values), np.log10(ds["eps"].values)
+    ex, ey = _edges(lx), _edges(ly)
+    esc = _field(ds, "escaped")
+    stick_c, escape_c = "#9ecae1", "#fdae6b"
+    ax.pcolormesh(ex, ey, np.ma.masked_invalid(esc), cmap=ListedColormap([stick_c, escape_c]),
+                  vmin=0, vmax=1, shading="flat")
+    failed = _failed(ds)
+    if failed.any():
+        ax.pcolormesh(ex, ey, np.ma.masked_where(~failed, np.ones(failed.shape)),
+                      cmap=ListedColormap([FAILED_COLOR]), shading="flat")
+    rows = critical_stokes(ds)
+    st_c = np.array([r["St_c"] for r in rows])
+    eps = np.array([r["eps"] for r in rows])
+    ok = np.isfinite(st_c)
+    ax.plot(np.log10(st_c[ok]), np.log10(eps[ok]), "k-o", ms=3.5, lw=1.2,
+            label=r"$St_c(\varepsilon)$ (interpolated)")
+    if lx.min() <= math.log10(EXPERIMENT_ST_C) <= lx.max():
+        ax.axvline(math.log10(EXPERIMENT_ST_C), color="k", ls="--", lw=1.0,
+                   label=r"experiments: no rebound below $St \approx 10$")
+    _log_axes(ax, ds)
+    ax.set_xlim(ex[0], ex[-1])
+    ax.set_ylim(ey[0], ey[-1])
+    ax.set_title(r"stick or rebound: does the rebound carry the spheres beyond $x_0$?")
+    handles = [Patch(color=stick_c, label=r"stick ($x_e < x_0$)"),
+               Patch(color=escape_c, label=r"rebound ($x_e > x_0$)"),
+               Patch(color=FAILED_COLOR, label=f"failed ({int(failed.sum())})"),
+               Patch(color=NOT_RUN_COLOR, label=f"not run ({int(_not_run(ds).sum())})")]
+    lines, labels = ax.get_legend_handles_labels()
+    ax.legend(handles=handles + lines, loc="upper left", bbox_to_anchor=(0.0, -0.13), ncol=3,
+              frameon=False)
+
+    ax2.semilogx(eps[ok], st_c[ok], "k-o", ms=3.5, lw=1.2, label=r"model $St_c(\varepsilon)$")
+    ax2.axhline(EXPERIMENT_ST_C, color="k", ls="--", lw=1.0,
+                label=r"experiments, $St \approx 10$")
+    ax2.set_xlabel(r"elasticity parameter $\varepsilon$")
+    ax2.set_ylabel(r"critical Stokes number $St_c$")
+    ax2.set_title("critical Stokes number")
+    ax2.grid(True, which="major", lw=0.4, alpha=0.5)
+    ax2.set_ylim(bottom=0.0)
+    if ok.any():
+        top = max(float(np.nanmax(st_c)), EXPERIMENT_ST_C)
+        ax2.set_ylim(0.0, 1.15 * top)
+    ax2.text(0.02, 0.02, "experiments: " + EXPERIMENT_REFERENCE.replace("; ", ";\n"),
+             transform=ax2.transAxes, fontsize=6, color="0.3", va="bottom", wrap=True)
+    ax2.legend(loc="upper right", frameon=False)
+    return fig

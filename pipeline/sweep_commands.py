@@ -1,0 +1,147 @@
+"""``ehd sweep``, ``ehd status``, ``ehd figures`` (registered by ``pipeline.cli``).
+
+Exit codes: 0 success; 2 bad input (sweep file, store of another solver version/numerics, busy
+store, unreachable scheduler), one line on stderr; 3 the sweep finished but failed scenes remain
+in it (stored with status and message; rerun them with ``--retry-failed``); 130 interrupted
+(everything finished so far is kept).
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = ["register", "cmd_sweep", "cmd_status", "cmd_figures"]
+
+
+def _positive_int(text: str) -> int:
+    import argparse
+
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"must be a whole number >= 1, got {text!r}")
+    return n
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "sweep", help="compute a St x eps sweep into its zarr store (cached, resumable)",
+        description="Compute every scene of a sweep file that its store lacks. Exit codes: 0 all "
+                    "scenes ok, 2 bad input, 3 finished with failed scenes, 130 interrupted.")
+    p.add_argument("sweep_file", metavar="SWEEP_FILE", help="sweep definition, e.g. sweeps/paper.toml")
+    p.add_argument("--store", metavar="PATH", default=None,
+                   help="zarr store to use instead of the one named in the sweep file")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                       help="run on an existing dask scheduler, e.g. tcp://10.0.0.1:8786")
+    where.add_argument("--scheduler-file", metavar="FILE", default=None,
+                       help="run on the dask scheduler described by FILE (dask scheduler "
+                            "--scheduler-file FILE)")
+    where.add_argument("--executor", choices=("processes", "threads", "serial"), default=None,
+                       help="local executor (default processes: a dask LocalCluster, one worker "
+                            "process per core)")
+    p.add_argument("--workers", metavar="N", type=_positive_int, default=None,
+                   help="local workers (default: all usable cores); with --scheduler/"
+                        "--scheduler-file: wait for N workers before starting")
+    p.add_argument("--retry-failed", action="store_true",
+                   help="rerun the scenes stored as failed (by default they are kept as they are)")
+    p.set_defaults(func=cmd_sweep)
+
+    p = sub.add_parser("status", help="what a sweep store holds: done, failed, missing")
+    p.add_argument("store", metavar="STORE", help="sweep store, e.g. results/paper.zarr")
+    p.set_defaults(func=cmd_status)
+
+    p = sub.add_parser("figures", help="Figures 12-14, (St, eps) maps and stick/rebound from a "
+                                        "sweep store (never computes scenes; skipped when the "
+                                        "folder is up to date with the store)")
+    p.add_argument("store", metavar="STORE", help="sweep store, e.g. results/paper.zarr")
+    p.add_argument("--out", metavar="DIR", default="figures", help="output folder (default figures)")
+    p.set_defaults(func=cmd_figures)
+
+
+def cmd_sweep(args) -> int:
+    from .cli import UsageError
+    from .config import ConfigError, load_sweep
+    from .store import StoreBusy, StoreMismatch
+    from .sweep import run_sweep
+
+    try:
+        sweep = load_sweep(args.sweep_file)
+    except ConfigError as exc:
+        raise UsageError(str(exc)) from None
+    try:
+        summary = run_sweep(sweep, store=args.store, runner=args.executor or "processes",
+                            workers=args.workers, address=args.scheduler,
+                            scheduler_file=args.scheduler_file, retry_failed=args.retry_failed)
+    except (StoreMismatch, StoreBusy, ConnectionError) as exc:
+        raise UsageError(str(exc)) from None
+    print(summary.text())
+    return summary.exit_code
+
+
+def cmd_status(args) -> int:
+    import numpy as np
+
+    from .analysis import critical_stokes
+    from .cli import UsageError
+    from .store import MODEL_CODES, STATUS_CODES, open_results, pending_journal
+
+    try:
+        ds = open_results(args.store)
+    except FileNotFoundError as exc:
+        raise UsageError(str(exc)) from None
+    status = ds["status"].values
+    model = ds["model"].values
+    ok = status == STATUS_CODES["ok"]
+    a = ds.attrs
+    print(f"store {args.store}: sweep {a.get('sweep_name')!r}, solver {a.get('solver_version')}, "
+          f"accuracy {a.get('accuracy')}, cache key {str(a.get('cache_key'))[:12]}, "
+          f"created {a.get('created')}")
+    St, eps = ds["St"].values, ds["eps"].values
+    print(f"grid: {eps.size} eps in [{eps.min():.3g}, {eps.max():.3g}] x {St.size} St in "
+          f"[{St.min():.4g}, {St.max():.4g}] = {status.size} scenes")
+    names = {v: k for k, v in STATUS_CODES.items()}
+    failed = status >= 2
+    print(f"  done      {int(ok.sum()):6d}   (rigid-only {int((ok & (model == MODEL_CODES['rigid'])).sum())}, "
+          f"escaped {int(np.nansum(ds['escaped'].values[ok]))})")
+    by_code = ", ".join(f"{names[c]} {int((status == c).sum())}" for c in sorted(set(status[failed])))
+    print(f"  failed    {int(failed.sum()):6d}" + (f"   ({by_code})" if by_code else ""))
+    print(f"  not run   {int((status == 0).sum()):6d}")
+    pending = pending_journal(args.store)
+    if pending:
+        print(f"  journal   {pending:6d}   finished scenes of an interrupted run, merged by the "
+              "next ehd sweep")
+    stc = {r["eps"]: r for r in critical_stokes(ds)}
+    print(f"  {'eps':>8} {'ok':>5} {'failed':>6} {'not run':>7} {'rigid':>5}  St_c")
+    for i, e in enumerate(eps):
+        r = stc[float(e)]
+        st_c = f"{r['St_c']:.4g}" if math.isfinite(r["St_c"]) else (r["note"] or "-")
+        print(f"  {e:8.2g} {int(ok[i].sum()):5d} {int(failed[i].sum()):6d} "
+              f"{int((status[i] == 0).sum()):7d} {int((ok[i] & (model[i] == 1)).sum()):5d}  {st_c}")
+    rows, cols = np.nonzero(failed)
+    for i, j in list(zip(rows, cols))[:20]:
+        print(f"  failed: St={St[j]:.6g} eps={eps[i]:.3g} {names[int(status[i, j])]}: "
+              f"{ds['message'].values[i, j]}")
+    if rows.size > 20:
+        print(f"  ... {rows.size - 20} more failed scenes")
+    return 0
+
+
+def cmd_figures(args) -> int:
+    from .cli import UsageError
+    from .figures import update_figures
+    from .store import open_results
+
+    try:
+        ds = open_results(args.store)
+    except FileNotFoundError as exc:
+        raise UsageError(str(exc)) from None
+    paths, rendered = update_figures(ds, args.out)
+    if not rendered:
+        print(f"figures in {args.out} are up to date with {args.store}")
+    else:
+        for path in paths:
+            print(path)
+    return 0
