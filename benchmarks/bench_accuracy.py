@@ -233,12 +233,19 @@ def write_report(res):
         lines.append(f"- `{preset}` (target {target:g}): " + ("met on every panel scene." if not misses
                                                                else f"missed on {len(misses)} of "
                                                                f"{len(res['panel'])}: " + "; ".join(misses)))
-    lines += ["", "## Which error dominates", ""]
+    lines += ["", "## Which error dominates", "",
+              "Max over the panel of the total error, and of the parts caused by the hand-over "
+              "(`switch`) and the hand-back (`release`) at the preset's thresholds (read off the "
+              "threshold studies above, interpolated in log-log); the rest is grid and time error.",
+              "", "| preset | part | " + " | ".join(KEYS) + " |", "|---|---" + "|---" * len(KEYS) + "|"]
     for preset in PRESETS:
-        sw = PRESETS[preset].switch
-        rl = PRESETS[preset].release
-        lines.append(f"- `{preset}` (switch {sw:g}, release {rl:g}): total max "
-                     + ", ".join(f"{k} {max(res['table'][preset]['errors'][k]):.1e}" for k in KEYS))
+        sw, rl = PRESETS[preset].switch, PRESETS[preset].release
+        total = [max(res["table"][preset]["errors"][k]) for k in KEYS]
+        hand = [_threshold_part(res["switch_error"], SWITCHES, sw, k) for k in KEYS]
+        back = [_threshold_part(res["release_error"], RELEASES, rl, k) for k in KEYS]
+        lines.append(f"| {preset} | total | " + " | ".join(map(_fmt, total)) + " |")
+        lines.append(f"| | switch {sw:g} | " + " | ".join(map(_fmt, hand)) + " |")
+        lines.append(f"| | release {rl:g} | " + " | ".join(map(_fmt, back)) + " |")
     m = res["master"]
     on = [r for r in m["rows"] if r["model"] == "master"]
     lines += ["", "## One-parameter fast path (master curve in S = St V_switch)", "",
@@ -262,6 +269,27 @@ def write_report(res):
     lines.append("")
     lines.append(f"Run time of this benchmark: {res['seconds'] / 60:.1f} min.")
     (HERE / "accuracy.md").write_text("\n".join(lines) + "\n")
+
+
+def _threshold_part(study, thresholds, value, key):
+    """Max over the panel of a threshold study's error at ``value`` (log-log interpolation,
+    linear extrapolation in the threshold beyond the studied range: the error is first order)."""
+    worst = 0.0
+    for scene in study:
+        if key not in scene or not scene[key]:
+            continue
+        errs = np.array([scene[key][str(t)] for t in thresholds], dtype=float)
+        ts = np.array(thresholds)
+        if value >= ts.max():
+            e = errs[0] * value / ts[0]
+        elif value <= ts.min():
+            e = errs[-1] * value / ts[-1]
+        else:
+            good = errs > 0
+            e = float(np.exp(np.interp(np.log(value), np.log(ts[good][::-1]),
+                                       np.log(errs[good][::-1])))) if good.sum() > 1 else 0.0
+        worst = max(worst, e)
+    return worst
 
 
 def plot(res):
