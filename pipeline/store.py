@@ -128,13 +128,16 @@ def pending_journal(path) -> int:
     return len(_read_journal(_journal_path(Path(path))))
 
 
-def open_results(path):
+def open_results(path, **open_kwargs):
     """Open a sweep store for analysis.
 
     Parameters
     ----------
     path : str or Path
         The store directory (e.g. ``results/paper.zarr``).
+    **open_kwargs
+        Passed to ``xarray.open_zarr`` (e.g. ``chunks=None``: no dask arrays, quicker for a
+        store that is read whole).
 
     Returns
     -------
@@ -156,7 +159,7 @@ def open_results(path):
             if _old_path(path).exists() else ""
         raise FileNotFoundError(f"no sweep store at {str(path)!r}{hint}")
     with zarr_warnings():
-        ds = xr.open_zarr(path, consolidated=True)
+        ds = xr.open_zarr(path, consolidated=True, **open_kwargs)
     if "store_schema" not in ds.attrs:
         raise FileNotFoundError(f"{str(path)!r} is a zarr store but not an ehd sweep store")
     n = pending_journal(path)
@@ -409,7 +412,8 @@ class SweepStore:
         import xarray as xr
 
         with zarr_warnings():
-            self.ds = xr.open_zarr(self.path, consolidated=True).load()
+            # chunks=None: plain lazy arrays, no dask graph (several times quicker to load whole)
+            self.ds = xr.open_zarr(self.path, consolidated=True, chunks=None).load()
 
     def _check(self, sweep) -> None:
         attrs = self.ds.attrs

@@ -88,8 +88,12 @@ def cmd_status(args) -> int:
     from .cli import UsageError
     from .store import MODEL_CODES, STATUS_CODES, open_results, pending_journal
 
+    import warnings
+
     try:
-        ds = open_results(args.store)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # a pending journal is reported below
+            ds = open_results(args.store, chunks=None)
     except FileNotFoundError as exc:
         raise UsageError(str(exc)) from None
     status = ds["status"].values
@@ -135,7 +139,7 @@ def cmd_figures(args) -> int:
     from .store import open_results
 
     try:
-        ds = open_results(args.store)
+        ds = open_results(args.store, chunks=None)
     except FileNotFoundError as exc:
         raise UsageError(str(exc)) from None
     paths, rendered = update_figures(ds, args.out)
