@@ -22,9 +22,14 @@ import os
 from concurrent.futures import as_completed
 from contextlib import contextmanager
 
-__all__ = ["open_runner", "default_workers", "RUNNERS", "Runner"]
+__all__ = ["open_runner", "default_workers", "RUNNERS", "Runner", "RunnerError"]
 
 RUNNERS = ("processes", "threads", "serial")
+
+
+class RunnerError(RuntimeError):
+    """The executor could not be started or reached (unreachable scheduler, workers that cannot
+    import the project)."""
 
 
 def default_workers() -> int:
@@ -83,9 +88,12 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
     warm : callable, optional
         Called once here before any worker starts, then on every worker (``client.run``).
     """
+    local = address is None and scheduler_file is None
+    if local and kind not in RUNNERS:
+        raise ValueError(f"executor must be one of {RUNNERS}, got {kind!r}")
     if warm is not None:
         warm()  # compile once, here: writes the on-disk numba cache the workers will load
-    if address is None and scheduler_file is None and kind == "serial":
+    if local and kind == "serial":
         yield Runner("serial (this process)")
         return
 
@@ -97,7 +105,7 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
             client = Client(address, timeout="30s") if address is not None else \
                 Client(scheduler_file=scheduler_file, timeout="30s")
         except (OSError, TimeoutError, ValueError) as exc:
-            raise ConnectionError(f"cannot reach the dask scheduler ({target}): {exc}") from None
+            raise RunnerError(f"cannot reach the dask scheduler ({target}): {exc}") from None
         with client:
             if workers:
                 client.wait_for_workers(workers)
@@ -114,5 +122,9 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
 
 def _dask_runner(client, description: str, warm) -> Runner:
     if warm is not None:
-        client.run(warm)  # each worker process loads the cached kernels before its first scene
+        try:
+            client.run(warm)  # each worker process loads the cached kernels before its first scene
+        except Exception as exc:
+            raise RunnerError(f"warming the workers failed ({type(exc).__name__}: {exc}); every "
+                              "worker needs this project installed (pip install -e .)") from None
     return Runner(description, executor=client.get_executor(pure=False), client=client)

@@ -64,6 +64,7 @@ def register(sub) -> None:
 def cmd_sweep(args) -> int:
     from .cli import UsageError
     from .config import ConfigError, load_sweep
+    from .runners import RunnerError
     from .store import StoreBusy, StoreMismatch
     from .sweep import run_sweep
 
@@ -75,7 +76,7 @@ def cmd_sweep(args) -> int:
         summary = run_sweep(sweep, store=args.store, runner=args.executor or "processes",
                             workers=args.workers, address=args.scheduler,
                             scheduler_file=args.scheduler_file, retry_failed=args.retry_failed)
-    except (StoreMismatch, StoreBusy, ConnectionError) as exc:
+    except (StoreMismatch, StoreBusy, RunnerError) as exc:
         raise UsageError(str(exc)) from None
     print(summary.text())
     return summary.exit_code
