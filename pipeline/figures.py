@@ -229,6 +229,21 @@ def _fig14(ds):
         ax.axhline(-0.4 * math.log10(eps), color=colors[i], lw=0.8, ls=":")
     ax.text(0.01, 0.99, r"dotted: start separation $x_0/x_1 = \varepsilon^{-2/5}$",
             transform=ax.transAxes, va="top", fontsize=7, color="0.3")
+    # Past escape x_e grows like exp(St): on a full axis (1e37 at St = 100) the stick region,
+    # the part of the figure with physics in it, would be a flat line. Show up to three decades
+    # above the highest x0/x1 and say where the curves go.
+    finite = y[np.isfinite(y)]
+    if finite.size:
+        top = max(-0.4 * math.log10(float(ds["eps"].values.min())), 0.0) + 3.0
+        if finite.max() > top:
+            bottom = min(float(finite.min()), 0.0) - 0.5
+            ax.set_ylim(bottom, top)
+            ax.text(0.99, 0.62, f"off scale above:\nup to $10^{{{finite.max():.0f}}}$ "
+                    f"at St = {float(ds['St'].values[np.nanargmax(np.nanmax(y, axis=0))]):.3g}",
+                    transform=ax.transAxes, ha="right", va="bottom", fontsize=7, color="0.3")
+            ax.text(0.01, 0.94, "(full range: map_equilibrium_separation)",
+                    transform=ax.transAxes, va="top", fontsize=7, color="0.3")
+            ax.legend(loc="lower right", frameon=False)  # the curves have left that corner
     ax.yaxis.set_major_locator(MaxNLocator(integer=True, nbins=8))
     ax.yaxis.set_major_formatter(_power_formatter())
     return fig
