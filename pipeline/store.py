@@ -400,7 +400,11 @@ class SweepStore:
         elif not (self.path / "zarr.json").is_file():
             raise StoreMismatch(f"{str(self.path)!r} exists but is not a zarr store; choose "
                                 "another --store")
-        self._load()
+        try:
+            self._load()
+        except (ValueError, KeyError, OSError) as exc:  # e.g. a zarr store without consolidation
+            raise StoreMismatch(f"{str(self.path)!r} cannot be opened as an ehd sweep store "
+                                f"({type(exc).__name__}: {exc}); choose another --store") from None
         self._check(sweep)
         self._replay()
         self._extend(sweep)
@@ -417,6 +421,9 @@ class SweepStore:
 
     def _check(self, sweep) -> None:
         attrs = self.ds.attrs
+        if "store_schema" not in attrs:
+            raise StoreMismatch(f"{str(self.path)!r} is a zarr store but not an ehd sweep store; "
+                                "choose another --store")
         if attrs.get("store_schema") != STORE_SCHEMA:
             raise StoreMismatch(
                 f"{str(self.path)!r} has store schema {attrs.get('store_schema')!r}, this "

@@ -241,6 +241,13 @@ def test_changed_numerics_or_version_never_mix(tmp_path, monkeypatch):
     xr.testing.assert_identical(before, data_vars(open_results(sweep.store)))
 
 
+def test_a_store_that_is_not_a_sweep_store_is_refused(tmp_path):
+    xr.Dataset({"a": ("x", np.arange(3))}).to_zarr(tmp_path / "plain.zarr", consolidated=False)
+    with pytest.raises(StoreMismatch, match="sweep store"):
+        run(make_sweep(tmp_path, [1.0], [1e-2], name="plain.zarr"))
+    assert CALLS == []
+
+
 def test_store_schema_and_attrs(tmp_path):
     text = sweep_text([0.5, 1.0, 3.0], [1e-8, 1e-2])
     sweep = parse_sweep(text).with_store(tmp_path / "s.zarr")
