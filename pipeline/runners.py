@@ -114,8 +114,11 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
 
     n = workers or default_workers()
     processes = kind == "processes"
+    # no dashboard; the scheduler still serves a small HTTP endpoint, on port 8787 unless told
+    # otherwise, and warns when another cluster holds that port: use a free local port instead
     cluster = LocalCluster(n_workers=n if processes else 1, threads_per_worker=1 if processes else n,
-                           processes=processes, dashboard_address=None)
+                           processes=processes, dashboard_address=None,
+                           scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
     with cluster, Client(cluster) as client:
         yield _dask_runner(client, f"local {'processes' if processes else 'threads'} x{n}", warm)
 

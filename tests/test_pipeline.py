@@ -426,8 +426,8 @@ def test_existing_scheduler_runner_matches_serial(tmp_path):
 
     sweep = make_sweep(tmp_path, [0.5, 1.0, 3.0, 5.0], [1e-3, 1e-2], name="serial.zarr")
     run(sweep)
-    with LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
-                      dashboard_address=None) as cluster:
+    with LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None,
+                      scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}) as cluster:
         other = sweep.with_store(tmp_path / "dist.zarr")
         summary = run(other, runner=None, address=cluster.scheduler_address, workers=1)
     assert summary.runner.startswith("dask scheduler") and summary.done == 8
