@@ -6,7 +6,9 @@
   (the Makefile points it at ``.numba_cache/`` in the project) or ``~/.cache/ehd-collision``.
 - ``nogil=True`` so threads can run scenes side by side.
 - A NaN-safe fastmath subset: ``fastmath=True`` would make ``np.isfinite`` always true
-  (numba issues 2919, 6217), and failure detection depends on it.
+  (numba issues 2919, 6217), and failure detection depends on it. Without ``reassoc``: it let
+  the summation order depend on how a kernel was compiled, so freshly compiled and cache-loaded
+  code differed in the last digits (film.matvec vectorises by explicit partial sums instead).
 - ``error_model="numpy"``: division by zero gives inf (checked by the caller), not an exception.
 """
 
@@ -16,7 +18,7 @@ from pathlib import Path
 
 import numba
 
-FASTMATH = {"nsz", "arcp", "contract", "afn", "reassoc"}
+FASTMATH = {"nsz", "arcp", "contract", "afn"}
 
 
 def _source_hash() -> str:

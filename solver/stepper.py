@@ -22,7 +22,7 @@ Dimensionless, scale ``x1`` (physics.md); ``T`` is time in units of ``x1 / v0``.
 import numpy as np
 
 from ._jit import jit
-from .film import energy_rates, face_fluxes, gap, jacobian, residual
+from .film import energy_rates, face_fluxes, gap, jacobian, matvec, residual
 from .linalg import lu_factor, lu_solve
 
 # status codes of the loop (solver/collision.py maps them to names and messages)
@@ -63,16 +63,6 @@ def _norm(dp, dx, dv, dh, p, x, v, h, rtol):
         e = max(e, abs(dh[i]) / (abs(h[i]) + GAP_FLOOR))
         e = max(e, abs(dp[i]) / (abs(p[i]) + p_floor))
     return e / rtol
-
-
-@jit
-def _matvec(a, x, out):
-    n = x.size
-    for i in range(n):
-        acc = 0.0
-        for j in range(n):
-            acc += a[i, j] * x[j]
-        out[i] = acc
 
 
 @jit
@@ -296,7 +286,7 @@ def integrate(s, s_face, area, weight, influence, stokes, x_init, v_init, p_init
             if err_fac > 0.0:
                 for k in range(m):
                     res[k] = err_fac * (y[k] - y_pred[k])
-                _matvec(influence, res[:n], kdp)
+                matvec(influence, res[:n], kdp)
                 for i in range(n):
                     dh[i] = res[n] + kdp[i]
                 err = _norm(res[:n], res[n], res[n + 1], dh, y[:n], y[n], y[n + 1], h, 1.0) / rtol
