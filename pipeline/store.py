@@ -507,6 +507,12 @@ class SweepStore:
         if code is None or code == 0:
             code = STATUS_CODES["error"]
             message = f"unknown solver status {status!r}: {message}"
+        key = rec.get("cache_key")
+        if key is not None and key != self.key:  # never store another version's numbers as ok
+            code = STATUS_CODES["error"]
+            message = (f"computed by a worker with another solver version or numerics (key "
+                       f"{str(key)[:12]}, store {self.key[:12]}): every worker must run the same "
+                       "installation; rerun with --retry-failed once it does")
         ok = code == STATUS_CODES["ok"]
         ds = self.ds
         for name in FLOAT_FIELDS:

@@ -82,8 +82,15 @@ def solve_scene(St: float, eps: float, accuracy: str, overrides: dict) -> dict:
 
 
 def collision_record(c) -> dict:
-    """The record of a ``solver.Collision`` (see :func:`solve_scene`)."""
-    record = {"status": c.status, "message": c.message, "model": c.model}
+    """The record of a ``solver.Collision`` (see :func:`solve_scene`), with the cache key of the
+    solver version and numerics that computed it *on this worker* (the store checks it: a worker
+    with another installation must not slip its results in)."""
+    from solver import SOLVER_VERSION
+
+    from .config import cache_key
+
+    record = {"status": c.status, "message": c.message, "model": c.model,
+              "cache_key": cache_key(SOLVER_VERSION, c.numerics.as_dict())}
     for name in FLOAT_FIELDS:
         record[name] = float(getattr(c, name))
     for name in FLAG_FIELDS:

@@ -223,6 +223,19 @@ def test_failed_scene_is_stored_and_the_sweep_goes_on(tmp_path):
     assert retried.done == 3 and retried.failed == 1  # St = 4 still raises
 
 
+def test_a_result_from_a_worker_with_another_installation_is_not_stored_as_ok(tmp_path):
+    sweep = make_sweep(tmp_path, [1.0, 3.0], [1e-2])
+    with SweepStore.open(sweep) as st:
+        good, bad = st.cells(sweep)
+        st.record(good, {**fake_solve(1.0, 1e-2, "fast", {}), "cache_key": sweep.cache_key()})
+        st.record(bad, {**fake_solve(3.0, 1e-2, "fast", {}), "cache_key": "0" * 64})
+    ds = open_results(sweep.store).load().sel(eps=1e-2)
+    assert int(ds.status.sel(St=1.0)) == STATUS_CODES["ok"]
+    assert int(ds.status.sel(St=3.0)) == STATUS_CODES["error"]
+    assert "another solver version" in str(ds.message.sel(St=3.0).values)
+    assert np.isnan(ds.v_r.sel(St=3.0))
+
+
 def test_changed_numerics_or_version_never_mix(tmp_path, monkeypatch):
     sweep = make_sweep(tmp_path, [1.0, 3.0], [1e-2])
     run(sweep)
