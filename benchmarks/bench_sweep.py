@@ -85,6 +85,10 @@ def main(argv=None) -> int:
 
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=REPO, capture_output=True,
                             text=True).stdout.strip()
+    dirty = subprocess.run(["git", "status", "--porcelain", "solver", "pipeline"], cwd=REPO,
+                           capture_output=True, text=True).stdout.strip()
+    if dirty:
+        commit += " (with uncommitted changes in solver/ or pipeline/)"
     lines = [
         f"# Sweep benchmark: `make sweep` on `{sweep_file}`",
         "",
