@@ -448,6 +448,22 @@ def test_existing_scheduler_runner_matches_serial(tmp_path):
                                 data_vars(open_results(other.store)))
 
 
+def crashing_solve(St, eps, accuracy, overrides):
+    """The stand-in, except that the worker process dies hard at St = 3 (like a segfault)."""
+    if math.isclose(St, 3.0):
+        os.abort()
+    return fake_solve(St, eps, accuracy, overrides)
+
+
+def test_a_crashing_worker_is_stored_as_an_error_and_the_sweep_goes_on(tmp_path, monkeypatch):
+    monkeypatch.setenv("PYTHONPATH", str(REPO))  # spawned workers import this test module
+    sweep = make_sweep(tmp_path, [1.0, 3.0, 5.0], [1e-2])
+    summary = run(sweep, runner="processes", workers=2, solve=crashing_solve)
+    assert summary.done == 2 and summary.failed == 1 and summary.exit_code == EXIT_FAILED
+    ds = open_results(sweep.store).load().sel(eps=1e-2, St=3.0)
+    assert int(ds.status) == STATUS_CODES["error"] and "KilledWorker" in str(ds.message.values)
+
+
 # ---- command line -------------------------------------------------------------------------------
 def test_cli_sweep_status_and_exit_codes(tmp_path, capsys):
     from pipeline.cli import main
