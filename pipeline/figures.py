@@ -12,8 +12,8 @@ bytes).
 Maps are drawn in log10 coordinates (linear axes labelled in powers of ten): cell edges are the
 midpoints of neighbouring log10 grid values, and contours are interpolated in log coordinates
 (matplotlib's ``shading="nearest"`` would take arithmetic edges, and ``contour`` on log axes
-interpolates in data coordinates: shared/stack-notes.md). Failed scenes are drawn in a colour
-outside the colour map and counted in the legend; scenes not run are left grey.
+interpolates in data coordinates: shared/stack-notes.md). Failed scenes are cross-hatched in red
+on white (visible on any colour map) and counted in the legend; scenes not run are left grey.
 """
 
 from __future__ import annotations
@@ -259,6 +259,26 @@ def _edges(log_centres: np.ndarray) -> np.ndarray:
     return np.concatenate([[c[0] - (mid[0] - c[0])], mid, [c[-1] + (c[-1] - mid[-1])]])
 
 
+def _mark_failed(ax, ex, ey, failed):
+    """Failed cells: white with a red cross-hatch, unmistakable on any colour map."""
+    from matplotlib.collections import PatchCollection
+    from matplotlib.patches import Rectangle
+
+    rows, cols = np.nonzero(failed)
+    if rows.size:
+        boxes = [Rectangle((ex[j], ey[i]), ex[j + 1] - ex[j], ey[i + 1] - ey[i])
+                 for i, j in zip(rows, cols)]
+        ax.add_collection(PatchCollection(boxes, facecolor="white", edgecolor=FAILED_COLOR,
+                                          hatch="xxx", linewidth=0.0))
+
+
+def _failed_handle(failed):
+    from matplotlib.patches import Patch
+
+    return Patch(facecolor="white", edgecolor=FAILED_COLOR, hatch="xxx",
+                 label=f"failed ({int(failed.sum())})")
+
+
 def _log_axes(ax, ds):
     """Axes in log10 St, log10 eps with ticks labelled as numbers."""
     from matplotlib.ticker import FixedLocator, FuncFormatter, MaxNLocator
@@ -277,7 +297,6 @@ def _log_axes(ax, ds):
 def _map(ds, z, title, cbar_label, levels, *, cbar_power=False, cmap="viridis", norm=None):
     """A (St, eps) map of ``z`` (NaN where not ok) with contours, failed and missing cells."""
     import matplotlib
-    from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
     fig = _figure((6.4, 4.4))
@@ -289,9 +308,7 @@ def _map(ds, z, title, cbar_label, levels, *, cbar_power=False, cmap="viridis", 
     cm = matplotlib.colormaps[cmap]
     mesh = ax.pcolormesh(ex, ey, zm, cmap=cm, norm=norm, shading="flat")
     failed = _failed(ds)
-    if failed.any():
-        ax.pcolormesh(ex, ey, np.ma.masked_where(~failed, np.ones(failed.shape)),
-                      cmap=ListedColormap([FAILED_COLOR]), shading="flat")
+    _mark_failed(ax, ex, ey, failed)
     if ly.size > 1 and lx.size > 1 and np.isfinite(z).sum() >= 4:
         finite = z[np.isfinite(z)]
         lv = [v for v in levels if finite.min() < v < finite.max()]
@@ -311,7 +328,7 @@ def _map(ds, z, title, cbar_label, levels, *, cbar_power=False, cmap="viridis", 
     ax.set_xlim(ex[0], ex[-1])
     ax.set_ylim(ey[0], ey[-1])
     ax.set_title(title)
-    handles = [Patch(color=FAILED_COLOR, label=f"failed ({int(failed.sum())})"),
+    handles = [_failed_handle(failed),
                Patch(color=NOT_RUN_COLOR, label=f"not run ({int(_not_run(ds).sum())})")]
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.0, -0.13), ncol=2,
               frameon=False)
@@ -357,9 +374,7 @@ def _stick_or_rebound(ds):
     ax.pcolormesh(ex, ey, np.ma.masked_invalid(esc), cmap=ListedColormap([stick_c, escape_c]),
                   vmin=0, vmax=1, shading="flat")
     failed = _failed(ds)
-    if failed.any():
-        ax.pcolormesh(ex, ey, np.ma.masked_where(~failed, np.ones(failed.shape)),
-                      cmap=ListedColormap([FAILED_COLOR]), shading="flat")
+    _mark_failed(ax, ex, ey, failed)
     rows = critical_stokes(ds)
     st_c = np.array([r["St_c"] for r in rows])
     eps = np.array([r["eps"] for r in rows])
@@ -375,7 +390,7 @@ def _stick_or_rebound(ds):
     ax.set_title(r"stick or rebound: does the rebound carry the spheres beyond $x_0$?")
     handles = [Patch(color=stick_c, label=r"stick ($x_e < x_0$)"),
                Patch(color=escape_c, label=r"rebound ($x_e > x_0$)"),
-               Patch(color=FAILED_COLOR, label=f"failed ({int(failed.sum())})"),
+               _failed_handle(failed),
                Patch(color=NOT_RUN_COLOR, label=f"not run ({int(_not_run(ds).sum())})")]
     lines, labels = ax.get_legend_handles_labels()
     ax.legend(handles=handles + lines, loc="upper left", bbox_to_anchor=(0.0, -0.13), ncol=3,
