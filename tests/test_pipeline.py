@@ -27,7 +27,7 @@ from pipeline.config import ConfigError, cache_key, parse_sweep
 from pipeline.store import (MODEL_CODES, STATUS_CODES, VARIABLES, StoreBusy, StoreMismatch,
                             SweepStore, pending_journal)
 from pipeline.sweep import EXIT_FAILED, run_sweep
-from pipeline.tasks import FLAG_FIELDS, FLOAT_FIELDS
+from pipeline.tasks import FLOAT_FIELDS
 
 REPO = Path(__file__).resolve().parent.parent
 
