@@ -45,6 +45,7 @@ figures: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_solver.py
+	$(PY) benchmarks/bench_accuracy.py
 
 bench-sweep: $(STAMP)
 	$(PY) benchmarks/bench_sweep.py

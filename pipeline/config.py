@@ -13,6 +13,7 @@ command line and never changes a number. Format (``sweeps/paper.toml`` is the re
 
     [numerics]
     accuracy = "standard"                 # preset: fast, standard, fine
+    # fast_path = true                    # master curve in S = St V_switch (solver/master.py)
     # rtol = 1e-4                         # optional overrides of solver.Numerics fields
 
 The cache key of a sweep is the sha256 of the canonical JSON of the solver version and the fully
@@ -80,6 +81,7 @@ class Sweep:
     eps: tuple
     accuracy: str
     overrides: dict = field(default_factory=dict)
+    fast_path: bool = False  # answer scenes from a master curve in S = St V_switch (opt-in)
     store: Path = Path("results/sweep.zarr")
     source: str = ""
     path: Path | None = None
@@ -92,7 +94,10 @@ class Sweep:
         """The fully resolved numerical settings of every scene (profiles never kept in sweeps)."""
         from solver.settings import resolve
 
-        return resolve(self.accuracy, **self.overrides, save_profiles=False).as_dict()
+        numerics = resolve(self.accuracy, **self.overrides, save_profiles=False).as_dict()
+        if self.fast_path:  # changes the answers (within its measured error): part of the key
+            numerics["fast_path"] = True
+        return numerics
 
     def solver_version(self) -> str:
         from solver import SOLVER_VERSION
@@ -155,11 +160,15 @@ def parse_sweep(text: str, path: Path | None = None) -> Sweep:
 
     numerics = dict(doc.get("numerics", {}))
     accuracy = numerics.pop("accuracy", "standard")
+    fast_path = numerics.pop("fast_path", False)
+    if not isinstance(fast_path, bool):
+        raise ConfigError(f"{where}: [numerics] fast_path must be true or false, got {fast_path!r}")
     if "save_profiles" in numerics:
         raise ConfigError(f"{where}: [numerics] save_profiles is fixed by the pipeline (sweeps "
                           "store scalars only); remove it")
     sweep = Sweep(name=name, St=axes["St"], eps=axes["eps"], accuracy=accuracy,
-                  overrides=numerics, store=Path(store), source=text, path=path)
+                  overrides=numerics, fast_path=fast_path, store=Path(store), source=text,
+                  path=path)
     try:
         sweep.numerics()
     except ValueError as exc:

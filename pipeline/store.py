@@ -38,11 +38,11 @@ from .tasks import COUNT_FIELDS, FAILURE_FIELDS, FLAG_FIELDS, FLOAT_FIELDS
 __all__ = ["open_results", "SweepStore", "StoreMismatch", "StoreBusy", "STATUS_CODES",
            "MODEL_CODES", "VARIABLES", "STORE_SCHEMA", "pending_journal", "zarr_warnings"]
 
-STORE_SCHEMA = 1  # bump when variables or their meaning change (an old store is then refused)
+STORE_SCHEMA = 2  # bump when variables or their meaning change (an old store is then refused)
 
 STATUS_CODES = {"not_run": 0, "ok": 1, "max_steps": 2, "step_underflow": 3, "nonfinite": 4,
-                "error": 5}
-MODEL_CODES = {"unknown": 0, "rigid": 1, "ehd": 2}
+                "error": 5, "start_deformed": 6}
+MODEL_CODES = {"unknown": 0, "rigid": 1, "ehd": 2, "master": 3}
 RTOL_COORD = 1e-9  # grid values this close are the same scene (geomspace round-off is ~1e-16)
 FLUSH_SECONDS = 2.0  # journal -> store merge interval: the journal already makes results durable
 

@@ -16,7 +16,7 @@ import numpy as np
 from .progress import Progress
 from .runners import open_runner
 from .store import MODEL_CODES, STATUS_CODES, SweepStore
-from .tasks import ensure_environment, solve_scene, warm
+from .tasks import MasterSolve, ensure_environment, solve_scene, warm
 
 __all__ = ["run_sweep", "Summary", "EXIT_OK", "EXIT_FAILED"]
 
@@ -125,6 +125,8 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         rerun = (status == 0) | (retry_failed & (status >= 2))
         todo = [c for c, r in zip(cells, rerun) if r]
         summary.scenes, summary.cached = len(cells), len(cells) - len(todo)
+        if todo and sweep.fast_path and solve is solve_scene:
+            solve = _master_solve(sweep, progress)
         if todo:
             jobs = [(cell, (*st.scene(cell), sweep.accuracy, overrides)) for cell in todo]
             bar = Progress(len(jobs), stream=progress)
@@ -147,9 +149,25 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
                         bar.update(rec.get("status"), rec.get("model"))
             finally:
                 bar.close()
+            # what the store kept, not what the workers said (it turns a record from a worker
+            # with another installation into an error)
+            stored = st.status_of([cell for cell, _ in jobs])
+            summary.computed_failed = int(np.sum(stored >= 2))
         _count(summary, st, cells)
     summary.wall_s = time.monotonic() - t0
     return summary
+
+
+def _master_solve(sweep, progress) -> MasterSolve:
+    """Build the master curve once, here, before the workers start (solver/master.py)."""
+    from solver.master import MasterCurve
+
+    t = time.monotonic()
+    curve = MasterCurve.build(sweep.accuracy, **sweep.overrides)
+    if progress is not None:
+        print(f"fast path: master curve of {len(curve.s)} coupled solves in "
+              f"{time.monotonic() - t:.1f} s", file=progress, flush=True)
+    return MasterSolve(curve)
 
 
 class _Warm:

@@ -81,16 +81,18 @@ def solve_scene(St: float, eps: float, accuracy: str, overrides: dict) -> dict:
                 "message": f"{type(exc).__name__}: {exc}{where}"}
 
 
-def collision_record(c) -> dict:
+def collision_record(c, extra_numerics: dict | None = None) -> dict:
     """The record of a ``solver.Collision`` (see :func:`solve_scene`), with the cache key of the
     solver version and numerics that computed it *on this worker* (the store checks it: a worker
-    with another installation must not slip its results in)."""
+    with another installation must not slip its results in). ``extra_numerics``: settings
+    outside ``solver.Numerics`` that are part of the key (``fast_path``)."""
     from solver import SOLVER_VERSION
 
     from .config import cache_key
 
+    numerics = {**c.numerics.as_dict(), **(extra_numerics or {})}
     record = {"status": c.status, "message": c.message, "model": c.model,
-              "cache_key": cache_key(SOLVER_VERSION, c.numerics.as_dict())}
+              "cache_key": cache_key(SOLVER_VERSION, numerics)}
     for name in FLOAT_FIELDS:
         record[name] = float(getattr(c, name))
     for name in FLAG_FIELDS:
@@ -98,6 +100,23 @@ def collision_record(c) -> dict:
     for name in COUNT_FIELDS:
         record[name] = int(getattr(c, name))
     return record
+
+
+class MasterSolve:
+    """``solve`` for sweeps with ``fast_path = true``: scenes on the master curve are answered
+    by interpolation in ``S = St V_switch`` (solver/master.py), the others by a direct solve.
+    Picklable: the curve (a few kB of arrays) travels with the tasks."""
+
+    def __init__(self, curve):
+        self.curve = curve
+
+    def __call__(self, St: float, eps: float, accuracy: str, overrides: dict) -> dict:
+        ensure_environment()
+        try:
+            return collision_record(self.curve.collide(St, eps), {"fast_path": True})
+        except Exception as exc:  # stored as data, as in solve_scene
+            return {"status": "error", "model": "unknown", "wall_s": math.nan,
+                    "message": f"{type(exc).__name__}: {exc}"}
 
 
 def warm(accuracy: str = "fast", overrides: dict | None = None) -> float:

@@ -28,7 +28,7 @@ from .settings import Numerics, resolve, validate_scene
 __all__ = ["collide", "Collision", "SOLVER_VERSION", "STATUS", "hertz_overlap", "JSON_KEYS"]
 
 # Bump with any change that can alter numbers: stamped into every result and store.
-SOLVER_VERSION = "1.0.0"
+SOLVER_VERSION = "1.1.0"
 
 STATUS = {
     stepper.OK: ("ok", ""),
@@ -87,7 +87,7 @@ class Collision:
     peak_force: float = math.nan
     w0_max_x1: float = math.nan  # largest central deformation W(0)
     x_min_x1: float = math.nan  # smallest X (negative: undeformed surfaces overlap)
-    dimple: bool = False
+    dimple: bool | None = False  # None when the scene failed
     dimple_depth_x1: float = 0.0  # largest H(0) - min_R H
     tau_dimple: float = math.nan  # first time the dimple is deeper than DIMPLE_DEPTH
     energy_error: float = math.nan  # max |E_k + E_s + dissipated - const| in the coupled phase
@@ -136,9 +136,11 @@ class Collision:
         return _exp(self.ln_x_e_x0)
 
     @property
-    def escaped(self) -> bool:
-        """The rebound carries the spheres back beyond x0: the model's verdict "no sticking"."""
-        return bool(self.ln_x_e_x0 > 0.0)
+    def escaped(self) -> bool | None:
+        """The rebound carries the spheres back beyond x0: the model's verdict "no sticking"
+        (None when the scene failed and x_e is unknown)."""
+        ln_x_e = self.ln_x_e_x0
+        return bool(ln_x_e > 0.0) if math.isfinite(ln_x_e) else None
 
     @property
     def gap(self) -> np.ndarray | None:
@@ -380,7 +382,8 @@ def _coupled(stokes, eps, accuracy, numerics, x_start, x_switch, tau_per_t):
         result.deformation = w_hist
         result.profile_x = x_c
     if name != "ok":
-        result.v_r = math.nan
+        result.v_r = result.dimple_depth_x1 = math.nan
+        result.dimple = None
         result.series = _concat(blocks)
         result.message = (f"{message} (St={stokes:g}, eps={eps:g}, after {counters[0]} steps at "
                           f"tau={t_c[-1] * tau_per_t:.4g})")

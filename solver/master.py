@@ -88,7 +88,7 @@ class MasterCurve:
     def collide(self, St, eps) -> Collision:
         """A scene from the master curve; scenes off the curve are solved directly."""
         stokes, eps = validate_scene(St, eps)
-        numerics = resolve(self.accuracy, **dict(self.overrides))
+        numerics = resolve(self.accuracy, **dict(self.overrides), save_profiles=False)
         x_start = eps**-0.4
         x_switch = rigid.handover_separation(x_start, stokes, numerics.switch)
         if x_switch is None or x_switch >= x_start:
