@@ -8,7 +8,7 @@
 - A NaN-safe fastmath subset: ``fastmath=True`` would make ``np.isfinite`` always true
   (numba issues 2919, 6217), and failure detection depends on it. Without ``reassoc``: it let
   the summation order depend on how a kernel was compiled, so freshly compiled and cache-loaded
-  code differed in the last digits (film.matvec vectorises by explicit partial sums instead).
+  code differed in the last digits (the elastic product uses BLAS instead, linalg.matvec).
 - ``error_model="numpy"``: division by zero gives inf (checked by the caller), not an exception.
 """
 

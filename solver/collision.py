@@ -28,7 +28,7 @@ from .settings import Numerics, resolve, validate_scene
 __all__ = ["collide", "Collision", "SOLVER_VERSION", "STATUS", "hertz_overlap", "JSON_KEYS"]
 
 # Bump with any change that can alter numbers: stamped into every result and store.
-SOLVER_VERSION = "1.1.0"
+SOLVER_VERSION = "1.2.0"
 
 STATUS = {
     stepper.OK: ("ok", ""),

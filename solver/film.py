@@ -24,32 +24,7 @@ times the step.
 import numpy as np
 
 from ._jit import jit
-
-
-@jit
-def matvec(a, x, out):
-    """``out = a @ x`` with eight running sums in a fixed order.
-
-    The explicit partial sums let LLVM vectorise the product without ``reassoc``; with
-    ``reassoc`` the summation order depended on how a kernel was compiled, and freshly compiled
-    and cache-loaded code gave results differing in the last digits (sweeps run both)."""
-    n = x.size
-    m = n - n % 8
-    for i in range(a.shape[0]):
-        row = a[i]
-        s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = 0.0
-        for j in range(0, m, 8):
-            s0 += row[j] * x[j]
-            s1 += row[j + 1] * x[j + 1]
-            s2 += row[j + 2] * x[j + 2]
-            s3 += row[j + 3] * x[j + 3]
-            s4 += row[j + 4] * x[j + 4]
-            s5 += row[j + 5] * x[j + 5]
-            s6 += row[j + 6] * x[j + 6]
-            s7 += row[j + 7] * x[j + 7]
-        for j in range(m, n):
-            s0 += row[j] * x[j]
-        out[i] = ((s0 + s1) + (s2 + s3)) + ((s4 + s5) + (s6 + s7))
+from .linalg import matvec
 
 
 @jit

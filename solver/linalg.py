@@ -1,7 +1,8 @@
-"""Dense LU factorisation kept across Newton iterations and time steps (numba's
-``np.linalg.solve`` refactorises at every call).
+"""Dense linear algebra of the time loop: an LU factorisation kept across Newton iterations and
+time steps (numba's ``np.linalg.solve`` refactorises at every call) and the matrix-vector
+product with the elastic matrix.
 
-LAPACK's ``dgetrf``/``dgetrs`` from SciPy's Cython bindings, called from compiled code (no GIL):
+LAPACK's ``dgetrf``/``dgetrs`` and BLAS ``dgemv`` from SciPy's Cython bindings, called from compiled code (no GIL):
 5-6x faster than a plain compiled triple loop at N ~ 130 on this machine. They are bound by
 symbol name (``llvmlite.binding.add_symbol`` + ``ExternalFunction``), not as ctypes pointers,
 so the calling functions stay cacheable. The arrays are C-ordered, so LAPACK factors the
@@ -17,10 +18,29 @@ from ._jit import jit
 
 for _name in ("dgetrf", "dgetrs"):
     llvm.add_symbol(f"ehd_{_name}", get_cython_function_address("scipy.linalg.cython_lapack", _name))
+llvm.add_symbol("ehd_dgemv", get_cython_function_address("scipy.linalg.cython_blas", "dgemv"))
 
 _p = types.voidptr
 _dgetrf = types.ExternalFunction("ehd_dgetrf", types.void(_p, _p, _p, _p, _p, _p))
 _dgetrs = types.ExternalFunction("ehd_dgetrs", types.void(_p, _p, _p, _p, _p, _p, _p, _p, _p))
+_dgemv = types.ExternalFunction("ehd_dgemv",
+                                types.void(_p, _p, _p, _p, _p, _p, _p, _p, _p, _p, _p))
+
+
+@jit
+def matvec(a, x, out):
+    """``out = a @ x`` (a C-ordered, square) by BLAS ``dgemv``: 2-3x faster than a compiled
+    loop, and with a fixed summation order (numba's ``reassoc`` made freshly compiled and
+    cache-loaded code sum differently)."""
+    trans = np.empty(1, np.uint8)
+    trans[0] = ord("T")  # BLAS reads the C-ordered matrix as its transpose
+    n = np.empty(1, np.int32)
+    n[0] = a.shape[0]
+    one = np.ones(1, np.int32)
+    alpha = np.ones(1)
+    beta = np.zeros(1)
+    _dgemv(trans.ctypes, n.ctypes, n.ctypes, alpha.ctypes, a.ctypes, n.ctypes, x.ctypes,
+           one.ctypes, beta.ctypes, out.ctypes, one.ctypes)
 
 
 @jit
