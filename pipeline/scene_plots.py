@@ -145,7 +145,7 @@ def plot_motion(fig, c):
     axes[2].legend()
     for ax in axes:
         ax.label_outer()
-        for t, name in ((c.tau_v_zero, "v = 0"), (c.tau_max_rebound, "max rebound")):
+        for t in (c.tau_v_zero, c.tau_max_rebound):  # v = 0, max rebound
             if np.isfinite(t):
                 ax.axvline(t, color="0.6", lw=0.8, ls=":")
     return axes

@@ -21,8 +21,6 @@ The unknowns of a step are ``y = (P_0..P_{N-1}, X, V)``; rows are scaled to gap 
 times the step.
 """
 
-import numpy as np
-
 from ._jit import jit
 from .linalg import matvec
 
