@@ -73,7 +73,7 @@ class Collision:
     eps: float
     accuracy: str
     numerics: Numerics
-    model: str  # "rigid" (no coupled solve needed) or "ehd"
+    model: str  # "rigid" (no coupled solve needed), "ehd", or "master" (solver.master fast path)
     status: str  # "ok" or a failure code (STATUS)
     message: str
     v_r: float = 0.0  # max rebound speed / v0
