@@ -79,3 +79,19 @@ def test_observables_continuous_in_stokes():
 def test_budget_ends_a_long_scene_with_a_status():
     c = collide(1000.0, 1e-12, max_steps=50, save_profiles=False)
     assert c.status == "max_steps" and "step budget" in c.message
+
+
+def test_random_scenes_across_the_supported_range():
+    # 40 scenes log-uniform in St (0.05..1e4) x eps (1e-12..0.1), fixed seed: every one is ok
+    # or start_deformed, with sensible values (280 such scenes over the three presets: no other
+    # outcome, energy closure <= 2e-3)
+    rng = np.random.default_rng(1)
+    for _ in range(40):
+        stokes = 10 ** rng.uniform(math.log10(0.05), 4.0)
+        eps = 10 ** rng.uniform(-12.0, -1.0)
+        c = collide(stokes, eps, accuracy="fast", save_profiles=False)
+        assert c.status in ("ok", "start_deformed"), (stokes, eps, c.message)
+        if c.ok:
+            assert 0.0 <= c.v_r < 1.0 and 0.0 < c.h_m_x1 <= c.h_m_approach_x1
+            assert math.isfinite(c.ln_x_e_x1)
+            assert c.model == "rigid" or c.energy_error < 2e-3
