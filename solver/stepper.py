@@ -302,7 +302,10 @@ def integrate(s, s_face, area, weight, influence, stokes, x_init, v_init, p_init
             accepted = True
 
         if not accepted:
-            continue  # records the last state with the failure status, then stops
+            # record the last accepted state with the failure status, then stop; w and h hold
+            # the rejected trial, so recompute them
+            gap(s, influence, y0[n], y0[:n], w, h)
+            continue
 
         # ---- shift history -------------------------------------------------------------------
         y2[:] = y1
