@@ -148,14 +148,17 @@ class MaterialTable:
         return self.fluids[name]
 
 
-def _read_toml(path: Path) -> dict:
+def read_toml(path, what: str = "materials file", error=MaterialError) -> dict:
+    """Parse a TOML file; a missing, unreadable or invalid file raises ``error`` naming it."""
     try:
         with open(path, "rb") as fh:
             return tomllib.load(fh)
     except FileNotFoundError:
-        raise MaterialError(f"materials file {str(path)!r} not found") from None
+        raise error(f"{what} {str(path)!r} not found") from None
+    except IsADirectoryError:
+        raise error(f"{what} {str(path)!r} is a directory") from None
     except tomllib.TOMLDecodeError as exc:
-        raise MaterialError(f"materials file {str(path)!r} is not valid TOML: {exc}") from None
+        raise error(f"{what} {str(path)!r} is not valid TOML: {exc}") from None
 
 
 def user_table_paths(environ=None) -> list[Path]:
@@ -180,5 +183,5 @@ def load_table(extra_files=(), *, user_files: bool = True, environ=None) -> Mate
     paths = list(user_table_paths(environ)) if user_files else []
     paths += [Path(p) for p in extra_files]
     for path in paths:
-        table.add(_read_toml(path), str(path))
+        table.add(read_toml(path), str(path))
     return table

@@ -250,25 +250,33 @@ def _body(data, label, table: MaterialTable) -> Body:
         if not isinstance(raw["material"], str):
             raise SceneError(f"{label}.material must be a name, got {raw['material']!r}")
         base = table.solid(raw["material"], f"{label}.material")
-    values = {}
-    for name, (spec, required) in SOLID_FIELDS.items():
-        if name in raw:
-            values[name] = to_si(raw[name], spec, f"{label}.{name}")
-        elif base is not None:
-            values[name] = getattr(base, name)
-        elif required and not (name == "density" and math.isinf(radius)):
-            raise SceneError(f"{label}: missing the field '{name}' (e.g. {name} = "
-                             f"'{spec.example}'), or name a material = '...'")
-        else:
-            values[name] = None
-    overridden = sorted(set(raw) & set(SOLID_FIELDS))
-    if base is not None:
-        name = base.name + (f" (with {', '.join(overridden)} given)" if overridden else "")
-        source = base.source + ("; overrides given in the scene" if overridden else "")
-    else:
-        name, source = "custom", "given in the scene"
+    # a plane wall needs no density (its mass is infinite)
+    optional = {"density"} if math.isinf(radius) else set()
+    values, name, source = _properties(raw, SOLID_FIELDS, base, label, "material", optional)
     solid = Solid(name=name, source=source, description=base.description if base else "", **values)
     return Body(label=label, radius=radius, solid=solid)
+
+
+def _properties(raw, fields, base, label, kind, optional=frozenset()):
+    """Field values of a solid or fluid: given in ``raw``, else from the named ``base`` entry,
+    else None for optional fields; returns ``(values, name, source)``."""
+    values = {}
+    for field_name, (spec, required) in fields.items():
+        if field_name in raw:
+            values[field_name] = to_si(raw[field_name], spec, f"{label}.{field_name}")
+        elif base is not None:
+            values[field_name] = getattr(base, field_name)
+        elif required and field_name not in optional:
+            raise SceneError(f"{label}: missing the field '{field_name}' (e.g. {field_name} = "
+                             f"'{spec.example}'), or name a {kind} = '...'")
+        else:
+            values[field_name] = None
+    overridden = sorted(set(raw) & set(fields))
+    if base is None:
+        return values, "custom", "given in the scene"
+    name = base.name + (f" (with {', '.join(overridden)} given)" if overridden else "")
+    source = base.source + ("; overrides given in the scene" if overridden else "")
+    return values, name, source
 
 
 def _fluid(data, table: MaterialTable):
@@ -281,23 +289,7 @@ def _fluid(data, table: MaterialTable):
         if not isinstance(raw["name"], str):
             raise SceneError(f"fluid.name must be a name, got {raw['name']!r}")
         base = table.fluid(raw["name"], "fluid.name")
-    values = {}
-    for name, (spec, required) in FLUID_FIELDS.items():
-        if name in raw:
-            values[name] = to_si(raw[name], spec, f"fluid.{name}")
-        elif base is not None:
-            values[name] = getattr(base, name)
-        elif required:
-            raise SceneError(f"fluid: missing the field '{name}' (e.g. {name} = '{spec.example}'), "
-                             "or name a fluid = '...'")
-        else:
-            values[name] = None
-    overridden = sorted(set(raw) & set(FLUID_FIELDS))
-    if base is not None:
-        name = base.name + (f" (with {', '.join(overridden)} given)" if overridden else "")
-        source = base.source + ("; overrides given in the scene" if overridden else "")
-    else:
-        name, source = "custom", "given in the scene"
+    values, name, source = _properties(raw, FLUID_FIELDS, base, "fluid", "fluid")
     fluid = FluidProps(name=name, source=source, description=base.description if base else "",
                        **values)
     ambient = None

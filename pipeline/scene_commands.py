@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import sys
-import tomllib
 
 __all__ = ["register", "cmd_scene", "cmd_paper_figures", "load_scene", "format_report"]
 
@@ -36,15 +35,10 @@ def _usage_error(msg):
 
 
 def _read_scene_file(path: str) -> dict:
-    try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
-    except FileNotFoundError:
-        raise _usage_error(f"scene file {path!r} not found") from None
-    except IsADirectoryError:
-        raise _usage_error(f"scene file {path!r} is a directory") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise _usage_error(f"scene file {path!r} is not valid TOML: {exc}") from None
+    from .cli import UsageError
+    from .materials import read_toml
+
+    return read_toml(path, "scene file", UsageError)
 
 
 def load_scene(path=None, flags: dict | None = None, materials=(), *, user_files=True):

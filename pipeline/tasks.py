@@ -75,10 +75,15 @@ def solve_scene(St: float, eps: float, accuracy: str, overrides: dict) -> dict:
         c = collide(St, eps, accuracy=accuracy, **{**overrides, "save_profiles": False})
         return collision_record(c)
     except Exception as exc:  # a bug or a bad scene must not stop the sweep: store it as data
-        tb = traceback.extract_tb(exc.__traceback__)
-        where = f" at {Path(tb[-1].filename).name}:{tb[-1].lineno}" if tb else ""
-        return {"status": "error", "model": "unknown", "wall_s": math.nan,
-                "message": f"{type(exc).__name__}: {exc}{where}"}
+        return error_record(exc)
+
+
+def error_record(exc: BaseException) -> dict:
+    """The record of a scene whose solve raised: status "error" and where it happened."""
+    tb = traceback.extract_tb(exc.__traceback__)
+    where = f" at {Path(tb[-1].filename).name}:{tb[-1].lineno}" if tb else ""
+    return {"status": "error", "model": "unknown", "wall_s": math.nan,
+            "message": f"{type(exc).__name__}: {exc}{where}"}
 
 
 def collision_record(c, extra_numerics: dict | None = None) -> dict:
@@ -115,8 +120,7 @@ class MasterSolve:
         try:
             return collision_record(self.curve.collide(St, eps), {"fast_path": True})
         except Exception as exc:  # stored as data, as in solve_scene
-            return {"status": "error", "model": "unknown", "wall_s": math.nan,
-                    "message": f"{type(exc).__name__}: {exc}"}
+            return error_record(exc)
 
 
 def warm(accuracy: str = "fast", overrides: dict | None = None) -> float:

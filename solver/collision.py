@@ -328,6 +328,17 @@ def _rigid_only(stokes, eps, accuracy, numerics, x_start, tau_per_t):
         x_min_x1=math.exp(ln_x_stop), energy_error=0.0, series=series, **peaks)
 
 
+def include_rigid_peaks(result, x_start, x_switch):
+    """Peaks are the larger of the coupled phase's (already in ``result``) and those of the
+    analytic rigid approach before the hand-over at ``x_switch``."""
+    head = _rigid_peaks(x_start, result.St, x_switch, result.eps**0.4)
+    if head["peak_force"] > result.peak_force:
+        result.peak_force, result.tau_peak_force = head["peak_force"], head["tau_peak_force"]
+    if head["w0_max_x1"] > result.w0_max_x1:
+        result.w0_max_x1 = head["w0_max_x1"]
+        result.tau_max_deformation = head["tau_max_deformation"]
+
+
 def _rigid_peaks(x_start, stokes, x_end, tau_per_t):
     """Largest force and central deformation on the rigid path from ``x_start`` down to
     ``x_end``: the force 3V/X (1/3 of it in our unit) peaks where V = 1/St, W(0) = 3 I0 V X^-1.5
@@ -431,16 +442,11 @@ def _coupled(stokes, eps, accuracy, numerics, x_start, x_switch, tau_per_t):
         result.h_m_x1 = min(result.h_m_x1, math.exp(ln_x_e))
         if below.size == 0:
             result.h_m_approach_x1 = min(result.h_m_approach_x1, math.exp(ln_x_e))
-    # peaks: the larger of the coupled phase's and the rigid approach's (analytic)
-    head = _rigid_peaks(x_start, stokes, x_switch, tau_per_t)
     i = int(np.argmax(cols["F"]))
     result.tau_peak_force, result.peak_force = map(float, _parabolic_peak(tau, cols["F"], i))
-    if head["peak_force"] > result.peak_force:
-        result.tau_peak_force, result.peak_force = head["tau_peak_force"], head["peak_force"]
     i = int(np.argmax(cols["W0"]))
     result.tau_max_deformation, result.w0_max_x1 = map(float, _parabolic_peak(tau, cols["W0"], i))
-    if head["w0_max_x1"] > result.w0_max_x1:
-        result.tau_max_deformation, result.w0_max_x1 = head["tau_max_deformation"], head["w0_max_x1"]
+    include_rigid_peaks(result, x_start, x_switch)
     i = int(np.argmin(x_c))
     result.x_min_x1 = float(_parabolic_peak(tau, x_c, i)[1])
     depth = cols["H0"] - h_min

@@ -26,7 +26,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from . import rigid
-from .collision import DIMPLE_DEPTH, Collision, _rigid_peaks, collide
+from .collision import DIMPLE_DEPTH, Collision, collide, include_rigid_peaks
 from .settings import resolve, validate_scene
 
 __all__ = ["MasterCurve"]
@@ -124,12 +124,6 @@ class MasterCurve:
             dimple_depth_x1=lam * at("dimple_depth_x1"), energy_error=at("energy_error"),
             tau_handover=t_s * tau_per_t)
         result.dimple = bool(result.dimple_depth_x1 > DIMPLE_DEPTH)
-        # the rigid approach before the hand-over can hold the largest force / deformation
-        head = _rigid_peaks(x_start, stokes, x_switch, tau_per_t)
-        if head["peak_force"] > result.peak_force:
-            result.peak_force, result.tau_peak_force = head["peak_force"], head["tau_peak_force"]
-        if head["w0_max_x1"] > result.w0_max_x1:
-            result.w0_max_x1 = head["w0_max_x1"]
-            result.tau_max_deformation = head["tau_max_deformation"]
+        include_rigid_peaks(result, x_start, x_switch)
         result.wall_s = time.perf_counter() - wall
         return result
