@@ -1,15 +1,16 @@
-"""Radial grid for the film: uniform where the contact forms, stretched outside.
+"""Radial grid for the film: refined at the axis, uniform across the contact, stretched outside.
 
 Radii are dimensionless (``R = r / sqrt(a x1)``). The grid is built once per resolution in
-*reference units* (uniform inner region ``[0, 1]``) and stretched by a factor ``radius`` for a
+*reference units* (inner region ``[0, 1]``) and stretched by a factor ``radius`` for a
 scene, so the elastic matrix is built once per resolution and only rescaled:
 ``D(lam R, lam C) = lam D(R, C)`` gives ``K(lam) = lam K_ref``.
 
 The finite volumes live in ``s = R^2 / 2`` (``R dR = ds``); faces sit at the midpoints in ``s``,
 so cell ``i`` covers ``[s_face[i-1], s_face[i]]`` with area ``area[i]`` (``Int P R dR`` of a
-constant cell pressure is ``P * area``). The last node is the outer boundary; its "cell" runs from
+constant cell pressure is ``P * area``, used for the cell balances). The last node is the outer boundary; its "cell" runs from
 the last face to ``R_L`` and the pressure beyond decays like the rigid far field ``(R_L/R)^4``.
-Force and deflection see the pressure as linear between nodes (elasticity.py).
+Force and deflection see the pressure interpolated between nodes on the shaped basis of
+elasticity.py (``force_weight``, ``influence``).
 """
 
 from __future__ import annotations
@@ -37,12 +38,7 @@ class RadialGrid:
     s_face: np.ndarray  # (N-1,) face positions in s (midpoints)
     area: np.ndarray  # (N,) finite-volume cell areas in s (the last one ends at R_L)
     force_weight: np.ndarray  # (N,) Int P R dR = force_weight @ P, far-field tail included
-    influence: np.ndarray  # (N, N) deflection per unit cell pressure, W = influence @ P
-    inner_radius: float  # end of the uniform inner region
-
-    @property
-    def size(self) -> int:
-        return self.radius.size
+    influence: np.ndarray  # (N, N) deflection per unit nodal pressure, W = influence @ P
 
 
 def _reference_nodes(n_inner: int, axis_ratio: float, axis_extent: float, stretch: float,
@@ -87,7 +83,7 @@ def reference_grid(n_inner: int, axis_ratio: float, axis_extent: float, stretch:
     K = influence_matrix(radius, SHAPE_WIDTH)
     for a in (radius, s, s_face, area, weight, K):
         a.setflags(write=False)
-    return RadialGrid(radius, s, s_face, area, weight, K, 1.0)
+    return RadialGrid(radius, s, s_face, area, weight, K)
 
 
 def scaled_grid(ref: RadialGrid, radius: float) -> RadialGrid:
@@ -100,5 +96,4 @@ def scaled_grid(ref: RadialGrid, radius: float) -> RadialGrid:
         area=ref.area * lam**2,
         force_weight=ref.force_weight * lam**2,
         influence=ref.influence * lam,
-        inner_radius=lam,
     )
