@@ -12,6 +12,6 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-from .store import open_results  # noqa: E402
+from .sweeps.store import open_results  # noqa: E402
 
 __all__ = ["open_results"]

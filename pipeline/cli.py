@@ -91,7 +91,7 @@ def cmd_run(args) -> int:
         if not args.json:
             print(f"saved {args.save}")
     if args.plot and result.ok:
-        from .scene_plots import plot_scene
+        from .plots.scene_plots import plot_scene
 
         paths = plot_scene(result, args.plot)
         if not args.json:
@@ -123,7 +123,7 @@ def _build_run(sub) -> None:
 # name -> builder(subparsers) of the commands defined here
 COMMANDS = {"run": _build_run}
 # modules that add their own subcommands through ``register(subparsers)``
-COMMAND_MODULES = ("pipeline.sweep_commands", "pipeline.scene_commands")
+COMMAND_MODULES = ("pipeline.sweeps.commands", "pipeline.scenes.commands")
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -21,8 +21,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import rigid, stepper
-from .grid import reference_grid, scaled_grid
+from .integration import stepper
+from .model import rigid
+from .integration.grid import reference_grid, scaled_grid
 from .settings import Numerics, resolve, validate_scene
 
 __all__ = ["collide", "Collision", "SOLVER_VERSION", "STATUS", "hertz_overlap", "JSON_KEYS"]

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from . import rigid
+from .model import rigid
 from .collision import DIMPLE_DEPTH, Collision, collide, include_rigid_peaks
 from .settings import resolve, validate_scene
 

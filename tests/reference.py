@@ -3,7 +3,7 @@
 import numpy as np
 from scipy import integrate
 
-from solver.elasticity import kernel
+from solver.model.elasticity import kernel
 
 
 def deformation_integral(xi):

@@ -6,7 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from solver import JSON_KEYS, collide, hertz_overlap, rigid
+from solver import JSON_KEYS, collide, hertz_overlap
+from solver.model import rigid
 
 from .reference import deformation_integral
 

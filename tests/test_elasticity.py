@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from solver.elasticity import disk_deflection, force_weights, influence_matrix, kernel
-from solver.grid import reference_grid, scaled_grid
+from solver.model.elasticity import disk_deflection, force_weights, influence_matrix, kernel
+from solver.integration.grid import reference_grid, scaled_grid
 
 from .reference import deformation_integral
 

@@ -22,12 +22,12 @@ import pytest
 import xarray as xr
 
 from pipeline import open_results
-from pipeline.analysis import critical_stokes
-from pipeline.config import ConfigError, cache_key, parse_sweep
-from pipeline.store import (MODEL_CODES, STATUS_CODES, VARIABLES, StoreBusy, StoreMismatch,
+from pipeline.sweeps.analysis import critical_stokes
+from pipeline.sweeps.config import ConfigError, cache_key, parse_sweep
+from pipeline.sweeps.store import (MODEL_CODES, STATUS_CODES, VARIABLES, StoreBusy, StoreMismatch,
                             SweepStore, pending_journal)
-from pipeline.sweep import EXIT_FAILED, run_sweep
-from pipeline.tasks import FLOAT_FIELDS
+from pipeline.sweeps.run import EXIT_FAILED, run_sweep
+from pipeline.sweeps.tasks import FLOAT_FIELDS
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -43,7 +43,7 @@ def fake_st_c(eps):
 
 
 def fake_solve(St, eps, accuracy, overrides):
-    """A record like ``pipeline.tasks.solve_scene``'s, with a known answer; ``ln(x_e/x0)`` is
+    """A record like ``pipeline.sweeps.tasks.solve_scene``'s, with a known answer; ``ln(x_e/x0)`` is
     linear in ln St and changes sign at ``fake_st_c(eps)``."""
     CALLS.append((St, eps))
     if any(math.isclose(St, s) for s in RAISING):
@@ -116,7 +116,7 @@ def data_vars(ds):
 
 # ---- sweep files ---------------------------------------------------------------------------------
 def test_paper_sweep_file_meets_the_issue():
-    from pipeline.config import load_sweep
+    from pipeline.sweeps.config import load_sweep
 
     s = load_sweep(REPO / "sweeps" / "paper.toml")
     assert len(s.St) >= 60 and s.St[0] <= 0.5 and s.St[-1] >= 100.0
@@ -244,9 +244,9 @@ def test_changed_numerics_or_version_never_mix(tmp_path, monkeypatch):
     with pytest.raises(StoreMismatch) as err:
         run(changed)
     assert "rtol" in str(err.value) and "--store" in str(err.value)
-    import pipeline.config
+    import pipeline.sweeps.config
 
-    monkeypatch.setattr(pipeline.config.Sweep, "solver_version", lambda self: "99.0")
+    monkeypatch.setattr(pipeline.sweeps.config.Sweep, "solver_version", lambda self: "99.0")
     with pytest.raises(StoreMismatch) as err:
         run(sweep)
     assert "solver_version" in str(err.value) and "99.0" in str(err.value)
@@ -347,8 +347,8 @@ def test_kill_9_loses_nothing_and_recomputes_nothing(tmp_path):
         import sys
         sys.path.insert(0, {str(REPO)!r})
         from tests.test_pipeline import slow_fake_solve, sweep_text
-        from pipeline.config import parse_sweep
-        from pipeline.sweep import run_sweep
+        from pipeline.sweeps.config import parse_sweep
+        from pipeline.sweeps.run import run_sweep
         sweep = parse_sweep(sweep_text({St!r}, {eps!r})).with_store({str(store)!r})
         run_sweep(sweep, runner="serial", solve=slow_fake_solve, progress=None, flush_seconds=0.2)
         """)
@@ -514,7 +514,7 @@ def test_critical_stokes_is_interpolated_between_grid_points(tmp_path):
 
 
 def test_figures_render_from_a_synthetic_store_with_reproducible_bytes(tmp_path):
-    from pipeline.figures import FIGURES, render_all, update_figures
+    from pipeline.plots.sweep_maps import FIGURES, render_all, update_figures
 
     ds = synthetic_store(tmp_path)
     first, rendered = update_figures(ds, tmp_path / "a")
@@ -533,7 +533,7 @@ def test_figures_render_from_a_synthetic_store_with_reproducible_bytes(tmp_path)
 def test_progress_line_has_counts_rate_and_eta():
     import io
 
-    from pipeline.progress import Progress
+    from pipeline.sweeps.progress import Progress
 
     p = Progress(4, stream=io.StringIO())
     p.start -= 2.0  # two seconds ago
@@ -545,7 +545,7 @@ def test_progress_line_has_counts_rate_and_eta():
 
 
 def test_figures_are_redrawn_only_when_the_store_changes(tmp_path, monkeypatch):
-    import pipeline.figures as figures
+    import pipeline.plots.sweep_maps as figures
 
     sweep = make_sweep(tmp_path, [1.0, 10.0], [1e-4, 1e-2])
     run(sweep)

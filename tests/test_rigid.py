@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import integrate, special
 
-from solver import rigid
+from solver.model import rigid
 
 
 @pytest.mark.parametrize("stokes, x_from, v_from", [(2.0, 10.0, 1.0), (30.0, 3.0, 1.0),

@@ -6,10 +6,10 @@ import math
 import pytest
 
 from pipeline.cli import main
-from pipeline.materials import MaterialError, load_table
-from pipeline.scene import (RESULT_KEYS, THRESHOLDS, SceneError, premise_checks, run_scene,
+from pipeline.scenes.materials import MaterialError, load_table
+from pipeline.scenes.scene import (RESULT_KEYS, THRESHOLDS, SceneError, premise_checks, run_scene,
                             scene_from_dict)
-from pipeline.units import FieldSpec, UnitError, to_si
+from pipeline.scenes.units import FieldSpec, UnitError, to_si
 
 
 @pytest.fixture(scope="module")

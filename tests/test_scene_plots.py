@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from pipeline.cli import main
-from pipeline.paper_figures import (FIGURES, PAPER_EPS, PAPER_STOKES, deformation_integral,
+from pipeline.plots.paper_figures import (FIGURES, PAPER_EPS, PAPER_STOKES, deformation_integral,
                                     kernel_of_ratio, paper_figures)
-from pipeline.scene_plots import dimple_rows, plot_scene, profile_rows
+from pipeline.plots.scene_plots import dimple_rows, plot_scene, profile_rows
 from solver import collide
 
 

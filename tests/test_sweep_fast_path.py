@@ -3,9 +3,9 @@
 import math
 
 from pipeline import open_results
-from pipeline.config import parse_sweep
-from pipeline.store import MODEL_CODES
-from pipeline.sweep import run_sweep
+from pipeline.sweeps.config import parse_sweep
+from pipeline.sweeps.store import MODEL_CODES
+from pipeline.sweeps.run import run_sweep
 from solver import collide
 
 TEXT = """

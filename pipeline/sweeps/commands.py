@@ -62,11 +62,11 @@ def register(sub) -> None:
 
 
 def cmd_sweep(args) -> int:
-    from .cli import UsageError
+    from ..cli import UsageError
     from .config import ConfigError, load_sweep
     from .runners import RunnerError
     from .store import StoreBusy, StoreMismatch
-    from .sweep import run_sweep
+    from .run import run_sweep
 
     try:
         sweep = load_sweep(args.sweep_file)
@@ -86,7 +86,7 @@ def cmd_status(args) -> int:
     import numpy as np
 
     from .analysis import critical_stokes
-    from .cli import UsageError
+    from ..cli import UsageError
     from .store import MODEL_CODES, STATUS_CODES, open_results, pending_journal
 
     import warnings
@@ -135,8 +135,8 @@ def cmd_status(args) -> int:
 
 
 def cmd_figures(args) -> int:
-    from .cli import UsageError
-    from .figures import update_figures
+    from ..cli import UsageError
+    from ..plots.sweep_maps import update_figures
     from .store import open_results
 
     try:

@@ -14,7 +14,7 @@ import numpy as np
 from numba import types
 from numba.extending import get_cython_function_address
 
-from ._jit import jit
+from .._jit import jit
 
 for _name in ("dgetrf", "dgetrs"):
     llvm.add_symbol(f"ehd_{_name}", get_cython_function_address("scipy.linalg.cython_lapack", _name))

@@ -21,8 +21,8 @@ Dimensionless, scale ``x1`` (physics.md); ``T`` is time in units of ``x1 / v0``.
 
 import numpy as np
 
-from ._jit import jit
-from .film import energy_rates, face_fluxes, gap, jacobian, residual
+from .._jit import jit
+from ..model.film import energy_rates, face_fluxes, gap, jacobian, residual
 from .linalg import lu_factor, lu_solve, matvec
 
 # status codes of the loop (solver/collision.py maps them to names and messages)

@@ -20,7 +20,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .elasticity import force_weights, influence_matrix
+from ..model.elasticity import force_weights, influence_matrix
 
 __all__ = ["RadialGrid", "reference_grid", "scaled_grid", "SHAPE_WIDTH"]
 

@@ -1,6 +1,6 @@
 """Named solids and fluids for scenes: the shipped table plus the user's own.
 
-The shipped table is ``pipeline/data/materials.toml``; every entry has a ``source``. Users add or
+The shipped table is ``pipeline/scenes/data/materials.toml``; every entry has a ``source``. Users add or
 replace entries without editing code, with TOML files of the same form (``[materials.NAME]`` and
 ``[fluids.NAME]`` tables), found in this order (later files override earlier ones):
 
@@ -178,8 +178,8 @@ def user_table_paths(environ=None) -> list[Path]:
 def load_table(extra_files=(), *, user_files: bool = True, environ=None) -> MaterialTable:
     """The shipped table, then user files, then ``extra_files`` (each overriding the previous)."""
     table = MaterialTable()
-    shipped = resources.files("pipeline").joinpath("data", "materials.toml")
-    table.add(tomllib.loads(shipped.read_text(encoding="utf-8")), "pipeline/data/materials.toml")
+    shipped = resources.files("pipeline.scenes").joinpath("data", "materials.toml")
+    table.add(tomllib.loads(shipped.read_text(encoding="utf-8")), "pipeline/scenes/data/materials.toml")
     paths = list(user_table_paths(environ)) if user_files else []
     paths += [Path(p) for p in extra_files]
     for path in paths:

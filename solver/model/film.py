@@ -21,8 +21,8 @@ The unknowns of a step are ``y = (P_0..P_{N-1}, X, V)``; rows are scaled to gap 
 times the step.
 """
 
-from ._jit import jit
-from .linalg import matvec
+from .._jit import jit
+from ..integration.linalg import matvec
 
 
 @jit

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .analysis import (EXPERIMENT_REFERENCE, EXPERIMENT_ST_C, critical_stokes,
+from ..sweeps.analysis import (EXPERIMENT_REFERENCE, EXPERIMENT_ST_C, critical_stokes,
                        critical_stokes_csv, valid)
 
 __all__ = ["render_all", "update_figures", "fingerprint", "FIGURES"]
@@ -89,8 +89,9 @@ def fingerprint(ds) -> str:
     import matplotlib
 
     h = hashlib.sha256()
-    for module in ("figures.py", "analysis.py"):
-        h.update((Path(__file__).parent / module).read_bytes())
+    package = Path(__file__).resolve().parent.parent
+    for module in (Path(__file__).resolve(), package / "sweeps" / "analysis.py"):
+        h.update(module.read_bytes())
     h.update(matplotlib.__version__.encode())
     h.update(json.dumps(ds.attrs, sort_keys=True, default=str).encode())
     for name in sorted(ds.variables):

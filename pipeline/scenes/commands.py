@@ -29,13 +29,13 @@ for _n in (1, 2):
 
 
 def _usage_error(msg):
-    from .cli import UsageError
+    from ..cli import UsageError
 
     return UsageError(msg)
 
 
 def _read_scene_file(path: str) -> dict:
-    from .cli import UsageError
+    from ..cli import UsageError
     from .materials import read_toml
 
     return read_toml(path, "scene file", UsageError)
@@ -56,7 +56,7 @@ def load_scene(path=None, flags: dict | None = None, materials=(), *, user_files
 
     Returns
     -------
-    pipeline.scene.Scene
+    pipeline.scenes.scene.Scene
 
     Raises
     ------
@@ -181,7 +181,7 @@ def cmd_scene(args) -> int:
         scene = load_scene(args.file, flags, args.materials or ())
     except ValueError as exc:
         raise _usage_error(str(exc)) from None
-    from .cli import _numerics_overrides
+    from ..cli import _numerics_overrides
 
     try:
         result = run_scene(scene, accuracy=args.accuracy, **_numerics_overrides(args))
@@ -199,7 +199,7 @@ def cmd_scene(args) -> int:
     else:
         print(format_report(d))
     if args.plot and result.collision.ok:
-        from .scene_plots import plot_scene
+        from ..plots.scene_plots import plot_scene
 
         paths = plot_scene(result.collision, args.plot, title=scene.title)
         if not args.json:
@@ -238,7 +238,7 @@ def _list_materials(args) -> int:
 
 
 def cmd_paper_figures(args) -> int:
-    from .paper_figures import paper_figures
+    from ..plots.paper_figures import paper_figures
 
     try:
         paths = paper_figures(args.out, accuracy=args.accuracy)
@@ -253,7 +253,7 @@ def cmd_paper_figures(args) -> int:
 
 
 def _build_scene(sub) -> None:
-    from .cli import _add_numerics_flags
+    from ..cli import _add_numerics_flags
 
     p = sub.add_parser(
         "scene", help="solve a collision given in physical units (bodies, fluid, speed)",

@@ -1,7 +1,7 @@
 """Run a sweep: plan the scenes the store lacks, run them on an executor, keep every result.
 
-Orchestration only: the physics is in ``solver``, the storage rules in :mod:`pipeline.store`, the
-executors in :mod:`pipeline.runners`. One loop consumes finished scenes in completion order, hands
+Orchestration only: the physics is in ``solver``, the storage rules in :mod:`pipeline.sweeps.store`, the
+executors in :mod:`pipeline.sweeps.runners`. One loop consumes finished scenes in completion order, hands
 each to the store's single writer and updates the progress bar.
 """
 
@@ -85,7 +85,7 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
 
     Parameters
     ----------
-    sweep : pipeline.config.Sweep
+    sweep : pipeline.sweeps.config.Sweep
         Grid, numerics, store location.
     store : path, optional
         Store location overriding ``sweep.store``.

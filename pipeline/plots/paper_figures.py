@@ -46,7 +46,7 @@ FIGURES = {
 
 def kernel_of_ratio(s):
     """``phi`` as a function of ``s = y/r`` alone: ``phi = s/(1+s) K(4s/(1+s)^2)``."""
-    from solver.elasticity import kernel
+    from solver.model.elasticity import kernel
 
     return kernel(1.0, np.asarray(s, dtype=float))
 
@@ -57,7 +57,7 @@ def deformation_integral(xi: float) -> float:
     The kernel's logarithmic singularity at ``eta = xi`` is put at an end point of the quadrature
     intervals ``[0, xi]`` and ``[xi, inf)``, where QUADPACK's extrapolation handles it.
     """
-    from solver.elasticity import kernel
+    from solver.model.elasticity import kernel
 
     xi = float(xi)
 
