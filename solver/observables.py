@@ -1,0 +1,157 @@
+"""One registry of what a collision reports: observables, status codes, models, series columns.
+
+Everything that lists results is generated from these declarations: the JSON keys of
+``Collision.to_dict`` (``JSON_KEYS``), the record a sweep task returns, the store's variables
+(with ``long_name`` and ``units``), the quantities the master-curve fast path interpolates, and the
+rows ``ehd run`` prints. Adding an observable is one entry here plus the code that computes it.
+
+Units (docs/model.md, "Scales"): lengths along the axis in ``x1`` (suffix ``_x1``) or ``x0``
+(``_x0``), times ``tau = v0 t / x0``, velocities in ``v0``, force in ``6 pi mu a^2 v0 / x1``,
+pressure in ``mu a v0 / x1^2``, energies relative to the initial kinetic energy ``m v0^2 / 2``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["Observable", "OBSERVABLES", "OBSERVABLE", "STATUS", "STATUS_CODES", "MODEL_CODES",
+           "LABELS", "Column", "SERIES", "SERIES_INDEX", "failure_message"]
+
+
+@dataclass(frozen=True)
+class Observable:
+    """One scalar result of a collision.
+
+    kind
+        ``"float"``, ``"flag"`` (bool; None when unknown), ``"count"`` (int).
+    label
+        Row label in the printed report; empty: not printed.
+    diagnostic
+        Kept when the scene failed (cost counters, wall time); every other observable of a failed
+        scene is missing (NaN), never a guess.
+    master
+        How the master-curve fast path carries it from the tabulated scene (solver/master.py):
+        the scale it multiplies with (``"length"``, ``"velocity"``, ``"force"``, ``"pressure"``,
+        ``"log_length"``, ``"time"``, ``"none"``), or ``""`` when it is derived or not available
+        on that path.
+    """
+
+    name: str
+    kind: str
+    long_name: str
+    units: str
+    label: str = ""
+    diagnostic: bool = False
+    master: str = ""
+
+
+_P = "mu a v0 / x1^2"
+OBSERVABLES = (
+    Observable("v_r", "float", "maximum rebound (separation) velocity max(-v)/v0, 0 without "
+               "rebound", "v0", "rebound velocity v_r/v0", master="velocity"),
+    Observable("h_m_x1", "float", "closest approach of the deformed surfaces, whole collision",
+               "x1", "closest approach h_m/x1", master="length"),
+    Observable("h_m_x0", "float", "closest approach of the deformed surfaces, whole collision",
+               "x0", "  h_m/x0"),
+    Observable("h_m_approach_x1", "float", "closest approach until v first reaches 0", "x1",
+               "closest approach on approach /x1", master="length"),
+    Observable("h_m_approach_x0", "float", "closest approach until v first reaches 0", "x0"),
+    Observable("x_e_x1", "float", "equilibrium separation of the undeformed surfaces (inf: exp "
+               "overflow, see ln_x_e_x1)", "x1", "equilibrium separation x_e/x1"),
+    Observable("x_e_x0", "float", "equilibrium separation of the undeformed surfaces (inf: exp "
+               "overflow, see ln_x_e_x0)", "x0", "  x_e/x0"),
+    Observable("ln_x_e_x1", "float", "natural log of x_e/x1 (finite where x_e/x1 overflows)", "1",
+               "  ln(x_e/x1)", master="log_length"),
+    Observable("ln_x_e_x0", "float", "natural log of x_e/x0; > 0 means escaped", "1"),
+    Observable("tau_max_deformation", "float", "time of the largest central deformation W(0)",
+               "x0/v0", "tau at max deformation", master="time"),
+    Observable("tau_v_zero", "float", "first time v = 0 (inf: the spheres never stop in finite "
+               "time)", "x0/v0", "tau at v = 0", master="time"),
+    Observable("tau_max_rebound", "float", "time of the largest rebound speed (NaN: no rebound)",
+               "x0/v0", "tau at max rebound", master="time"),
+    Observable("tau_peak_force", "float", "time of the peak film force", "x0/v0",
+               master="time"),
+    Observable("peak_force", "float", "peak film force", "6 pi mu a^2 v0 / x1",
+               "peak force / (6 pi mu a^2 v0/x1)", master="force"),
+    Observable("p_max", "float", "largest film pressure over the collision", _P,
+               "peak film pressure / (mu a v0/x1^2)", master="pressure"),
+    Observable("p_min", "float", "lowest film pressure over the collision (< 0: tension)", _P,
+               "lowest film pressure (tension < 0)", master="pressure"),
+    Observable("w0_max_x1", "float", "largest central deformation W(0)", "x1",
+               "max central deformation W(0)/x1", master="length"),
+    Observable("x_min_x1", "float", "smallest separation X of the undeformed surfaces (< 0: "
+               "overlap)", "x1", "min separation X/x1 (<0: overlap)", master="length"),
+    Observable("dimple", "flag", "a dimple forms (central gap above the minimum by more than "
+               "1e-3 x1)", "1", "dimple"),
+    Observable("dimple_depth_x1", "float", "largest dimple depth H(0) - min_R H", "x1",
+               "  depth /x1", master="length"),
+    Observable("tau_dimple", "float", "first time the dimple is deeper than 1e-3 x1", "x0/v0"),
+    Observable("escaped", "flag", "rebound carries the spheres back beyond x0 (x_e > x0): no "
+               "sticking", "1", "escaped (x_e > x0: no sticking)"),
+    Observable("energy_error", "float", "max energy-closure error of the coupled phase",
+               "m v0^2 / 2", "energy closure error", master="none"),
+    Observable("start_strain_energy", "float", "strain energy where the coupled phase starts, "
+               "over the kinetic energy", "1"),
+    Observable("steps", "count", "accepted time steps of the coupled solve", "1", "steps",
+               diagnostic=True),
+    Observable("rejected_steps", "count", "rejected time steps of the coupled solve", "1",
+               "  rejected", diagnostic=True),
+    Observable("newton_iterations", "count", "Newton iterations of the coupled solve", "1",
+               diagnostic=True),
+    Observable("lu_factorizations", "count", "LU factorisations of the coupled solve", "1",
+               diagnostic=True),
+    Observable("wall_s", "float", "wall time of the scene", "s", "wall time [s]",
+               diagnostic=True),
+)
+OBSERVABLE = {o.name: o for o in OBSERVABLES}
+
+# Status of a scene: name -> (code, message). One table for the solver, the store and the docs.
+STATUS = {
+    "not_run": (0, "not computed yet (stores only)"),
+    "ok": (1, ""),
+    "max_steps": (2, "step budget (max_steps) exhausted before the deformation relaxed"),
+    "step_underflow": (3, "time step fell below its minimum (nonlinear solve or error control "
+                          "failed)"),
+    "nonfinite": (4, "non-finite values or a singular Newton matrix in the coupled solve"),
+    "error": (5, "the solve raised an exception (sweeps store its text as the message)"),
+    # Not a numerical failure: the model's premise fails (collision.START_STRAIN_LIMIT).
+    "start_deformed": (6, "eps is not small for this St: the assumed starting deformation "
+                          "already stores {ratio:.3g} of the kinetic energy (limit {limit:g})"),
+}
+STATUS_CODES = {name: code for name, (code, _) in STATUS.items()}
+# Which model answered a scene
+MODEL_CODES = {"unknown": 0, "rigid": 1, "ehd": 2, "master": 3}
+# Labels of a result that are not observables (JSON keys; the store keeps them as codes/attrs)
+LABELS = ("accuracy", "model", "status", "message")
+
+
+def failure_message(name: str, **fields) -> str:
+    return STATUS[name][1].format(**fields)
+
+
+@dataclass(frozen=True)
+class Column:
+    """One column of a collision's time series."""
+
+    name: str
+    long_name: str
+    units: str
+
+
+SERIES = (
+    Column("T", "time v0 t / x1", "x1/v0"),
+    Column("X", "separation of undeformed surfaces", "x1"),
+    Column("V", "approach velocity", "v0"),
+    Column("F", "film force", "6 pi mu a^2 v0 / x1"),
+    Column("W0", "central deformation W(0)", "x1"),
+    Column("H_min", "minimum gap", "x1"),
+    Column("R_H_min", "radius of the minimum gap", "sqrt(a x1)"),
+    Column("E_k", "kinetic energy", "m v0^2/2"),
+    Column("E_s", "strain energy", "m v0^2/2"),
+    Column("dissipated", "viscous dissipation so far", "m v0^2/2"),
+    Column("H0", "central gap H(0)", "x1"),
+    Column("W_absmax", "largest |W| over the radius", "x1"),
+    Column("P_max", "largest film pressure over the radius", _P),
+    Column("P_min", "lowest film pressure over the radius", _P),
+)
+SERIES_INDEX = {c.name: k for k, c in enumerate(SERIES)}

@@ -1,0 +1,141 @@
+"""The physics of one scene: every dimensionless group, validated, in one object.
+
+A scene is fully described by its dimensionless groups (docs/model.md, "The parameters"). Today
+these are the Stokes number ``St`` and the elasticity parameter ``eps`` of Davis, Serayssol &
+Hinch (1986), the *classic model*; each new piece of physics adds a field here (with its
+metadata in ``GROUPS``), and everything downstream follows from this declaration: validation,
+the flat array the compiled kernels read (``as_array``, indices ``ST``, ``EPS``...), the sweep
+axes and fixed values of a sweep file, the store's coordinates and its cache key.
+
+Values travel to the kernels as arguments (a float array), never as closure constants: a new
+value must not recompile anything.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, fields, replace
+
+import numpy as np
+
+__all__ = ["Physics", "Group", "GROUPS", "ST", "EPS"]
+
+
+@dataclass(frozen=True)
+class Group:
+    """Metadata of one dimensionless group: what it is, its unit and its valid range."""
+
+    name: str
+    long_name: str
+    symbol: str  # short name in messages, e.g. "St (Stokes number) must be finite"
+    lo: float  # valid range (lo, hi] (open below unless closed_lo)
+    hi: float
+    closed_lo: bool = False
+    units: str = "1"
+
+    def check(self, value) -> float:
+        """``value`` as a float, or ValueError naming the group and its valid range."""
+        label = f"{self.name} ({self.symbol})"
+        try:
+            if isinstance(value, bool):
+                raise TypeError
+            v = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"{label} must be a number, got {value!r}") from None
+        if not math.isfinite(v):
+            raise ValueError(f"{label} must be finite, got {value!r}")
+        ok_lo = v >= self.lo if self.closed_lo else v > self.lo
+        if not ok_lo or v > self.hi:
+            lb = "[" if self.closed_lo else "("
+            raise ValueError(f"{label} = {value!r} is outside its valid range "
+                             f"{lb}{self.lo:g}, {self.hi:g}]")
+        return v
+
+
+GROUPS = (
+    Group("St", "Stokes number m v0 / (6 pi mu a^2)", "Stokes number", 0.0, 1.0e4),
+    # eps << 1 is the model's premise; at 0.1 the start x0 is only 2.5 x1
+    Group("eps", "elasticity parameter 4 theta mu v0 a^1.5 / x0^2.5", "elasticity parameter",
+          0.0, 0.1),
+)
+# positions in Physics.as_array(), read by the compiled kernels
+ST, EPS = 0, 1
+
+
+@dataclass(frozen=True)
+class Physics:
+    """Every dimensionless group of one scene (docs/model.md).
+
+    Parameters
+    ----------
+    St : float
+        Stokes number ``m v0 / (6 pi mu a^2)``, in (0, 1e4].
+    eps : float
+        Elasticity parameter ``4 theta mu v0 a^1.5 / x0^2.5 = (x1/x0)^2.5``, in (0, 0.1].
+
+    Raises
+    ------
+    ValueError
+        A value that is not a finite number or lies outside its group's range; the message
+        names the group.
+    """
+
+    St: float
+    eps: float
+
+    def __post_init__(self):
+        for group in GROUPS:
+            object.__setattr__(self, group.name, group.check(getattr(self, group.name)))
+
+    # ---- the declaration, for code that iterates over the groups ----------------------------
+    @staticmethod
+    def names() -> tuple:
+        """Field names in kernel-array order."""
+        return tuple(f.name for f in fields(Physics))
+
+    @staticmethod
+    def group(name: str) -> Group:
+        for g in GROUPS:
+            if g.name == name:
+                return g
+        raise KeyError(f"unknown physics field {name!r}; valid: {list(Physics.names())}")
+
+    @classmethod
+    def from_mapping(cls, values: dict) -> "Physics":
+        """A Physics from ``{name: value}``; unknown names are refused, naming the valid ones."""
+        unknown = set(values) - set(cls.names())
+        if unknown:
+            raise ValueError(f"unknown physics field(s) {sorted(unknown)}; valid: "
+                             f"{list(cls.names())}")
+        missing = [n for n in cls.names() if n not in values]
+        if missing:
+            raise ValueError(f"missing physics field(s) {missing}")
+        return cls(**values)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+    def as_array(self) -> np.ndarray:
+        """The groups as a flat float array in ``names()`` order (what the kernels read)."""
+        return np.array([getattr(self, n) for n in self.names()], dtype=float)
+
+    def replace(self, **changes) -> "Physics":
+        return replace(self, **changes)
+
+    # ---- what the groups imply ---------------------------------------------------------------
+    @property
+    def classic(self) -> bool:
+        """True when no physics beyond Davis, Serayssol & Hinch (1986) is switched on, so the
+        analytic shortcuts of the classic model (rigid phases, hand-over, master curve) are
+        exact. Always true today: St and eps are the classic model's only groups."""
+        return True
+
+    @property
+    def x_start(self) -> float:
+        """Start separation ``x0/x1 = eps^(-2/5)``."""
+        return self.eps ** -0.4
+
+    @property
+    def tau_per_t(self) -> float:
+        """``tau = v0 t / x0`` per ``T = v0 t / x1``: ``x1/x0 = eps^(2/5)``."""
+        return self.eps ** 0.4
