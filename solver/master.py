@@ -25,26 +25,29 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from .model import rigid
 from .collision import DIMPLE_DEPTH, Collision, collide, include_rigid_peaks
-from .settings import resolve, validate_scene
+from .model import rigid
+from .observables import OBSERVABLES
+from .physics import Physics
+from .settings import resolve
 
 __all__ = ["MasterCurve"]
 
-# interpolated in log S; lengths as logs (they span decades), v_r linear
-_LOG = ("h_m_x1", "h_m_approach_x1", "w0_max_x1", "peak_force")
-_LIN = ("v_r", "ln_x_e_x1", "x_min_x1", "t_v_zero", "t_max_rebound", "t_max_deformation",
-        "t_peak_force", "energy_error", "dimple_depth_x1")
+# what the curve carries (solver/observables.py: Observable.master): name -> (interpolation, scaling)
+_CARRIED = {o.name: tuple(o.master.split()) for o in OBSERVABLES if o.master}
 
 
 @dataclass(frozen=True)
 class MasterCurve:
-    """Coupled solutions started exactly at the hand-over, tabulated in ``S = St V_s``."""
+    """Coupled solutions started exactly at the hand-over, tabulated in ``S = St V_s``.
+
+    Exact (to the hand-over's accuracy) for the classic film only: ``collide`` refuses other
+    physics."""
 
     accuracy: str
     overrides: tuple  # sorted (name, value) pairs of numerical overrides
     s: np.ndarray  # (K,) tabulated S
-    table: dict  # name -> (K,) values (times T' in x1'/(V_s v0) from the hand-over)
+    table: dict  # name -> (K,) values in the master scene's units (times: T' from the hand-over)
 
     @classmethod
     def build(cls, accuracy="standard", s_min=0.4, s_max=1.0e4, per_decade=24, **overrides):
@@ -54,16 +57,15 @@ class MasterCurve:
         eps_m = numerics.switch / rigid.HANDOVER_COEFF * (1.0 + 1e-9)  # hands over at its start
         n = int(round(per_decade * math.log10(s_max / s_min))) + 1
         s = np.geomspace(s_min, s_max, n)
-        table = {k: np.empty(n) for k in (*_LOG, *_LIN)}
+        table = {k: np.empty(n) for k in _CARRIED}
+        t_per_tau = eps_m**-0.4  # T = tau x0/x1
         for i, si in enumerate(s):
-            c = collide(si, eps_m, accuracy=accuracy, save_profiles=False, **overrides)
+            c = collide(Physics(St=si, eps=eps_m), accuracy=accuracy, save_profiles=False,
+                        **overrides)
             if not c.ok:
                 raise RuntimeError(f"master scene S={si:g} failed: {c.message}")
-            t_per_tau = eps_m**-0.4  # T = tau x0/x1
-            for k in _LOG + ("v_r", "ln_x_e_x1", "x_min_x1", "energy_error", "dimple_depth_x1"):
-                table[k][i] = getattr(c, k)
-            for k in ("v_zero", "max_rebound", "max_deformation", "peak_force"):
-                table[f"t_{k}"][i] = getattr(c, f"tau_{k}") * t_per_tau
+            for k, (_, scaling) in _CARRIED.items():
+                table[k][i] = getattr(c, k) * (t_per_tau if scaling == "time" else 1.0)
         return cls(accuracy, tuple(sorted(overrides.items())), s, table)
 
     def __post_init__(self):
@@ -71,7 +73,8 @@ class MasterCurve:
         for name, y in self.table.items():
             finite = np.isfinite(y)
             if finite.sum() >= 4:
-                values = np.log(y[finite]) if name in _LOG else y[finite]
+                log = _CARRIED[name][0] == "log"
+                values = np.log(y[finite]) if log else y[finite]
                 splines[name] = (finite, CubicSpline(np.log(self.s[finite]), values))
         object.__setattr__(self, "_splines", splines)
 
@@ -83,46 +86,57 @@ class MasterCurve:
         if not finite[max(i - 1, 0): i + 1].all():
             return math.nan  # e.g. no rebound time below the critical S
         value = float(spline(math.log(s_value)))
-        return math.exp(value) if name in _LOG else value
+        return math.exp(value) if _CARRIED[name][0] == "log" else value
 
-    def collide(self, St, eps) -> Collision:
-        """A scene from the master curve; scenes off the curve are solved directly."""
-        stokes, eps = validate_scene(St, eps)
+    def collide(self, physics, eps=None) -> Collision:
+        """A scene from the master curve; classic scenes off the curve are solved directly.
+
+        Raises
+        ------
+        ValueError
+            ``physics`` is not the classic model: the curve would answer it with the wrong film.
+        """
+        if not isinstance(physics, Physics):
+            physics = Physics(St=physics, eps=eps)
+        if not rigid.exact_for(physics):
+            raise ValueError(f"the master curve holds the classic film only; solve {physics} "
+                             "directly with solver.collide")
         numerics = resolve(self.accuracy, **dict(self.overrides), save_profiles=False)
-        x_start = eps**-0.4
+        stokes, x_start = physics.St, physics.x_start
         x_switch = rigid.handover_separation(x_start, stokes, numerics.switch)
         if x_switch is None or x_switch >= x_start:
-            return collide(stokes, eps, accuracy=self.accuracy, save_profiles=False,
+            return collide(physics, accuracy=self.accuracy, save_profiles=False,
                            **dict(self.overrides))
         wall = time.perf_counter()
         v_s = float(rigid.velocity(x_switch, x_start, 1.0, stokes))
         t_s = float(rigid.elapsed_time(x_switch, x_start, 1.0, stokes))
         s_value = stokes * v_s
         if not self.s[0] <= s_value <= self.s[-1]:
-            return collide(stokes, eps, accuracy=self.accuracy, save_profiles=False,
+            return collide(physics, accuracy=self.accuracy, save_profiles=False,
                            **dict(self.overrides))
         lam = v_s**0.4
-        tau_per_t = eps**0.4
-
-        def at(name):
-            return self._interpolate(name, s_value)
-
-        def tau(name):
-            t = at(name)
-            return (t_s + lam / v_s * t) * tau_per_t if math.isfinite(t) else math.nan
-
-        v_r = max(0.0, v_s * at("v_r"))
+        tau_per_t = physics.tau_per_t
+        # docs/model.md, "Similarity": how each quantity of the master scene scales to this one
+        scale = {"velocity": v_s, "length": lam, "force": v_s / lam, "pressure": v_s / lam**2,
+                 "none": 1.0}
+        values = {}
+        for name, (_, scaling) in _CARRIED.items():
+            y = self._interpolate(name, s_value)
+            if scaling == "time":
+                values[name] = (t_s + lam / v_s * y) * tau_per_t if math.isfinite(y) else math.nan
+            elif scaling == "log_length":
+                values[name] = math.log(lam) + y
+            else:
+                values[name] = scale[scaling] * y
+        values["v_r"] = max(0.0, values["v_r"])
+        if not math.isfinite(self._interpolate("tau_v_zero", s_value)):
+            values["tau_v_zero"] = math.inf  # the master scene never stops: rigid creep
+        if values["v_r"] <= 0.0:
+            values["tau_max_rebound"] = math.nan
         result = Collision(
-            St=stokes, eps=eps, accuracy=self.accuracy, numerics=numerics, model="master",
+            physics=physics, accuracy=self.accuracy, numerics=numerics, model="master",
             status="ok", message=f"master curve at S = St V_switch = {s_value:.6g}",
-            v_r=v_r, h_m_x1=lam * at("h_m_x1"), h_m_approach_x1=lam * at("h_m_approach_x1"),
-            ln_x_e_x1=math.log(lam) + at("ln_x_e_x1"), x_min_x1=lam * at("x_min_x1"),
-            w0_max_x1=lam * at("w0_max_x1"), peak_force=v_s / lam * at("peak_force"),
-            tau_v_zero=tau("t_v_zero") if math.isfinite(at("t_v_zero")) else math.inf,
-            tau_max_rebound=tau("t_max_rebound") if v_r > 0 else math.nan,
-            tau_max_deformation=tau("t_max_deformation"), tau_peak_force=tau("t_peak_force"),
-            dimple_depth_x1=lam * at("dimple_depth_x1"), energy_error=at("energy_error"),
-            tau_handover=t_s * tau_per_t)
+            tau_handover=t_s * tau_per_t, **values)
         result.dimple = bool(result.dimple_depth_x1 > DIMPLE_DEPTH)
         include_rigid_peaks(result, x_start, x_switch)
         result.wall_s = time.perf_counter() - wall

@@ -31,9 +31,10 @@ class Observable:
         scene is missing (NaN), never a guess.
     master
         How the master-curve fast path carries it from the tabulated scene (solver/master.py):
-        the scale it multiplies with (``"length"``, ``"velocity"``, ``"force"``, ``"pressure"``,
-        ``"log_length"``, ``"time"``, ``"none"``), or ``""`` when it is derived or not available
-        on that path.
+        ``"<interpolation> <scaling>"``, interpolation ``log`` (positive values spanning decades)
+        or ``lin``; scaling ``length``, ``velocity``, ``force``, ``pressure``, ``log_length``,
+        ``time`` or ``none`` (docs/model.md, "Similarity"); ``""`` when it is derived from other
+        observables or not available on that path.
     """
 
     name: str
@@ -48,48 +49,48 @@ class Observable:
 _P = "mu a v0 / x1^2"
 OBSERVABLES = (
     Observable("v_r", "float", "maximum rebound (separation) velocity max(-v)/v0, 0 without "
-               "rebound", "v0", "rebound velocity v_r/v0", master="velocity"),
+               "rebound", "v0", "rebound velocity v_r/v0", master="lin velocity"),
     Observable("h_m_x1", "float", "closest approach of the deformed surfaces, whole collision",
-               "x1", "closest approach h_m/x1", master="length"),
+               "x1", "closest approach h_m/x1", master="log length"),
     Observable("h_m_x0", "float", "closest approach of the deformed surfaces, whole collision",
                "x0", "  h_m/x0"),
     Observable("h_m_approach_x1", "float", "closest approach until v first reaches 0", "x1",
-               "closest approach on approach /x1", master="length"),
+               "closest approach on approach /x1", master="log length"),
     Observable("h_m_approach_x0", "float", "closest approach until v first reaches 0", "x0"),
     Observable("x_e_x1", "float", "equilibrium separation of the undeformed surfaces (inf: exp "
                "overflow, see ln_x_e_x1)", "x1", "equilibrium separation x_e/x1"),
     Observable("x_e_x0", "float", "equilibrium separation of the undeformed surfaces (inf: exp "
                "overflow, see ln_x_e_x0)", "x0", "  x_e/x0"),
     Observable("ln_x_e_x1", "float", "natural log of x_e/x1 (finite where x_e/x1 overflows)", "1",
-               "  ln(x_e/x1)", master="log_length"),
+               "  ln(x_e/x1)", master="lin log_length"),
     Observable("ln_x_e_x0", "float", "natural log of x_e/x0; > 0 means escaped", "1"),
     Observable("tau_max_deformation", "float", "time of the largest central deformation W(0)",
-               "x0/v0", "tau at max deformation", master="time"),
+               "x0/v0", "tau at max deformation", master="lin time"),
     Observable("tau_v_zero", "float", "first time v = 0 (inf: the spheres never stop in finite "
-               "time)", "x0/v0", "tau at v = 0", master="time"),
+               "time)", "x0/v0", "tau at v = 0", master="lin time"),
     Observable("tau_max_rebound", "float", "time of the largest rebound speed (NaN: no rebound)",
-               "x0/v0", "tau at max rebound", master="time"),
+               "x0/v0", "tau at max rebound", master="lin time"),
     Observable("tau_peak_force", "float", "time of the peak film force", "x0/v0",
-               master="time"),
+               master="lin time"),
     Observable("peak_force", "float", "peak film force", "6 pi mu a^2 v0 / x1",
-               "peak force / (6 pi mu a^2 v0/x1)", master="force"),
+               "peak force / (6 pi mu a^2 v0/x1)", master="log force"),
     Observable("p_max", "float", "largest film pressure over the collision", _P,
-               "peak film pressure / (mu a v0/x1^2)", master="pressure"),
+               "peak film pressure / (mu a v0/x1^2)", master="log pressure"),
     Observable("p_min", "float", "lowest film pressure over the collision (< 0: tension)", _P,
-               "lowest film pressure (tension < 0)", master="pressure"),
+               "lowest film pressure (tension < 0)", master="lin pressure"),
     Observable("w0_max_x1", "float", "largest central deformation W(0)", "x1",
-               "max central deformation W(0)/x1", master="length"),
+               "max central deformation W(0)/x1", master="log length"),
     Observable("x_min_x1", "float", "smallest separation X of the undeformed surfaces (< 0: "
-               "overlap)", "x1", "min separation X/x1 (<0: overlap)", master="length"),
+               "overlap)", "x1", "min separation X/x1 (<0: overlap)", master="lin length"),
     Observable("dimple", "flag", "a dimple forms (central gap above the minimum by more than "
                "1e-3 x1)", "1", "dimple"),
     Observable("dimple_depth_x1", "float", "largest dimple depth H(0) - min_R H", "x1",
-               "  depth /x1", master="length"),
+               "  depth /x1", master="lin length"),
     Observable("tau_dimple", "float", "first time the dimple is deeper than 1e-3 x1", "x0/v0"),
     Observable("escaped", "flag", "rebound carries the spheres back beyond x0 (x_e > x0): no "
                "sticking", "1", "escaped (x_e > x0: no sticking)"),
     Observable("energy_error", "float", "max energy-closure error of the coupled phase",
-               "m v0^2 / 2", "energy closure error", master="none"),
+               "m v0^2 / 2", "energy closure error", master="lin none"),
     Observable("start_strain_energy", "float", "strain energy where the coupled phase starts, "
                "over the kinetic energy", "1"),
     Observable("steps", "count", "accepted time steps of the coupled solve", "1", "steps",

@@ -1,4 +1,4 @@
-"""Accuracy presets and input validation.
+"""Accuracy presets: every numerical choice of a scene, checked (the physics is solver/physics.py).
 
 A preset fixes every numerical choice that can change an answer: the radial grid (cells across
 the uniform inner region, stretch of the outer cells, how far the grid reaches), the time-step
@@ -12,10 +12,7 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, replace
 
-__all__ = ["Numerics", "PRESETS", "resolve", "validate_scene", "STOKES_RANGE", "EPS_RANGE"]
-
-STOKES_RANGE = (0.0, 1.0e4)  # open below, closed above
-EPS_RANGE = (0.0, 0.1)  # eps << 1 is the model's premise; at 0.1 the start x0 is only 2.5 x1
+__all__ = ["Numerics", "PRESETS", "resolve"]
 
 
 @dataclass(frozen=True)
@@ -79,13 +76,6 @@ def _check_number(name, value, lo, hi, *, open_lo=True):
         lb = "(" if open_lo else "["
         raise ValueError(f"{name} = {value!r} is outside its valid range {lb}{lo:g}, {hi:g}]")
     return v
-
-
-def validate_scene(stokes, eps):
-    """Check St and eps; return them as floats or raise ValueError naming the parameter."""
-    st = _check_number("St (Stokes number)", stokes, *STOKES_RANGE)
-    ep = _check_number("eps (elasticity parameter)", eps, *EPS_RANGE)
-    return st, ep
 
 
 def resolve(accuracy: str = "standard", **overrides) -> Numerics:

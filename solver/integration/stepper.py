@@ -1,7 +1,8 @@
 """The coupled time loop, entirely compiled (``nogil``): variable-step BDF2 on
 Reynolds + elasticity + particle motion, Newton-coupled, with error-controlled steps.
 
-Dimensionless, scale ``x1`` (physics.md); ``T`` is time in units of ``x1 / v0``.
+Dimensionless, scale ``x1`` (docs/model.md, "Scales"); ``T`` is time in units of ``x1 / v0``. The
+model's terms come from model/film.py; this module knows nothing of the physics beyond them.
 
 - Step: ``y_{n+1} - a1 y_n - a2 y_{n-1} = b dt f(y_{n+1})`` (variable-step BDF2; the first step is
   implicit Euler), solved for ``(P, X, V)`` by a chord-Newton iteration whose LU is reused while
@@ -13,24 +14,24 @@ Dimensionless, scale ``x1`` (physics.md); ``T`` is time in units of ``x1 / v0``.
   collapses the step when the pressure passes through zero), ``X`` and ``V``; steps grow at most
   2x (BDF2 zero-stability needs < 2.41x) and are kept when the proposed growth is under 1.2x, so
   the LU can be reused.
-- End (rest criterion): the loop stops once the deformation has relaxed, ``max|W| / X < release``
-  with ``X > 0``, and the remaining rigid motion can only relax it further (separating, ``V < 0``,
-  or past the rigid deformation peak, ``V < 0.4/St``). From there the motion is rigid and exact
-  (rigid.py).
+- End: a terminal event passed in by the caller (events.py), evaluated after each accepted step;
+  for the classic model the release of model/rigid.py, from where the motion is rigid and exact.
 """
 
 import numpy as np
 
 from .._jit import jit
-from ..model.film import energy_rates, face_fluxes, gap, jacobian, residual
+from ..model.film import energy_rates, face_fluxes, film_force, gap, jacobian, residual
+from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
+from .events import reached
 from .linalg import lu_factor, lu_solve, matvec
 
-# status codes of the loop (solver/collision.py maps them to names and messages)
+# status codes of the loop (solver/observables.py: STATUS)
 RUNNING = 0
-OK = 1
-MAX_STEPS = 2
-STEP_UNDERFLOW = 3
-NONFINITE = 4
+OK = STATUS_CODES["ok"]
+MAX_STEPS = STATUS_CODES["max_steps"]
+STEP_UNDERFLOW = STATUS_CODES["step_underflow"]
+NONFINITE = STATUS_CODES["nonfinite"]
 
 GAP_FLOOR = 1e-2  # x1 units: below this the gap error counts as absolute
 PRESSURE_FLOOR = 0.05  # fraction of max|P| below which the pressure error counts as absolute
@@ -38,9 +39,13 @@ NEWTON_KAPPA = 0.05  # Newton stops when its predicted remaining error is this f
 MAX_NEWTON = 7
 SAFETY = 0.9
 
-# columns of the series array
-SERIES = ("T", "X", "V", "F", "W0", "H_min", "R_H_min", "E_k", "E_s", "dissipated", "H0", "W_absmax")
+# columns of the series array (solver/observables.py: SERIES)
 N_SERIES = len(SERIES)
+_T, _X, _V, _F = SERIES_INDEX["T"], SERIES_INDEX["X"], SERIES_INDEX["V"], SERIES_INDEX["F"]
+_W0, _H_MIN, _R_H_MIN = SERIES_INDEX["W0"], SERIES_INDEX["H_min"], SERIES_INDEX["R_H_min"]
+_E_K, _E_S, _DISS = SERIES_INDEX["E_k"], SERIES_INDEX["E_s"], SERIES_INDEX["dissipated"]
+_H0, _W_ABSMAX = SERIES_INDEX["H0"], SERIES_INDEX["W_absmax"]
+_P_MAX, _P_MIN = SERIES_INDEX["P_max"], SERIES_INDEX["P_min"]
 
 
 @jit
@@ -66,10 +71,12 @@ def _norm(dp, dx, dv, dh, p, x, v, h, rtol):
 
 
 @jit
-def integrate(s, s_face, area, weight, influence, stokes, x_init, v_init, p_init, t_init, dissipated_init,
-              rtol, dt_init, dt_min, max_steps, release, save_profiles):
-    """Integrate from ``(T, X, V, P) = (t_init, x_init, v_init, p_init)`` until the deformation
-    has relaxed (module docstring) or a failure.
+def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, t_init,
+              dissipated_init, rtol, dt_init, dt_min, max_steps, stop_kind, stop_params,
+              save_profiles):
+    """Integrate from ``(T, X, V, P) = (t_init, x_init, v_init, p_init)`` until the terminal event
+    ``stop_kind`` with ``stop_params`` (events.py) or a failure. ``phys`` is
+    ``Physics.as_array()``.
 
     Returns
     -------
@@ -122,8 +129,8 @@ def integrate(s, s_face, area, weight, influence, stokes, x_init, v_init, p_init
     counters = np.zeros(5, dtype=np.int64)
 
     # initial row
-    face_fluxes(s, s_face, y0[:n], h, q)
-    strain, diss_rate = energy_rates(s, s_face, weight, stokes, x_init, y0[:n], w, h, q)
+    face_fluxes(s, s_face, y0[:n], h, phys, q)
+    strain, diss_rate = energy_rates(s, s_face, weight, phys, x_init, y0[:n], w, h, q)
     dissipated = dissipated_init
     n_rows = 0
 
@@ -140,27 +147,31 @@ def integrate(s, s_face, area, weight, influence, stokes, x_init, v_init, p_init
                 w_hist = _grow(w_hist, rows)
         x = y0[n]
         v = y0[n + 1]
-        force = 0.0
         imin = 0
         wmax = 0.0
+        pmax = y0[0]
+        pmin = y0[0]
         for i in range(n):
-            force += weight[i] * y0[i]
             if h[i] < h[imin]:
                 imin = i
             wmax = max(wmax, abs(w[i]))
+            pmax = max(pmax, y0[i])
+            pmin = min(pmin, y0[i])
         row = series[n_rows]
-        row[0] = t0
-        row[1] = x
-        row[2] = v
-        row[3] = force
-        row[4] = w[0]
-        row[5] = h[imin]
-        row[6] = np.sqrt(2.0 * s[imin])
-        row[7] = v * v
-        row[8] = strain
-        row[9] = dissipated
-        row[10] = h[0]
-        row[11] = wmax
+        row[_T] = t0
+        row[_X] = x
+        row[_V] = v
+        row[_F] = film_force(weight, y0[:n])
+        row[_W0] = w[0]
+        row[_H_MIN] = h[imin]
+        row[_R_H_MIN] = np.sqrt(2.0 * s[imin])
+        row[_E_K] = v * v
+        row[_E_S] = strain
+        row[_DISS] = dissipated
+        row[_H0] = h[0]
+        row[_W_ABSMAX] = wmax
+        row[_P_MAX] = pmax
+        row[_P_MIN] = pmin
         if save_profiles:
             p_hist[n_rows] = y0[:n]
             w_hist[n_rows] = w
@@ -168,7 +179,7 @@ def integrate(s, s_face, area, weight, influence, stokes, x_init, v_init, p_init
 
         if status != RUNNING:
             break
-        if x > 0.0 and wmax < release * x and (v < 0.0 or v < 0.4 / stokes) and counters[0] > 0:
+        if reached(stop_kind, stop_params, counters[0], x, v, wmax):
             status = OK
             break
 
@@ -217,7 +228,7 @@ def integrate(s, s_face, area, weight, influence, stokes, x_init, v_init, p_init
             fresh = False
             if (not lu_valid) or abs(bh / bh_lu - 1.0) > 0.3:
                 gap(s, influence, y[n], y[:n], w, h)
-                jacobian(s, s_face, area, weight, influence, stokes, bh, y[:n], h, jac, dres_dh)
+                jacobian(s, s_face, area, weight, influence, phys, bh, y[:n], h, jac, dres_dh)
                 counters[4] += 1
                 counters[3] += 1
                 lu_valid = lu_factor(jac, piv)
@@ -239,7 +250,7 @@ def integrate(s, s_face, area, weight, influence, stokes, x_init, v_init, p_init
                         bad = True
                 if bad:
                     break
-                residual(s, s_face, area, weight, stokes, bh, h_hist, x_hist, v_hist, y[n], y[n + 1],
+                residual(s, s_face, area, weight, phys, bh, h_hist, x_hist, v_hist, y[n], y[n + 1],
                          y[:n], h, q, res)
                 for k in range(m):
                     res[k] = -res[k]
@@ -319,8 +330,8 @@ def integrate(s, s_face, area, weight, influence, stokes, x_init, v_init, p_init
         n_hist = min(n_hist + 1, 3)
         counters[0] += 1
 
-        face_fluxes(s, s_face, y0[:n], h, q)
-        strain_new, diss_new = energy_rates(s, s_face, weight, stokes, y0[n], y0[:n], w, h, q)
+        face_fluxes(s, s_face, y0[:n], h, phys, q)
+        strain_new, diss_new = energy_rates(s, s_face, weight, phys, y0[n], y0[:n], w, h, q)
         dissipated += 0.5 * (diss_rate + diss_new) * dt
         strain = strain_new
         diss_rate = diss_new

@@ -1,105 +1,200 @@
-"""Compiled kernels of the coupled film problem: one implicit step's residual and Jacobian, and
-the energy terms. Pure arrays in, arrays out.
+"""The film model: each physical term written once, as a small compiled function with its partial
+derivatives, and the implicit step's residual, Jacobian and energy terms assembled from them.
 
-Dimensionless, scale ``x1`` (physics.md). In ``s = R^2/2`` the Reynolds equation is a 1-D
-conservation law,
+Dimensionless, scale ``x1`` (docs/model.md, "Scales"). In ``s = R^2/2`` the Reynolds equation is a
+1-D conservation law (docs/model.md, "The film equation")
 
     dH/dT = dq/ds,   q = (1/6) s H^3 dP/ds,   H = X + s + W,   W = K P,
 
-integrated over finite volumes (grid.py). The face flux between nodes ``i`` and ``i+1`` is
+integrated over finite volumes (integration/grid.py). The terms, one function each:
 
-    q_f = (P_{i+1} - P_i) s_f H_i^2 H_{i+1}^2 / (3 (s_{i+1} - s_i) (H_i + H_{i+1})),
+- ``face_flux``: the flux between nodes ``i`` and ``i+1``,
+  ``q_f = (P_{i+1} - P_i) s_f H_i^2 H_{i+1}^2 / (3 (s_{i+1} - s_i) (H_i + H_{i+1}))``, which
+  integrates ``1/(s H^3)`` across the face with ``H`` linear in ``s``: exact for the rigid pressure
+  ``3V/H^2`` on any grid, so the stretched far field costs no accuracy;
+- ``far_field_row``: the outer boundary node keeps ``P H^2`` equal to its neighbour's (rigid far
+  field ``P = 3V/H^2``); the pressure beyond it is the tail ``P_L (R_L/R)^4``;
+- ``cell_constraint``: a bound on the pressure of a cell (none in the classic model);
+- ``deflection`` and ``gap``: the surface load that deflects the solids, ``W = K P``;
+- ``film_force``: the load that moves them, ``Int P R dR = weight @ P``;
+- ``face_dissipation``, ``far_field_dissipation``, ``strain_energy``: the energy terms
+  (docs/model.md, "Energy balance").
 
-which integrates ``1/(s H^3)`` across the face with ``H`` linear in ``s``: it is exact for the rigid
-pressure ``3V/H^2`` on any grid, so the stretched far field costs no accuracy. The outer boundary
-node keeps ``P H^2`` equal to its neighbour's (rigid far field, ``P = 3V/H^2``); the pressure
-beyond it is the tail ``P_L (R_L/R)^4``, counted in force, deflection and energies.
-
-Force ``Int P R dR = weight @ P`` (pressure linear between nodes, elasticity.py).
-The unknowns of a step are ``y = (P_0..P_{N-1}, X, V)``; rows are scaled to gap units
-(``bh/area`` for the cells, ``bh`` for the motion) where ``bh`` is the implicit BDF coefficient
-times the step.
+The unknowns of a step are ``y = (P_0..P_{N-1}, X, V)``; rows are scaled to gap units (``bh/area``
+for the cells, ``bh`` for the motion), ``bh`` the implicit BDF coefficient times the step. The
+physics array ``phys`` (solver/physics.py, ``Physics.as_array``) carries the dimensionless groups.
 """
 
 from .._jit import jit
 from ..integration.linalg import matvec
+from ..physics import ST
+
+
+# ---- the terms ------------------------------------------------------------------------------------
+@jit
+def face_flux(s_lo, s_hi, s_f, p_lo, p_hi, h_lo, h_hi, phys):
+    """Flux ``q_f`` through the face at ``s_f`` between nodes ``lo`` and ``hi``, and its partial
+    derivatives.
+
+    Returns
+    -------
+    q, dq_dp_lo, dq_dp_hi, dq_dh_lo, dq_dh_hi : float
+    """
+    ds3 = 3.0 * (s_hi - s_lo)
+    sum_h = h_lo + h_hi
+    q = s_f * h_lo * h_lo * h_hi * h_hi / (ds3 * sum_h) * (p_hi - p_lo)
+    k = s_f / ds3
+    c = k * h_lo * h_lo * h_hi * h_hi / sum_h  # the conductance dq/dP_hi
+    dp = p_hi - p_lo
+    dq_dh_lo = dp * k * h_hi * h_hi * h_lo * (h_lo + 2.0 * h_hi) / (sum_h * sum_h)
+    dq_dh_hi = dp * k * h_lo * h_lo * h_hi * (h_hi + 2.0 * h_lo) / (sum_h * sum_h)
+    return q, -c, c, dq_dh_lo, dq_dh_hi
+
+
+@jit
+def face_dissipation(s_lo, s_hi, s_f, p_lo, p_hi, h_lo, h_hi, q):
+    """``Int q dP/ds ds`` over the face interval for the face flux ``q``: with ``q ~ s`` and ``H``
+    linear in ``s`` as in ``face_flux`` it is ``q dP s_bar / s_f``, ``s_bar`` the mean of ``s``
+    under ``H^-3`` (exact for the rigid film; the plain ``q dP`` overestimates it on stretched
+    cells)."""
+    s_bar = s_lo + (s_hi - s_lo) * h_lo / (h_lo + h_hi)
+    return q * (p_hi - p_lo) * s_bar / s_f
+
+
+@jit
+def far_field_row(p_in, p_out, h_in, h_out):
+    """Residual of the outer boundary node, ``P_L - P_{L-1} (H_{L-1}/H_L)^2`` (``P H^2`` constant,
+    as in the rigid far field), and its partial derivatives.
+
+    Returns
+    -------
+    r, dr_dp_in, dr_dp_out, dr_dh_in, dr_dh_out : float
+    """
+    ratio = h_in / h_out
+    return (p_out - p_in * ratio * ratio, -ratio * ratio, 1.0,
+            -2.0 * p_in * ratio / h_out, 2.0 * p_in * ratio * ratio / h_out)
+
+
+@jit
+def far_field_dissipation(x, s_last, p_last, h_last):
+    """Dissipation beyond the grid end ``s_L``: the rigid film of velocity ``V = P_L H_L^2 / 3``;
+    ``(2/(3 St))`` times this value is its part of ``D`` (docs/model.md, "Energy balance")."""
+    v_far = p_last * h_last * h_last / 3.0
+    xs = x + s_last
+    return 6.0 * v_far * v_far * (1.0 / xs - x / (2.0 * xs * xs))
+
+
+@jit
+def cell_constraint(p, phys):
+    """Whether a bound on the pressure replaces the film equation of a cell (an active
+    constraint), with that row's residual and its derivative in ``P``. The classic film carries
+    any pressure: never active. (A cavitation floor ``P >= -Pi`` is the first user.)"""
+    return False, 0.0, 0.0
+
+
+@jit
+def deflection(influence, p, w_out):
+    """Surface deflection ``W = K P`` of both solids under the film pressure."""
+    matvec(influence, p, w_out)
 
 
 @jit
 def gap(s, influence, x, p, w_out, h_out):
     """``W = K P`` and ``H = X + s + W`` into ``w_out``, ``h_out``."""
-    matvec(influence, p, w_out)
+    deflection(influence, p, w_out)
     for i in range(s.size):
         h_out[i] = x + s[i] + w_out[i]
 
 
 @jit
-def face_fluxes(s, s_face, p, h, q_out):
-    """Face fluxes ``q_f`` (module docstring); ``q_out`` has N-1 entries."""
-    for f in range(s.size - 1):
-        hi = h[f]
-        hj = h[f + 1]
-        c = s_face[f] * hi * hi * hj * hj / (3.0 * (s[f + 1] - s[f]) * (hi + hj))
-        q_out[f] = c * (p[f + 1] - p[f])
+def film_force(weight, p):
+    """``Int P R dR = weight @ P`` (pressure on the shaped basis of elasticity.py, tail included);
+    its derivative in ``P`` is ``weight``. The force on the spheres in units of
+    ``6 pi mu a^2 v0 / x1`` is a third of it, so ``dV/dT = -film_force / (3 St)``."""
+    force = 0.0
+    for i in range(p.size):
+        force += weight[i] * p[i]
+    return force
 
 
 @jit
-def residual(s, s_face, area, weight, stokes, bh, h_hist, x_hist, v_hist, x, v, p, h, q, res):
-    """Scaled residual of one implicit step: ``H - H_hist = bh dq/ds`` per cell, the far-field
-    boundary row, ``X - X_hist = -bh V`` and ``V - V_hist = -bh F/(3 St)``."""
+def strain_energy(weight, s_last, p, w, phys):
+    """Strain energy ``E_s = (1/(3 St)) Int P W R dR`` relative to the initial kinetic energy,
+    with the far-field tail (``W ~ W_L R_L / R``)."""
+    n = p.size
+    strain = 0.0
+    for i in range(n):
+        strain += weight[i] * p[i] * w[i]
+    # weight[-1] counted the tail as P_L W_L R_L^2/2; the 1/R decay of W gives R_L^2/3 instead
+    strain -= p[n - 1] * w[n - 1] * (2.0 * s_last) / 6.0
+    return strain / (3.0 * phys[ST])
+
+
+# ---- assembled from the terms ---------------------------------------------------------------------
+@jit
+def face_fluxes(s, s_face, p, h, phys, q_out):
+    """Face fluxes ``q_f`` of every face into ``q_out`` (N-1 entries)."""
+    for f in range(s.size - 1):
+        q_out[f] = face_flux(s[f], s[f + 1], s_face[f], p[f], p[f + 1], h[f], h[f + 1], phys)[0]
+
+
+@jit
+def residual(s, s_face, area, weight, phys, bh, h_hist, x_hist, v_hist, x, v, p, h, q, res):
+    """Scaled residual of one implicit step: ``H - H_hist = bh dq/ds`` per cell (or its active
+    pressure constraint), the far-field boundary row, ``X - X_hist = -bh V`` and
+    ``V - V_hist = -bh F/(3 St)``. ``q`` receives the face fluxes."""
     n = s.size
-    face_fluxes(s, s_face, p, h, q)
+    face_fluxes(s, s_face, p, h, phys, q)
     for i in range(n - 1):
+        active, r, _ = cell_constraint(p[i], phys)
+        if active:
+            res[i] = r
+            continue
         dq = q[i] - (q[i - 1] if i > 0 else 0.0)
         res[i] = h[i] - h_hist[i] - bh / area[i] * dq
-    ratio = h[n - 2] / h[n - 1]
-    res[n - 1] = p[n - 1] - p[n - 2] * ratio * ratio
-    force = 0.0
-    for i in range(n):
-        force += weight[i] * p[i]
+    res[n - 1] = far_field_row(p[n - 2], p[n - 1], h[n - 2], h[n - 1])[0]
     res[n] = x - x_hist + bh * v
-    res[n + 1] = v - v_hist + bh * force / (3.0 * stokes)
+    res[n + 1] = v - v_hist + bh * film_force(weight, p) / (3.0 * phys[ST])
 
 
 @jit
-def jacobian(s, s_face, area, weight, influence, stokes, bh, p, h, jac, dres_dh):
-    """Exact Jacobian of ``residual`` with respect to ``(P, X, V)`` into ``jac`` (N+2, N+2).
+def jacobian(s, s_face, area, weight, influence, phys, bh, p, h, jac, dres_dh):
+    """Jacobian of ``residual`` with respect to ``(P, X, V)`` into ``jac`` (N+2, N+2), from the
+    terms' partial derivatives.
 
     The cell rows depend on the gap at three nodes, and the gap on every pressure through ``K``:
     ``J = (dres/dH) K + dres/dP``. ``dres_dh`` (N, 3) is work space (columns i-1, i, i+1)."""
     n = s.size
     jac[:, :] = 0.0
     dres_dh[:, :] = 0.0
-    # derivatives of q_f with respect to H_i, H_{i+1} and P_i, P_{i+1}
     for f in range(n - 1):
-        hi = h[f]
-        hj = h[f + 1]
-        k = s_face[f] / (3.0 * (s[f + 1] - s[f]))
-        sum_h = hi + hj
-        c = k * hi * hi * hj * hj / sum_h
-        dp = p[f + 1] - p[f]
-        dq_dhi = dp * k * hj * hj * hi * (hi + 2.0 * hj) / (sum_h * sum_h)
-        dq_dhj = dp * k * hi * hi * hj * (hj + 2.0 * hi) / (sum_h * sum_h)
+        _, dq_dpi, dq_dpj, dq_dhi, dq_dhj = face_flux(s[f], s[f + 1], s_face[f], p[f], p[f + 1],
+                                                      h[f], h[f + 1], phys)
         # row f: -bh/area_f * (+q_f);  row f+1 (if a cell row): -bh/area_{f+1} * (-q_f)
         g = bh / area[f]
-        jac[f, f] += g * c
-        jac[f, f + 1] -= g * c
+        jac[f, f] -= g * dq_dpi
+        jac[f, f + 1] -= g * dq_dpj
         dres_dh[f, 1] -= g * dq_dhi
         dres_dh[f, 2] -= g * dq_dhj
         if f + 1 < n - 1:
             g = bh / area[f + 1]
-            jac[f + 1, f] -= g * c
-            jac[f + 1, f + 1] += g * c
+            jac[f + 1, f] += g * dq_dpi
+            jac[f + 1, f + 1] += g * dq_dpj
             dres_dh[f + 1, 0] += g * dq_dhi
             dres_dh[f + 1, 1] += g * dq_dhj
     for i in range(n - 1):
         dres_dh[i, 1] += 1.0
-    # boundary row: P_L - P_{L-1} (H_{L-1}/H_L)^2
-    ratio = h[n - 2] / h[n - 1]
-    jac[n - 1, n - 1] += 1.0
-    jac[n - 1, n - 2] -= ratio * ratio
-    dres_dh[n - 1, 0] = -2.0 * p[n - 2] * ratio / h[n - 1]
-    dres_dh[n - 1, 1] = 2.0 * p[n - 2] * ratio * ratio / h[n - 1]
+    _, dr_dpi, dr_dpo, dr_dhi, dr_dho = far_field_row(p[n - 2], p[n - 1], h[n - 2], h[n - 1])
+    jac[n - 1, n - 1] += dr_dpo
+    jac[n - 1, n - 2] += dr_dpi
+    dres_dh[n - 1, 0] = dr_dhi
+    dres_dh[n - 1, 1] = dr_dho
+    for i in range(n - 1):  # an active constraint replaces the whole row
+        active, _, dr_dp = cell_constraint(p[i], phys)
+        if active:
+            jac[i, :] = 0.0
+            dres_dh[i, :] = 0.0
+            jac[i, i] = dr_dp
     # chain rule through H = X + s + K P
     for i in range(n):
         lo = i - 1 if i > 0 else 0
@@ -115,32 +210,19 @@ def jacobian(s, s_face, area, weight, influence, stokes, bh, p, h, jac, dres_dh)
     jac[n, n] = 1.0
     jac[n, n + 1] = bh
     for j in range(n):
-        jac[n + 1, j] = bh * weight[j] / (3.0 * stokes)
+        jac[n + 1, j] = bh * weight[j] / (3.0 * phys[ST])
     jac[n + 1, n + 1] = 1.0
 
 
 @jit
-def energy_rates(s, s_face, weight, stokes, x, p, w, h, q):
-    """Strain energy ``E_s = (1/(3St)) Int P W R dR`` and dissipation rate
-    ``D = (2/(3St)) Int q dP/ds ds`` (both relative to the initial kinetic energy; equal to
-    ``(1/(18 St)) Int H^3 (dP/dR)^2 R dR`` of physics.md), with the
-    far-field tail: ``W ~ W_L R_L/R`` and, for ``D``, the rigid film of velocity ``P_L H_L^2/3``.
-    ``q`` must hold the face fluxes of ``p, h``."""
+def energy_rates(s, s_face, weight, phys, x, p, w, h, q):
+    """Strain energy ``E_s`` and dissipation rate ``D = (2/(3St)) Int q dP/ds ds`` (both relative to
+    the initial kinetic energy; equal to ``(1/(18 St)) Int H^3 (dP/dR)^2 R dR``, docs/model.md,
+    "Energy balance"), far field included. ``q`` must hold the face fluxes of ``p, h``."""
     n = s.size
-    strain = 0.0
-    for i in range(n):
-        strain += weight[i] * p[i] * w[i]
-    s_last = s[n - 1]
-    # weight[-1] counted the tail as P_L W_L R_L^2/2; the 1/R decay of W gives R_L^2/3 instead
-    strain -= p[n - 1] * w[n - 1] * (2.0 * s_last) / 6.0
-    # Int q dP/ds ds over a face interval, with q ~ s and H linear in s as in the face flux:
-    # q_f dP s_bar / s_f, s_bar the mean of s under H^-3 (exact for the rigid film; the plain
-    # q_f dP overestimates it on stretched cells)
+    strain = strain_energy(weight, s[n - 1], p, w, phys)
     diss = 0.0
     for f in range(n - 1):
-        s_bar = s[f] + (s[f + 1] - s[f]) * h[f] / (h[f] + h[f + 1])
-        diss += q[f] * (p[f + 1] - p[f]) * s_bar / s_face[f]
-    v_far = p[n - 1] * h[n - 1] * h[n - 1] / 3.0
-    xs = x + s_last
-    diss += 6.0 * v_far * v_far * (1.0 / xs - x / (2.0 * xs * xs))
-    return strain / (3.0 * stokes), 2.0 * diss / (3.0 * stokes)
+        diss += face_dissipation(s[f], s[f + 1], s_face[f], p[f], p[f + 1], h[f], h[f + 1], q[f])
+    diss += far_field_dissipation(x, s[n - 1], p[n - 1], h[n - 1])
+    return strain, 2.0 * diss / (3.0 * phys[ST])

@@ -1,6 +1,7 @@
 """Rigid-sphere lubrication (W = 0): the exact solution and the small-deformation estimate.
 
-Dimensionless, scale ``x1`` (physics.md). With no deformation the film pressure is
+Dimensionless, scale ``x1`` (docs/model.md, "Rigid-sphere solution"). With no deformation the
+film pressure is
 ``P = 3 V / H^2``, the force ``Int P R dR = 3 V / X`` and the motion
 
     V = V1 + ln(X / X1) / St,
@@ -10,6 +11,10 @@ from any state ``(T1, X1, V1)`` (``Ei`` the exponential integral); the spheres c
 ``X1 exp(-St V1)`` after infinite time. Inserting the rigid pressure into the elastic integral
 gives the leading deflection ``W(R) = 3 V X^(-3/2) I(R / sqrt(X))``, so
 ``W(0) / X = (3 pi^2 / (4 sqrt 2)) V X^(-5/2)``: the hand-over criterion.
+
+Exact for the classic film only (``Physics.classic``): a pressure floor or a pressure-dependent
+viscosity changes the rigid film's pressure and force. ``exact_for`` is the test every caller
+makes before using these shortcuts.
 """
 
 from __future__ import annotations
@@ -19,6 +24,8 @@ import math
 import numpy as np
 from scipy import optimize, special
 
+from ..integration.events import RELAXED
+
 __all__ = [
     "I0",
     "HANDOVER_COEFF",
@@ -27,6 +34,9 @@ __all__ = [
     "rest_separation",
     "handover_separation",
     "deformation_ratio",
+    "exact_for",
+    "release_event",
+    "approach_peaks",
 ]
 
 I0 = math.pi**2 / (4.0 * math.sqrt(2.0))  # I(0), the maximum of the deformation integral
@@ -71,6 +81,44 @@ def rest_separation(x_from, v_from, stokes):
 def deformation_ratio(x, v):
     """Leading-order central deformation over separation, ``W(0)/X``, for the rigid pressure."""
     return HANDOVER_COEFF * v * np.asarray(x, dtype=float) ** -2.5
+
+
+def exact_for(physics) -> bool:
+    """Whether the rigid solution, the hand-over and the release of this module are exact for
+    ``physics`` (a ``solver.Physics``): only for the classic film."""
+    return physics.classic
+
+
+def release_event(release, stokes):
+    """The coupled phase's terminal event (integration/events.py): the deformation has relaxed
+    below ``release`` (max|W|/X) and the rigid motion can only relax it further, separating or past
+    the rigid deformation peak ``V < 0.4/St`` (``W(0)/X ~ V X^-2.5`` falls once ``St V < 0.4``).
+    From there this module's departure ``X_e = X exp(-St V)`` is exact."""
+    return RELAXED, np.array([release, 0.4 / stokes])
+
+
+def approach_peaks(x_start, stokes, x_end):
+    """Largest force, central deformation and pressure on the rigid approach from ``(x_start, 1)``
+    down to ``x_end`` (0: all the way), with the time ``T`` of each.
+
+    With ``u = ln(X0/X)`` and ``V = 1 - u/St``: the force ``3V/X`` (its third in the unit
+    ``6 pi mu a^2 v0 / x1``) peaks at ``u = St - 1``, ``W(0) = 3 I0 V X^-1.5`` at ``u = St - 2/3``,
+    the axis pressure ``P(0) = 3V/X^2`` at ``u = St - 1/2``; each is clipped to the path (the start
+    when St is small). Returns a dict of ``peak_force``, ``w0_max``, ``p_max`` and ``t_*`` times.
+    """
+    u_end = math.log(x_start / x_end) if x_end > 0 else math.inf
+
+    def at(u_peak):
+        x = x_start * math.exp(-min(max(u_peak, 0.0), u_end))
+        v = float(velocity(x, x_start, 1.0, stokes))
+        return x, v, float(elapsed_time(x, x_start, 1.0, stokes))
+
+    x_f, v_f, t_f = at(stokes - 1.0)
+    x_w, v_w, t_w = at(stokes - 2.0 / 3.0)
+    x_p, v_p, t_p = at(stokes - 0.5)
+    return {"peak_force": v_f / x_f, "t_peak_force": t_f,
+            "w0_max": 3.0 * v_w * x_w**-1.5 * I0, "t_max_deformation": t_w,
+            "p_max": 3.0 * v_p / (x_p * x_p), "t_p_max": t_p}
 
 
 def handover_separation(x_start, stokes, threshold):

@@ -1,0 +1,26 @@
+"""Terminal events of the time loop, passed in as data (as ``solve_ivp`` takes terminal events).
+
+numba does not cache a compiled loop that takes another compiled function as an argument (it
+recompiled in every process when tried), so an event is a kind code plus a parameter array,
+evaluated here after each accepted step. The caller chooses the event that ends *its* model's
+coupled phase: today the classic model's release (solver/model/rigid.py, ``release_event``).
+"""
+
+from .._jit import jit
+
+__all__ = ["RELAXED", "reached"]
+
+# The deformation has relaxed and the remaining motion can only relax it further: from here the
+# rigid departure is exact (docs/model.md, "Rigid-sphere solution"). params = (release, V_peak):
+# stop once X > 0, max|W| < release X, and the spheres separate (V < 0) or are past the rigid
+# deformation peak (V < V_peak).
+RELAXED = 1
+
+
+@jit
+def reached(kind, params, steps, x, v, w_absmax):
+    """True when the event ``kind`` with ``params`` has happened at the accepted state
+    (``steps`` accepted steps so far, separation ``x``, velocity ``v``, largest ``|W|``)."""
+    if kind == RELAXED:
+        return steps > 0 and x > 0.0 and w_absmax < params[0] * x and (v < 0.0 or v < params[1])
+    return False

@@ -1,0 +1,178 @@
+"""The result of one collision: ``Collision``, its JSON form and its self-describing Dataset.
+
+Every list of results here is generated from the registry in solver/observables.py. Scales
+(docs/model.md, "Scales"): lengths in ``x1`` (suffix ``_x1``) or ``x0`` (``_x0``), times as
+``tau = v0 t / x0``, force in ``6 pi mu a^2 v0 / x1``, pressure in ``mu a v0 / x1^2``, energies
+relative to the initial kinetic energy.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .observables import LABELS, OBSERVABLES, SERIES
+from .physics import Physics
+from .settings import Numerics
+
+__all__ = ["Collision", "JSON_KEYS", "SOLVER_VERSION"]
+
+# Bump with any change that can alter numbers: stamped into every result and store.
+SOLVER_VERSION = "1.3.0"
+
+JSON_KEYS = (*Physics.names(), *LABELS, *(o.name for o in OBSERVABLES), "solver_version")
+
+SCALING = ("lengths along the axis / x1 (x1 = (4 theta mu a^1.5 v0)^0.4), radius / sqrt(a x1), "
+           "tau = v0 t / x0, pressure / (mu a v0 / x1^2), velocity / v0, force / "
+           "(6 pi mu a^2 v0 / x1), energies / (m v0^2 / 2)")
+
+
+def _exp(v):
+    if not math.isfinite(v):
+        return v
+    return math.exp(v) if v < 709.0 else math.inf
+
+
+@dataclass
+class Collision:
+    """Result of one collision. Failures are data: ``status != "ok"`` with a ``message`` and NaN
+    observables (never a guess). The observables and their units are declared in
+    solver/observables.py."""
+
+    physics: Physics
+    accuracy: str
+    numerics: Numerics
+    model: str  # "rigid" (no coupled solve needed), "ehd", or "master" (solver.master fast path)
+    status: str  # "ok" or a failure code (observables.STATUS)
+    message: str
+    v_r: float = 0.0  # max rebound speed / v0
+    h_m_x1: float = math.nan  # closest approach of the deformed surfaces, whole collision
+    h_m_approach_x1: float = math.nan  # closest approach until v first reaches 0
+    ln_x_e_x1: float = math.nan  # log of the equilibrium separation (finite even when x_e overflows)
+    tau_max_deformation: float = math.nan  # time of the largest W(0)
+    tau_v_zero: float = math.nan  # first time v = 0 (inf: the spheres never stop in finite time)
+    tau_max_rebound: float = math.nan  # time of the largest rebound speed (nan: no rebound)
+    tau_peak_force: float = math.nan
+    peak_force: float = math.nan
+    p_max: float = math.nan  # largest film pressure over the collision
+    p_min: float = math.nan  # lowest film pressure over the collision (< 0: tension)
+    w0_max_x1: float = math.nan  # largest central deformation W(0)
+    x_min_x1: float = math.nan  # smallest X (negative: undeformed surfaces overlap)
+    dimple: bool | None = False  # None when the scene failed
+    dimple_depth_x1: float = 0.0  # largest H(0) - min_R H
+    tau_dimple: float = math.nan  # first time the dimple is deeper than DIMPLE_DEPTH
+    energy_error: float = math.nan  # max |E_k + E_s + dissipated - const| in the coupled phase
+    start_strain_energy: float = 0.0  # E_s / E_k where the coupled phase starts
+    steps: int = 0
+    rejected_steps: int = 0
+    newton_iterations: int = 0
+    lu_factorizations: int = 0
+    wall_s: float = 0.0
+    tau_handover: float = math.nan  # rigid -> coupled
+    tau_release: float = math.nan  # coupled -> rigid
+    series: dict = field(default_factory=dict, repr=False)  # time series (SERIES, tau, phase)
+    radius: np.ndarray | None = field(default=None, repr=False)  # (N,) grid radii R
+    profile_tau: np.ndarray | None = field(default=None, repr=False)  # (rows,)
+    pressure: np.ndarray | None = field(default=None, repr=False)  # (rows, N) P
+    deformation: np.ndarray | None = field(default=None, repr=False)  # (rows, N) W
+    profile_x: np.ndarray | None = field(default=None, repr=False)  # (rows,) X at profile times
+
+    # ---- the physics ----------------------------------------------------------------------------
+    @property
+    def St(self) -> float:
+        return self.physics.St
+
+    @property
+    def eps(self) -> float:
+        return self.physics.eps
+
+    @property
+    def x0_over_x1(self) -> float:
+        return self.physics.x_start
+
+    # ---- derived quantities ---------------------------------------------------------------------
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+    @property
+    def h_m_x0(self) -> float:
+        return self.h_m_x1 / self.x0_over_x1
+
+    @property
+    def h_m_approach_x0(self) -> float:
+        return self.h_m_approach_x1 / self.x0_over_x1
+
+    @property
+    def ln_x_e_x0(self) -> float:
+        return self.ln_x_e_x1 - math.log(self.x0_over_x1)
+
+    @property
+    def x_e_x1(self) -> float:
+        return _exp(self.ln_x_e_x1)
+
+    @property
+    def x_e_x0(self) -> float:
+        return _exp(self.ln_x_e_x0)
+
+    @property
+    def escaped(self) -> bool | None:
+        """The rebound carries the spheres back beyond x0: the model's verdict "no sticking"
+        (None when the scene failed and x_e is unknown)."""
+        ln_x_e = self.ln_x_e_x0
+        return bool(ln_x_e > 0.0) if math.isfinite(ln_x_e) else None
+
+    @property
+    def gap(self) -> np.ndarray | None:
+        """Film thickness ``H = X + R^2/2 + W`` at the profile times, (rows, N)."""
+        if self.deformation is None:
+            return None
+        return self.profile_x[:, None] + 0.5 * self.radius[None, :] ** 2 + self.deformation
+
+    def to_dict(self) -> dict:
+        """The scalar results (``JSON_KEYS``), non-finite numbers as None."""
+        out = {}
+        for key in JSON_KEYS:
+            value = SOLVER_VERSION if key == "solver_version" else getattr(self, key)
+            if isinstance(value, (bool, np.bool_)):
+                value = bool(value)
+            elif isinstance(value, (int, np.integer)):
+                value = int(value)
+            elif isinstance(value, (float, np.floating)):
+                value = float(value) if math.isfinite(value) else None
+            out[key] = value
+        return out
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict())
+
+    def to_xarray(self):
+        """Self-describing Dataset: scalars as attrs, time series along ``tau``, profiles
+        along ``(profile_tau, R)``."""
+        import xarray as xr
+
+        attrs = {k: (int(v) if isinstance(v, bool) else v) for k, v in self.to_dict().items()
+                 if v is not None}
+        attrs.update({f"numerics_{k}": (int(v) if isinstance(v, bool) else v)
+                      for k, v in self.numerics.as_dict().items()})
+        attrs["scaling"] = SCALING
+        ds = xr.Dataset(attrs=attrs)
+        tau = self.series["tau"]
+        ds = ds.assign_coords(tau=("tau", tau, {"long_name": "time v0 t / x0"}))
+        columns = [(c.name, c.long_name, c.units) for c in SERIES if c.name in self.series]
+        columns.append(("phase", "0 rigid approach, 1 coupled, 2 rigid departure", "1"))
+        for name, long_name, units in columns:
+            ds[name] = ("tau", self.series[name], {"long_name": long_name, "units": units})
+        if self.pressure is not None and self.pressure.size:
+            ds = ds.assign_coords(
+                R=("R", self.radius, {"long_name": "radius", "units": "sqrt(a x1)"}),
+                profile_tau=("profile_tau", self.profile_tau, {"long_name": "time v0 t / x0"}))
+            ds["P"] = (("profile_tau", "R"), self.pressure,
+                       {"long_name": "film pressure", "units": "mu a v0 / x1^2"})
+            ds["W"] = (("profile_tau", "R"), self.deformation,
+                       {"long_name": "total surface deformation", "units": "x1"})
+            ds["H"] = (("profile_tau", "R"), self.gap, {"long_name": "film thickness", "units": "x1"})
+        return ds

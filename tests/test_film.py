@@ -1,0 +1,91 @@
+"""The film model's residual, Jacobian and linear algebra against independent references.
+
+The Jacobian is assembled from each term's partial derivatives (solver/model/film.py); a wrong
+derivative would only show up as more Newton iterations, so it is checked here against central
+differences of the residual on random admissible states (positive gaps, pressures of both signs,
+a step coefficient from small to large). The compiled LAPACK/BLAS calls are checked against numpy.
+"""
+
+import numpy as np
+import pytest
+
+from solver import Physics
+from solver.collision import scene_grid
+from solver.integration.linalg import lu_factor, lu_solve, matvec
+from solver.model.film import gap, jacobian, residual
+from solver.settings import resolve
+
+
+def _state(rng, grid, phys):
+    """A random admissible state: a rigid-like pressure with noise, and an X that keeps H > 0."""
+    n = grid.s.size
+    v = rng.uniform(-1.0, 1.0)
+    x = rng.uniform(0.3, 3.0)
+    p = 3.0 * v / (x + grid.s) ** 2 * (1.0 + 0.3 * rng.standard_normal(n))
+    w, h = np.empty(n), np.empty(n)
+    gap(grid.s, grid.influence, x, p, w, h)
+    if np.min(h) <= 0.05:
+        x += 0.1 - np.min(h)
+    return x, v, p
+
+
+def _residual(grid, phys, bh, hist, y):
+    n = grid.s.size
+    w, h, q, res = np.empty(n), np.empty(n), np.empty(n - 1), np.empty(n + 2)
+    gap(grid.s, grid.influence, y[n], y[:n], w, h)
+    residual(grid.s, grid.s_face, grid.area, grid.force_weight, phys, bh, hist[0], hist[1],
+             hist[2], y[n], y[n + 1], y[:n], h, q, res)
+    return res
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_jacobian_matches_central_differences(seed):
+    rng = np.random.default_rng(seed)
+    physics = Physics(St=float(rng.uniform(0.5, 50.0)), eps=1e-4)
+    phys = physics.as_array()
+    grid = scene_grid(physics.St, 5.0, resolve("fast", n_inner=8))
+    n = grid.s.size
+    x, v, p = _state(rng, grid, phys)
+    bh = 10.0 ** rng.uniform(-4.0, 0.0)
+    hist = (x + grid.s + rng.uniform(0.0, 0.1, n), x + 0.01, v + 0.01)
+    y = np.concatenate([p, [x, v]])
+    w, h = np.empty(n), np.empty(n)
+    gap(grid.s, grid.influence, x, p, w, h)
+    jac = np.empty((n + 2, n + 2))
+    jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, phys, bh, p, h,
+             jac, np.empty((n, 3)))
+    fd = np.empty_like(jac)
+    for k in range(n + 2):
+        # step 3e-4 of each unknown's scale (floor: 1e-3 of the largest pressure, for the tiny
+        # far-field pressures): measured, the difference error is round-off ~ eps |res| / step
+        # below that (1.6e-6 at 6e-6) and truncation ~ step^2 above it (1e-8 at 1e-3)
+        step = 3e-4 * max(abs(y[k]), 1e-3 * np.max(np.abs(p)))
+        yp, ym = y.copy(), y.copy()
+        yp[k] += step
+        ym[k] -= step
+        fd[:, k] = (_residual(grid, phys, bh, hist, yp) - _residual(grid, phys, bh, hist, ym)) \
+            / (2.0 * step)
+    scale = np.max(np.abs(jac), axis=1, keepdims=True)  # each row at its own scale
+    # 1e-6: above the differences' own error (~3e-8 at this step, comment above), far below
+    # the 1e-2..1 relative error of a wrong or missing term (a 1 % error in one derivative fails)
+    assert np.max(np.abs(jac - fd) / scale) < 1e-6
+
+
+def test_compiled_linear_algebra_matches_numpy():
+    rng = np.random.default_rng(1)
+    for n in (3, 17, 130):
+        a = rng.standard_normal((n, n)) + n * np.eye(n)
+        x = rng.standard_normal(n)
+        out = np.empty(n)
+        matvec(a, x, out)
+        # 1e-12: a sum of n ~ 130 products of O(n) terms, relative to |a||x|: a few ulps each
+        np.testing.assert_allclose(out, a @ x, rtol=0, atol=1e-12 * np.abs(a).sum(1).max())
+        lu = a.copy()
+        piv = np.empty(n, dtype=np.int32)
+        assert lu_factor(lu, piv)
+        b = rng.standard_normal(n)
+        sol = lu_solve(lu, piv, b.copy())
+        # diagonally dominant: condition number O(1), so the solve is accurate to ~n ulps
+        np.testing.assert_allclose(sol, np.linalg.solve(a, b), rtol=1e-11, atol=1e-13)
+    singular = np.zeros((4, 4))
+    assert not lu_factor(singular, np.empty(4, dtype=np.int32))
