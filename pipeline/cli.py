@@ -1,6 +1,14 @@
 """Command line: ``ehd run`` (one scene); other modules add subcommands (``COMMAND_MODULES``).
 
-Exit codes: 0 success, 1 a scene failed (its status and message are printed), 2 bad input.
+Exit codes: 0 success, 1 a scene failed (its status and message are printed), 2 bad input
+(including output paths that cannot be written, checked before any solve), 130 interrupted,
+141 the reader of stdout went away (``ehd run ... | head``): like a Unix tool killed by SIGPIPE
+(128 + 13), so ``set -o pipefail`` scripts see the usual code, but without a traceback; the rest
+of the output goes to /dev/null (the recipe of the Python docs, "Note on SIGPIPE").
+
+``ehd run`` takes one flag per dimensionless group of ``solver.physics`` (``--St``, ``--eps``),
+generated from its declaration, and prints one row per labelled observable of
+``solver.observables``: a new group or observable appears here without editing this module.
 """
 
 from __future__ import annotations
@@ -8,7 +16,12 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
+from pathlib import Path
+
+from solver.observables import LABELS, OBSERVABLES
+from solver.physics import GROUPS, Physics
 
 __all__ = ["main", "COMMANDS"]
 
@@ -43,25 +56,22 @@ def _fmt(v, spec=".6g"):
     return str(v)
 
 
+# Labels of a result (solver.observables.LABELS) shown as rows; "message" is printed below the
+# table as the failure or note line, "accuracy" is the user's own flag.
+_LABEL_ROWS = tuple(name for name in LABELS if name in ("model", "status"))
+
+
+def report_rows(d: dict) -> list[tuple[str, object]]:
+    """Rows of the ``ehd run`` report of ``Collision.to_dict()``: the physics groups, model and
+    status, then every observable with a ``label``, in registry order."""
+    rows = [(name, d[name]) for name in Physics.names()]
+    rows += [(name, d[name]) for name in _LABEL_ROWS]
+    rows += [(o.label, d[o.name]) for o in OBSERVABLES if o.label]
+    return rows
+
+
 def _print_scene(d: dict) -> None:
-    rows = [
-        ("St", d["St"]), ("eps", d["eps"]), ("model", d["model"]), ("status", d["status"]),
-        ("rebound velocity v_r/v0", d["v_r"]),
-        ("closest approach h_m/x1", d["h_m_x1"]), ("  h_m/x0", d["h_m_x0"]),
-        ("closest approach on approach /x1", d["h_m_approach_x1"]),
-        ("equilibrium separation x_e/x1", d["x_e_x1"]), ("  ln(x_e/x1)", d["ln_x_e_x1"]),
-        ("  x_e/x0", d["x_e_x0"]),
-        ("escaped (x_e > x0: no sticking)", d["escaped"]),
-        ("peak force / (6 pi mu a^2 v0/x1)", d["peak_force"]),
-        ("max central deformation W(0)/x1", d["w0_max_x1"]),
-        ("min separation X/x1 (<0: overlap)", d["x_min_x1"]),
-        ("dimple", d["dimple"]), ("  depth /x1", d["dimple_depth_x1"]),
-        ("tau at max deformation", d["tau_max_deformation"]),
-        ("tau at v = 0", d["tau_v_zero"]), ("tau at max rebound", d["tau_max_rebound"]),
-        ("energy closure error", d["energy_error"]),
-        ("steps (rejected)", f"{d['steps']} ({d['rejected_steps']})"),
-        ("wall time [s]", d["wall_s"]),
-    ]
+    rows = report_rows(d)
     width = max(len(k) for k, _ in rows)
     for k, v in rows:
         print(f"{k:<{width}}  {_fmt(v)}")
@@ -71,13 +81,45 @@ def _print_scene(d: dict) -> None:
         print(f"note: {d['message']}")
 
 
+def check_output_paths(save: str | None = None, plot: str | None = None) -> None:
+    """UsageError, before any solve, when ``--save FILE`` or ``--plot DIR`` cannot be written:
+    a missing parent directory, or an existing path of the wrong kind (a ``.zarr`` store and
+    ``DIR`` are directories, a ``.nc`` file is a file)."""
+    if save:
+        if not save.endswith((".nc", ".zarr")):
+            raise UsageError(f"--save: unknown file type {save!r}; use a .nc or .zarr path")
+        path = Path(save)
+        parent = path.parent
+        if not parent.is_dir():
+            raise UsageError(f"--save {save}: the directory {str(parent)!r} does not exist")
+        if save.endswith(".zarr") and path.exists() and not path.is_dir():
+            raise UsageError(f"--save {save}: exists and is not a directory (a .zarr store is one)")
+        if save.endswith(".nc") and path.is_dir():
+            raise UsageError(f"--save {save}: is a directory, not a file")
+    if plot:
+        path = Path(plot)
+        if path.exists() and not path.is_dir():
+            raise UsageError(f"--plot {plot}: exists and is not a directory")
+        existing = next((p for p in path.parents if p.exists()), None)
+        if existing is not None and not existing.is_dir():
+            raise UsageError(f"--plot {plot}: {str(existing)!r} is not a directory")
+
+
+def physics_from_args(args) -> Physics:
+    """The ``Physics`` of the ``--St``, ``--eps``... flags (``_add_physics_flags``)."""
+    try:
+        return Physics.from_mapping({name: getattr(args, name) for name in Physics.names()})
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+
+
 def cmd_run(args) -> int:
     from solver import collide
 
-    if args.save and not args.save.endswith((".nc", ".zarr")):
-        raise UsageError(f"--save: unknown file type {args.save!r}; use a .nc or .zarr path")
+    check_output_paths(args.save, args.plot)
+    physics = physics_from_args(args)
     try:
-        result = collide(args.St, args.eps, accuracy=args.accuracy,
+        result = collide(physics, accuracy=args.accuracy,
                          save_profiles=bool(args.save or args.plot), **_numerics_overrides(args))
     except ValueError as exc:
         raise UsageError(str(exc)) from None
@@ -101,16 +143,27 @@ def cmd_run(args) -> int:
 
 def _save_dataset(ds, path: str) -> None:
     if path.endswith(".zarr"):
-        ds.to_zarr(path, mode="w")
+        from .sweeps.store import zarr_warnings
+
+        with zarr_warnings():  # we consolidate on purpose, as the sweep stores do
+            ds.to_zarr(path, mode="w")
     else:
         ds.to_netcdf(path, engine="scipy")  # netCDF3 via scipy: no extra dependency
 
 
+def _add_physics_flags(p: argparse.ArgumentParser) -> None:
+    """One required flag per dimensionless group (``solver.physics.GROUPS``): ``--St``, ..."""
+    for group in GROUPS:
+        lb = "[" if group.closed_lo else "("
+        p.add_argument(f"--{group.name}", dest=group.name, type=float, required=True,
+                       metavar=group.name.upper(),
+                       help=f"{group.long_name}, in {lb}{group.lo:g}, {group.hi:g}]")
+
+
 def _build_run(sub) -> None:
-    p = sub.add_parser("run", help="solve one collision given St and eps")
-    p.add_argument("--St", type=float, required=True, help="Stokes number m v0 / (6 pi mu a^2)")
-    p.add_argument("--eps", type=float, required=True,
-                   help="elasticity parameter 4 theta mu v0 a^1.5 / x0^2.5")
+    names = ", ".join(Physics.names())
+    p = sub.add_parser("run", help=f"solve one collision given its dimensionless groups ({names})")
+    _add_physics_flags(p)
     _add_numerics_flags(p)
     p.add_argument("--json", action="store_true", help="print exactly one JSON object")
     p.add_argument("--save", metavar="FILE", default=None,
@@ -148,13 +201,21 @@ def _parser() -> argparse.ArgumentParser:
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     try:
-        return args.func(args)
+        code = args.func(args)
+        sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
+        return code
     except UsageError as exc:
         print(f"ehd {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # the reader went away (``ehd ... | head``): no traceback, and the interpreter's final
+        # flush must not raise again, so stdout points to /dev/null (Python docs, SIGPIPE note)
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 141
 
 
 if __name__ == "__main__":

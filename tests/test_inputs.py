@@ -78,3 +78,70 @@ def test_cli_failed_scene_exits_1_with_reason():
     assert out.returncode == 1
     d = json.loads(out.stdout)
     assert d["status"] == "max_steps" and "step budget" in d["message"]
+
+
+# ---- ehd run: flags from the physics declaration, report rows from the registry -------------
+def test_cli_run_flags_come_from_the_physics_groups(capsys):
+    from pipeline.cli import main
+    from solver.physics import GROUPS
+
+    with pytest.raises(SystemExit):
+        main(["run", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())  # argparse wraps lines
+    for group in GROUPS:
+        assert f"--{group.name}" in help_text and group.long_name in help_text
+
+
+def test_cli_run_report_has_a_row_for_each_labelled_observable(capsys):
+    from pipeline.cli import main
+    from solver.observables import OBSERVABLES
+    from solver.physics import Physics
+
+    assert main(["run", "--St", "5", "--eps", "0.01", "--accuracy", "fast"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    labels = [o.label for o in OBSERVABLES if o.label]
+    expected = [*Physics.names(), "model", "status", *labels]
+    # one row per label, in this order, label then two spaces and the value
+    rows = [line for line in lines if any(line.startswith(k + "  ") for k in expected)]
+    assert len(rows) == len(expected)
+    for row, label in zip(rows, expected):
+        assert row.startswith(label + "  ") and row[len(label):].strip()
+
+
+@pytest.mark.parametrize("make, flag, needle", [
+    (lambda tmp: "/nonexistent/d/x.nc", "--save", "does not exist"),
+    (lambda tmp: str(tmp / "missing" / "x.zarr"), "--save", "does not exist"),
+    (lambda tmp: (tmp / "f.zarr").write_text("") or str(tmp / "f.zarr"), "--save",
+     "not a directory"),
+    (lambda tmp: (tmp / "d.nc").mkdir() or str(tmp / "d.nc"), "--save", "is a directory"),
+    (lambda tmp: (tmp / "figs").write_text("") or str(tmp / "figs"), "--plot",
+     "not a directory"),
+])
+def test_cli_run_unwritable_output_exits_2_before_solving(tmp_path, capsys, monkeypatch, make,
+                                                          flag, needle):
+    import solver
+    from pipeline.cli import main
+
+    monkeypatch.setattr(solver, "collide", lambda *a, **k: pytest.fail("solved"))
+    assert main(["run", "--St", "5", "--eps", "0.01", flag, make(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert needle in err and "Traceback" not in err and len(err.splitlines()) == 1
+
+
+def test_cli_run_save_into_missing_directory_is_refused_fast():
+    out = _ehd("run", "--St", "5", "--eps", "0.01", "--save", "/nonexistent/d/x.nc")
+    assert out.returncode == 2 and out.stdout == ""
+    assert "/nonexistent/d" in out.stderr and len(out.stderr.strip().splitlines()) == 1
+
+
+def test_cli_output_into_a_closed_pipe_has_no_traceback():
+    out = subprocess.run(f"'{sys.executable}' -m pipeline.cli run --St 5 --eps 0.01 "
+                         "--accuracy fast | head -1", shell=True, capture_output=True, text=True,
+                         timeout=300)
+    assert out.stdout.startswith("St")
+    assert "Traceback" not in out.stderr and "BrokenPipeError" not in out.stderr
+    # a reader that never reads: the write meets a closed pipe (no solve needed for the output)
+    out = subprocess.run(["bash", "-o", "pipefail", "-c",
+                          f"'{sys.executable}' -m pipeline.cli scene --list-materials | true"],
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode in (0, 141) and out.stderr == ""

@@ -59,3 +59,26 @@ def test_handover_peak_and_never():
     # St <= 0.4: the ratio only falls from its start value 3 I0 eps = 5.2e-6
     assert rigid.handover_separation(x0, 0.3, 1e-5) is None
     assert rigid.handover_separation(1.0, 0.3, 1.0) == 1.0  # already past the threshold
+
+
+@pytest.mark.parametrize("eps, stokes", [(1e-6, 5.0), (1e-2, 0.3), (1e-3, 0.41), (1e-4, 40.0),
+                                         (1e-2, 1.0)])
+def test_log_peak_deformation_ratio_is_the_maximum_along_the_rigid_path(eps, stokes):
+    x0 = eps**-0.4
+    # dense sampling of the whole rigid path, u = ln(X0/X) from 0 to rest at u = St
+    u = np.linspace(0.0, stokes, 400001)[:-1]
+    x = x0 * np.exp(-u)
+    ratio = rigid.deformation_ratio(x, rigid.velocity(x, x0, 1.0, stokes))
+    # sampled maximum: within (du)^2 times the curvature of a smooth peak, ~1e-9 relative here
+    assert rigid.log_peak_deformation_ratio(x0, stokes) == pytest.approx(
+        math.log(ratio.max()), abs=1e-8)
+    assert rigid.log_peak_deformation_ratio(x0, stokes) >= math.log(ratio.max()) - 1e-12
+
+
+def test_start_deformation_ratio_and_its_inverse():
+    eps = 3e-3
+    x0 = eps**-0.4
+    assert rigid.start_deformation_ratio(eps) == pytest.approx(
+        rigid.deformation_ratio(x0, 1.0), rel=1e-12)
+    assert rigid.eps_for_start_deformation(rigid.start_deformation_ratio(eps)) == pytest.approx(
+        eps, rel=1e-14)

@@ -7,8 +7,8 @@ import pytest
 
 from pipeline.cli import main
 from pipeline.scenes.materials import MaterialError, load_table
-from pipeline.scenes.scene import (RESULT_KEYS, THRESHOLDS, SceneError, premise_checks, run_scene,
-                            scene_from_dict)
+from pipeline.scenes.scene import (RESULT_KEYS, THRESHOLDS, SceneError, check_solvable,
+                                   premise_checks, run_scene, scene_from_dict)
 from pipeline.scenes.units import FieldSpec, UnitError, to_si
 
 
@@ -72,10 +72,14 @@ def test_physical_results_are_the_dimensionless_ones_rescaled(table):
     assert d["peak_force_N"] == pytest.approx(
         c.peak_force * 6 * math.pi * 1e-3 * (25e-6) ** 2 * 0.1 / s.x1, rel=1e-12)
     assert d["time_to_stop_s"] == pytest.approx(c.tau_v_zero * 2.5e-7 / 0.1, rel=1e-12)
-    # the peak film pressure is at least the largest profile value, and a rebounding collision
+    # the pressure extremes are the solver's (whole collision), rescaled; a rebounding collision
     # has film tension
-    assert d["peak_pressure_Pa"] >= c.pressure.max() * s.pressure_scale * (1 - 1e-12)
+    assert d["peak_pressure_Pa"] == pytest.approx(c.p_max * s.pressure_scale, rel=1e-12)
+    assert d["min_pressure_Pa"] == pytest.approx(c.p_min * s.pressure_scale, rel=1e-12)
     assert d["min_pressure_Pa"] < 0 and c.v_r > 0
+    # a scene's report needs no profiles: only the figures ask for them
+    assert c.pressure is None or c.pressure.size == 0
+    assert c.physics == s.physics()
 
 
 def test_equal_spheres_equal_sphere_on_wall_with_reduced_radius_and_mass(table):
@@ -205,6 +209,18 @@ def test_mean_free_path_check(table):
 def test_out_of_range_scene_is_refused_not_solved(table):
     with pytest.raises(SceneError, match=r"eps = .* outside the model's range"):
         run_scene(scene_from_dict(sandstone(x0="2 nm"), table))
+    # steel ball on glass in air at 1 m/s: St = (2/9) rho a v0 / mu = 1.4e5 > 1e4
+    fast = scene_from_dict({"v0": "1 m/s", "body1": {"material": "chrome_steel", "radius": "1.5 mm"},
+                            "body2": {"material": "glass", "wall": True},
+                            "fluid": {"name": "air"}}, table)
+    with pytest.raises(SceneError, match=r"St = .* outside the solver's range .* dry Hertz"):
+        check_solvable(fast)
+
+
+def test_scene_physics_is_its_dimensionless_groups(table):
+    s = scene_from_dict(sandstone(), table)
+    p = check_solvable(s)
+    assert p == s.physics() and (p.St, p.eps) == (s.stokes, s.eps)
 
 
 # ---- bad input ------------------------------------------------------------------------------------
@@ -308,6 +324,17 @@ def test_cli_missing_file_and_no_scene(capsys, tmp_path):
     assert "not found" in capsys.readouterr().err
     assert main(["scene"]) == 2
     assert "give a scene file" in capsys.readouterr().err
+
+
+def test_cli_scene_plot_onto_a_file_exits_2_before_solving(tmp_path, capsys, monkeypatch):
+    import pipeline.scenes.scene as scene_module
+
+    monkeypatch.setattr(scene_module, "run_scene", lambda *a, **k: pytest.fail("solved"))
+    not_a_dir = tmp_path / "figs"
+    not_a_dir.write_text("")
+    assert main(["scene", write(tmp_path, SCENE), "--plot", str(not_a_dir)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "not a directory" in err and len(err.splitlines()) == 1
 
 
 def test_cli_strict_exits_1_on_warnings(tmp_path, capsys):

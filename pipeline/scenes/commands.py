@@ -104,6 +104,8 @@ def _g(value, spec=".4g"):
 
 def format_report(d: dict) -> str:
     """Human-readable report of ``SceneResult.to_dict()``."""
+    from solver.physics import Physics
+
     ins = d["inputs"]
     lines = []
     if d["title"]:
@@ -125,7 +127,7 @@ def format_report(d: dict) -> str:
         ("reduced mass m", _q(d["reduced_mass_kg"], "kg")),
         ("theta", f"{d['theta_per_Pa']:.4g} 1/Pa (E* = {_q(d['effective_modulus_Pa'], 'Pa')})"),
         ("film scale x1", _q(d["x1_m"], "m")),
-        ("St", _g(d["St"])), ("eps", _g(d["eps"])),
+        *((name, _g(d[name])) for name in Physics.names()),
         ("Re (Re x0/a)", f"{d['Re']:.4g} ({d['Re_x0_over_a']:.3g})"),
         ("(v0/c)^(1/5)", "-" if d["wave_parameter"] is None else
          f"{d['wave_parameter']:.3g} (c = {_q(d['sound_speed_m_per_s'], 'm/s')})"),
@@ -181,10 +183,13 @@ def cmd_scene(args) -> int:
         scene = load_scene(args.file, flags, args.materials or ())
     except ValueError as exc:
         raise _usage_error(str(exc)) from None
-    from ..cli import _numerics_overrides
+    from ..cli import _numerics_overrides, check_output_paths
 
+    check_output_paths(plot=args.plot)
     try:
-        result = run_scene(scene, accuracy=args.accuracy, **_numerics_overrides(args))
+        # profiles only for the figures: the pressure extremes come from the solver
+        result = run_scene(scene, accuracy=args.accuracy, save_profiles=bool(args.plot),
+                           **_numerics_overrides(args))
     except ValueError as exc:
         raise _usage_error(str(exc)) from None
     except ArithmeticError as exc:  # a numerical failure inside the solver: report, no traceback

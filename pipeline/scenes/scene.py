@@ -29,12 +29,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from solver.model import rigid
+from solver.physics import Physics
+
 from .materials import FLUID_FIELDS, SOLID_FIELDS, FluidProps, MaterialTable, Solid
 from .units import FieldSpec, format_quantity, to_si
 
 __all__ = [
     "SceneError", "Body", "Scene", "Check", "SceneResult", "scene_from_dict", "run_scene",
-    "pressure_extremes", "premise_checks", "outcome_checks", "THRESHOLDS", "RESULT_KEYS",
+    "premise_checks", "outcome_checks", "THRESHOLDS", "RESULT_KEYS",
     "DEFAULT_X0_OVER_A", "model_reason", "check_solvable",
 ]
 
@@ -50,7 +53,7 @@ THRESHOLDS = {
     # w(0)/x0 at the start is 3 pi^2 eps / (4 sqrt 2) = 5.23 eps (physics.md). Above 0.05, the
     # level at which the classic scheme stops trusting the rigid solution, the spheres would
     # already be deformed where the model assumes they are not: eps > 0.05 / 5.23 = 0.0096.
-    "eps": 0.05 / (3.0 * math.pi**2 / (4.0 * math.sqrt(2.0))),
+    "eps": rigid.eps_for_start_deformation(0.05),
     # Lubrication theory keeps the leading order in x/a; the outer-flow and curvature corrections
     # to the film force are of relative size O(x0/a) (up to logs), so 5% of a as the start.
     "x0_over_a": 0.05,
@@ -66,7 +69,7 @@ THRESHOLDS = {
 # Keys of SceneResult.to_dict() (a contract for scripts using `ehd scene --json`; see docs/scenes.md)
 RESULT_KEYS = (
     "title", "inputs", "reduced_radius_m", "reduced_mass_kg", "theta_per_Pa", "effective_modulus_Pa",
-    "x0_m", "x0_over_a", "x1_m", "St", "eps", "Re", "Re_x0_over_a", "sound_speed_m_per_s",
+    "x0_m", "x0_over_a", "x1_m", *Physics.names(), "Re", "Re_x0_over_a", "sound_speed_m_per_s",
     "wave_parameter", "model", "model_reason", "status", "message", "v_r",
     "rebound_speed_m_per_s", "closest_approach_nm", "closest_approach_on_approach_nm",
     "equilibrium_separation_m", "log10_equilibrium_separation_m", "escaped", "time_to_stop_s",
@@ -177,6 +180,25 @@ class Scene:
         """``(v0/c)^(1/5)``: elastic-wave transit time over the Hertz contact time (scaling)."""
         c = self.sound_speed
         return None if c is None else (self.v0 / c) ** 0.2
+
+    def physics(self) -> Physics:
+        """The scene's dimensionless groups: the one place a scene becomes solver input.
+
+        Raises SceneError when a group is outside what the solver accepts (the Physics' own
+        range check); for a group above its range the message says what to change in the scene.
+        """
+        values = {"St": self.stokes, "eps": self.eps}
+        try:
+            return Physics(**values)
+        except ValueError as exc:
+            for name, value in values.items():
+                try:
+                    Physics.group(name).check(value)
+                except ValueError:
+                    if name in _TOO_LARGE and value > Physics.group(name).hi:
+                        raise SceneError(_TOO_LARGE[name](self, value)) from None
+                    break
+            raise SceneError(f"the scene is outside the solver's range: {exc}") from None
 
     # ---- scales of the dimensionless solution -----------------------------------------------
     @property
@@ -365,8 +387,9 @@ def premise_checks(scene: Scene) -> list[Check]:
     if eps > t:
         out.append(Check("eps", eps, t, (
             f"eps = {eps:.3g} is not small (> {t:.3g}): the spheres are already deformed by "
-            f"w(0)/x0 = {5.234 * eps:.3g} at the start x0 = {format_quantity(scene.x0, 'm')}, which the "
-            "model takes as undeformed; start farther out (larger x0)")))
+            f"w(0)/x0 = {rigid.start_deformation_ratio(eps):.3g} at the start x0 = "
+            f"{format_quantity(scene.x0, 'm')}, which the model takes as undeformed; start "
+            "farther out (larger x0)")))
     ratio = scene.x0 / a
     t = THRESHOLDS["x0_over_a"]
     if ratio > t:
@@ -387,32 +410,6 @@ def premise_checks(scene: Scene) -> list[Check]:
             f"{scene.sound_speed:.4g} m/s): elastic waves carry away energy the quasi-static "
             "model does not see")))
     return out
-
-
-def pressure_extremes(c) -> tuple[float, float]:
-    """Largest and smallest film pressure over the collision, in units of ``mu a v0 / x1^2``.
-
-    The coupled phase is read from the saved profiles. On the analytic rigid approach the pressure
-    peaks at the axis, ``P(0) = 3 V / X^2`` with ``V = 1 - u/St``, ``X = X0 e^-u``; its maximum
-    over ``u`` is at ``u = St - 1/2`` (clipped to the part of the path that was rigid). During the
-    rigid departure ``|P(0)|`` only decreases, so the release profile holds the largest tension.
-    """
-    x_start = c.eps ** -0.4
-    stokes = c.St
-    phase = np.asarray(c.series["phase"])
-    if c.model == "ehd" and np.any(phase == 1):
-        u_end = math.log(x_start / float(np.asarray(c.series["X"])[phase == 1][0]))
-    else:
-        u_end = stokes  # rigid all the way: V reaches 0 at u = St
-    u = min(max(stokes - 0.5, 0.0), max(u_end, 0.0))
-    v = 1.0 - u / stokes
-    log_p = math.log(3.0 * max(v, 1e-300)) + 2.0 * u - 2.0 * math.log(x_start)
-    p_max = math.exp(min(log_p, 700.0))
-    p_min = 0.0
-    if c.pressure is not None and c.pressure.size:
-        p_max = max(p_max, float(np.max(c.pressure)))
-        p_min = min(p_min, float(np.min(c.pressure)))
-    return p_max, p_min
 
 
 def outcome_checks(scene: Scene, c, p_max: float, p_min: float) -> tuple[list[Check], list[str]]:
@@ -462,15 +459,11 @@ def _fmt_log(log_value: float) -> str:
 
 def model_reason(scene: Scene, c) -> str:
     """Why the scene needed the rigid or the EHD model, in one sentence with numbers."""
-    stokes, eps, switch = c.St, c.eps, c.numerics.switch
-    if stokes > 0.4:  # physics.md: peak of w/x along the rigid path
-        log_peak = (math.log(3.0 * math.pi**2 * eps / (10.0 * math.sqrt(2.0) * stokes))
-                    + 2.5 * stokes - 1.0)
-    else:
-        log_peak = math.log(3.0 * math.pi**2 * eps / (4.0 * math.sqrt(2.0)))
-    peak = _fmt_log(log_peak)
+    physics, switch = scene.physics(), c.numerics.switch
+    peak = _fmt_log(rigid.log_peak_deformation_ratio(physics.x_start, physics.St))
     if c.model == "rigid":
-        rest = scene.x0 * math.exp(-stokes)
+        # the rigid path from (x0, V = 1) comes to rest at x0 exp(-St)
+        rest = scene.x1 * math.exp(rigid.rest_separation(physics.x_start, 1.0, physics.St))
         return (f"rigid: along the rigid-sphere path the central deformation peaks at "
                 f"w(0)/x = {peak}, below the hand-over level {switch:g}, so the exact rigid "
                 f"solution holds; the spheres creep to rest at x0 exp(-St) = "
@@ -511,7 +504,7 @@ class SceneResult:
             "reduced_radius_m": num(s.reduced_radius), "reduced_mass_kg": num(s.reduced_mass),
             "theta_per_Pa": s.theta, "effective_modulus_Pa": s.effective_modulus,
             "x0_m": x0, "x0_over_a": x0 / s.reduced_radius, "x1_m": x1,
-            "St": s.stokes, "eps": s.eps, "Re": s.reynolds,
+            **s.physics().as_dict(), "Re": s.reynolds,
             "Re_x0_over_a": s.reynolds * x0 / s.reduced_radius,
             "sound_speed_m_per_s": s.sound_speed, "wave_parameter": s.wave_parameter,
             "model": c.model, "model_reason": model_reason(s, c),
@@ -536,22 +529,28 @@ class SceneResult:
         return out
 
 
-def check_solvable(scene: Scene) -> None:
-    """Refuse scenes whose St or eps lie outside the solver's range, saying what to change."""
-    from solver.settings import EPS_RANGE, STOKES_RANGE
+def check_solvable(scene: Scene) -> Physics:
+    """The scene's ``Physics``; SceneError, saying what to change, when a group lies outside
+    the solver's range (``Scene.physics``)."""
+    return scene.physics()
 
-    stokes, eps = scene.stokes, scene.eps
-    if eps > EPS_RANGE[1]:
-        need = scene.x1 * EPS_RANGE[1] ** -0.4
-        raise SceneError(
-            f"eps = {eps:.3g} is outside the model's range (0, {EPS_RANGE[1]:g}]: the start "
+
+def _eps_too_large(scene: Scene, eps: float) -> str:
+    hi = Physics.group("eps").hi
+    need = scene.x1 * hi ** -0.4
+    return (f"eps = {eps:.3g} is outside the model's range (0, {hi:g}]: the start "
             f"x0 = {format_quantity(scene.x0, 'm')} is within the deformation scale x1 = "
             f"{format_quantity(scene.x1, 'm')}; start farther out (x0 >= "
             f"{format_quantity(need, 'm')})")
-    if stokes > STOKES_RANGE[1]:
-        raise SceneError(
-            f"St = {stokes:.4g} is outside the solver's range (0, {STOKES_RANGE[1]:g}]: viscous "
-            "losses are negligible and the impact is close to dry Hertz contact")
+
+
+def _stokes_too_large(scene: Scene, stokes: float) -> str:
+    return (f"St = {stokes:.4g} is outside the solver's range (0, {Physics.group('St').hi:g}]: "
+            "viscous losses are negligible and the impact is close to dry Hertz contact")
+
+
+# group -> message for a scene whose group is above the solver's range (what to change)
+_TOO_LARGE = {"eps": _eps_too_large, "St": _stokes_too_large}
 
 
 def run_scene(scene: Scene, accuracy: str = "standard", **overrides) -> SceneResult:
@@ -563,7 +562,8 @@ def run_scene(scene: Scene, accuracy: str = "standard", **overrides) -> SceneRes
     accuracy : {"fast", "standard", "fine"}
         Solver preset.
     **overrides
-        Numerical settings passed to ``solver.collide``.
+        Numerical settings passed to ``solver.collide``. Profiles are not saved unless
+        ``save_profiles=True`` (only the figures need them).
 
     Returns
     -------
@@ -572,16 +572,16 @@ def run_scene(scene: Scene, accuracy: str = "standard", **overrides) -> SceneRes
     """
     from solver import collide
 
-    check_solvable(scene)
+    physics = check_solvable(scene)
     overrides = {k: v for k, v in overrides.items() if v is not None}
-    overrides["save_profiles"] = True  # peak pressure and tension come from the profiles
-    c = collide(scene.stokes, scene.eps, accuracy=accuracy, **overrides)
+    overrides.setdefault("save_profiles", False)
+    c = collide(physics, accuracy=accuracy, **overrides)
     warnings = premise_checks(scene)
     notes = []
     p_max = p_min = math.nan
     if c.ok:
-        p_max_d, p_min_d = pressure_extremes(c)
-        p_max, p_min = p_max_d * scene.pressure_scale, p_min_d * scene.pressure_scale
+        # the solver's extremes over the whole collision, rigid phases included
+        p_max, p_min = c.p_max * scene.pressure_scale, c.p_min * scene.pressure_scale
         post, notes = outcome_checks(scene, c, p_max, p_min)
         warnings += post
     if scene.sound_speed is None:

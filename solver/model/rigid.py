@@ -37,6 +37,9 @@ __all__ = [
     "exact_for",
     "release_event",
     "approach_peaks",
+    "start_deformation_ratio",
+    "eps_for_start_deformation",
+    "log_peak_deformation_ratio",
 ]
 
 I0 = math.pi**2 / (4.0 * math.sqrt(2.0))  # I(0), the maximum of the deformation integral
@@ -140,3 +143,29 @@ def handover_separation(x_start, stokes, threshold):
         return None
     u = optimize.brentq(log_ratio, 0.0, u_peak, xtol=1e-14, rtol=1e-14)
     return x_start * math.exp(-u)
+
+
+# ---- closed forms of the hand-over criterion (used by the scene checks and reports) ------------
+def start_deformation_ratio(eps):
+    """``W(0)/X`` at the start ``(X0, V = 1)``: ``X0 = eps^(-2/5)`` makes it ``3 I0 eps``."""
+    return HANDOVER_COEFF * eps
+
+
+def eps_for_start_deformation(ratio):
+    """The ``eps`` at which the start deformation ``W(0)/X`` equals ``ratio`` (inverse of
+    ``start_deformation_ratio``)."""
+    return ratio / HANDOVER_COEFF
+
+
+def log_peak_deformation_ratio(x_start, stokes):
+    """``ln max W(0)/X`` along the rigid path from ``(x_start, V = 1)`` until it comes to rest.
+
+    With ``u = ln(X0/X)`` the ratio is ``c (1 - u/St) X0^-2.5 exp(2.5 u)`` (``c`` =
+    ``HANDOVER_COEFF``), largest at ``u = St - 0.4`` when ``St > 0.4`` (there
+    ``c X0^-2.5 (0.4/St) exp(2.5 St - 1)``), else at the start. In logs: ``exp(2.5 St)``
+    overflows a float for large St.
+    """
+    log_start = math.log(HANDOVER_COEFF) - 2.5 * math.log(x_start)
+    if stokes <= 0.4:
+        return log_start
+    return log_start + math.log(0.4 / stokes) + 2.5 * stokes - 1.0
