@@ -131,7 +131,7 @@ def _rigid_path(x_from, v_from, t_from, stokes, x):
 
 
 def _rigid_block(t, x, v, tau_per_t, phase, dissipated):
-    """Time series of a rigid phase (docs/model.md, "Rigid-sphere solution"): ``P = 3V/H^2``,
+    """Time series of a rigid phase (docs/model.md, "Rigid solution"): ``P = 3V/H^2``,
     so the force is ``V/X`` in our unit, the axis pressure ``3V/X^2`` the extreme one (the far
     field tends to 0), ``W(0)`` the small-deformation estimate ``3 I0 V X^-1.5``."""
     n = len(t)

@@ -4,7 +4,7 @@ Where the coupled phase takes over from the analytic rigid approach, ``W(0)/X`` 
 hand-over threshold and the state is ``(X_s, V_s)`` with ``X_s = (c V_s / switch)^(2/5)``.
 Measured in the local film scale ``x1' = x1 V_s^(2/5)`` (the ``x1`` of a collision at speed
 ``V_s v0``) with velocities in ``V_s v0``, that state is the same for every scene, and the rest
-of the collision depends on ``S = St V_s`` alone (physics.md). So a table of coupled solutions
+of the collision depends on ``S = St V_s`` alone (docs/model.md, "Similarity"). So a table of coupled solutions
 started exactly at the threshold, one per ``S``, answers every scene whose hand-over comes after
 its start (``3 I0 eps < switch``), for the price of the analytic rigid phase:
 
@@ -117,8 +117,9 @@ class MasterCurve:
         lam = v_s**0.4
         tau_per_t = physics.tau_per_t
         # docs/model.md, "Similarity": how each quantity of the master scene scales to this one
+        # (energies are relative to the kinetic energy, which is V_s^2 times the master scene's)
         scale = {"velocity": v_s, "length": lam, "force": v_s / lam, "pressure": v_s / lam**2,
-                 "none": 1.0}
+                 "energy": v_s**2, "none": 1.0}
         values = {}
         for name, (_, scaling) in _CARRIED.items():
             y = self._interpolate(name, s_value)

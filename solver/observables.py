@@ -33,7 +33,7 @@ class Observable:
         How the master-curve fast path carries it from the tabulated scene (solver/master.py):
         ``"<interpolation> <scaling>"``, interpolation ``log`` (positive values spanning decades)
         or ``lin``; scaling ``length``, ``velocity``, ``force``, ``pressure``, ``log_length``,
-        ``time`` or ``none`` (docs/model.md, "Similarity"); ``""`` when it is derived from other
+        ``energy``, ``time`` or ``none`` (docs/model.md, "Similarity"); ``""`` when it is derived from other
         observables or not available on that path.
     """
 
@@ -90,7 +90,7 @@ OBSERVABLES = (
     Observable("escaped", "flag", "rebound carries the spheres back beyond x0 (x_e > x0): no "
                "sticking", "1", "escaped (x_e > x0: no sticking)"),
     Observable("energy_error", "float", "max energy-closure error of the coupled phase",
-               "m v0^2 / 2", "energy closure error", master="lin none"),
+               "m v0^2 / 2", "energy closure error", master="lin energy"),
     Observable("start_strain_energy", "float", "strain energy where the coupled phase starts, "
                "over the kinetic energy", "1"),
     Observable("steps", "count", "accepted time steps of the coupled solve", "1", "steps",

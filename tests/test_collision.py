@@ -39,7 +39,7 @@ def test_rigid_limit_velocity_and_time():
 
 def test_small_deformation_matches_asymptotics():
     # Early on the deformation is that of the rigid pressure, W = 3 V X^-1.5 I(R/sqrt X)
-    # (physics.md), up to the next order in W/X: the discrepancy must be O(W/X) and shrink with it.
+    # (docs/model.md, "Small deformation"), up to the next order in W/X: the discrepancy must be O(W/X) and shrink with it.
     ratios = []
     for eps in (1e-3, 3e-4):
         c = collide(2.0, eps, switch=1e-4, release=1e-5)
@@ -73,7 +73,7 @@ def test_energy_balance_closes_and_converges(stokes):
 
 def test_hertz_limit_at_large_stokes():
     # As St grows viscous losses vanish and the maximum overlap -min(x) approaches the dry
-    # Hertz value delta_H (physics.md). Measured ratios 0.914, 0.959, 0.982 at St = 100, 300,
+    # Hertz value delta_H (docs/model.md, "Hertz limit"). Measured ratios 0.914, 0.959, 0.982 at St = 100, 300,
     # 1000: the shortfall falls ~2.2x per 3x in St.
     shortfall = []
     for stokes in (100.0, 300.0, 1000.0):

@@ -38,7 +38,7 @@ def test_corners_and_edges(stokes, eps):
 
 
 def _threshold_stokes(eps, switch):
-    """St at which the rigid path's largest W/X (physics.md) just reaches the hand-over."""
+    """St at which the rigid path's largest W/X (docs/model.md, "Small deformation") just reaches the hand-over."""
     def log_peak(stokes):
         return math.log(3 * math.pi**2 * eps / (10 * math.sqrt(2) * stokes)) + 2.5 * stokes - 1
     return optimize.brentq(lambda st: log_peak(st) - math.log(switch), 1.0, 50.0)

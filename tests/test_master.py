@@ -17,7 +17,7 @@ def curve():
 @pytest.mark.parametrize("stokes, eps", [(5.0, 1e-5), (7.0, 1e-5), (13.0, 1e-6), (30.0, 1e-8),
                                          (20.0, 1e-4)])
 def test_master_curve_matches_direct_solves(curve, stokes, eps):
-    # after the hand-over the scaled problem depends on S = St V_switch alone (physics.md), so
+    # after the hand-over the scaled problem depends on S = St V_switch alone (docs/model.md, "Similarity"), so
     # the curve differs from a direct solve only by interpolation in S and by grids scaled for
     # S instead of St: measured <= 3e-3 at the kink near the critical S (v_r leaves 0, the
     # minimum gap moves from the approach to the rebound), <= 3e-4 elsewhere

@@ -12,7 +12,7 @@ from solver.model import rigid
 @pytest.mark.parametrize("stokes, x_from, v_from", [(2.0, 10.0, 1.0), (30.0, 3.0, 1.0),
                                                      (5.0, 0.5, -0.4), (300.0, 2.0, -0.8)])
 def test_velocity_and_time_match_ode(stokes, x_from, v_from):
-    # dX/dT = -V, dV/dT = -V/(St X) (force 3V/X, physics.md) integrated to 1e-12
+    # dX/dT = -V, dV/dT = -V/(St X) (force 3V/X, docs/model.md "Rigid solution") integrated to 1e-12
     def rhs(t, y):
         return [-y[1], -y[1] / (stokes * y[0])]
 
@@ -51,7 +51,7 @@ def test_handover_on_the_rigid_path():
 
 def test_handover_peak_and_never():
     x0 = 1e-6**-0.4
-    # physics.md: W/X peaks at 3 pi^2 eps exp(2.5 St - 1)/(10 sqrt 2 St) for St > 0.4
+    # docs/model.md "Small deformation": W/X peaks at 3 pi^2 eps exp(2.5 St - 1)/(10 sqrt 2 St) for St > 0.4
     stokes = 5.0
     peak = 3 * math.pi**2 * 1e-6 * math.exp(2.5 * stokes - 1) / (10 * math.sqrt(2) * stokes)
     assert rigid.handover_separation(x0, stokes, 0.999 * peak) is not None

@@ -25,7 +25,7 @@ def _no_user_materials(monkeypatch, tmp_path):
 
 
 def sandstone(**top):
-    """physics.md's worked example: 50 um radius sandstone grains, mu = 1 mPa s, v0 = 0.1 m/s."""
+    """The worked example of docs/model.md, "The parameters": 50 um radius sandstone grains, mu = 1 mPa s, v0 = 0.1 m/s."""
     data = {
         "v0": "0.1 m/s",
         "body1": {"material": "sandstone", "radius": "50 um"},
@@ -39,7 +39,7 @@ def sandstone(**top):
 # ---- the worked example, by hand ------------------------------------------------------------
 def test_worked_example_matches_hand_computation(table):
     s = scene_from_dict(sandstone(), table)
-    # Hand computation (physics.md values: a1 = a2 = 50 um, rho = 2600, E = 5.7e10, nu = 0.1,
+    # Hand computation (docs/model.md values: a1 = a2 = 50 um, rho = 2600, E = 5.7e10, nu = 0.1,
     # mu = 1e-3, v0 = 0.1, x0 = 0.01 a):
     #   a = 25 um; m = m1/2 = 2600 * (4/3) pi (50e-6)^3 / 2 = 6.80678e-10 kg
     #   St = m v0 / (6 pi mu a^2) = (4/9) rho a1 v0 / mu = (4/9) * 13 = 52/9 = 5.77778
@@ -57,7 +57,7 @@ def test_worked_example_matches_hand_computation(table):
     assert s.eps == pytest.approx(1.76913e-5, rel=5e-6)
     assert s.x0 == pytest.approx(2.5e-7, rel=1e-12)
     assert s.reynolds == pytest.approx(2.5, rel=1e-12)
-    # eps and x1 are tied: eps = (x1/x0)^(5/2) (physics.md); two independent formulas in Scene
+    # eps and x1 are tied: eps = (x1/x0)^(5/2) (docs/model.md); two independent formulas in Scene
     assert s.eps == pytest.approx((s.x1 / s.x0) ** 2.5, rel=1e-12)
 
 
@@ -117,7 +117,7 @@ def test_rigid_scene_reports_why(table):
     d = r.to_dict()
     assert d["model"] == "rigid" and d["model_reason"].startswith("rigid")
     assert d["St"] < 0.4 and d["v_r"] == 0.0 and d["time_to_stop_s"] is None
-    # rigid creep ends at x0 exp(-St) (physics.md)
+    # rigid creep ends at x0 exp(-St) (docs/model.md, "Rigid solution")
     assert d["closest_approach_nm"] == pytest.approx(d["x0_m"] * math.exp(-d["St"]) * 1e9, rel=1e-9)
 
 

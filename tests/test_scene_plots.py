@@ -19,7 +19,7 @@ def fast_paper():
 
 
 def test_deformation_integral_at_zero_and_far_field():
-    # I(0) = pi^2/(4 sqrt 2) exactly (physics.md); quad is asked for 1e-11 relative
+    # I(0) = pi^2/(4 sqrt 2) exactly (docs/model.md, "Small deformation"); quad is asked for 1e-11 relative
     assert deformation_integral(0.0) == pytest.approx(math.pi**2 / (4 * math.sqrt(2)), rel=1e-9)
     # I(xi) ~ pi/(2 xi): the first correction is O(ln(xi)/xi^2) (the kernel's next term, pi s/2
     # times (1 + O(s^2)), integrated against 1/(1+eta^2/2)^2), i.e. ~5e-4 at xi = 100
@@ -27,7 +27,7 @@ def test_deformation_integral_at_zero_and_far_field():
     r1000 = 1000 * deformation_integral(1000.0) / (math.pi / 2)
     assert abs(r100 - 1) < 1e-3
     assert abs(r1000 - 1) < abs(r100 - 1) / 30  # falls faster than 1/xi
-    # I is largest at 0 and decreasing (physics.md: "I(0), its maximum")
+    # I is largest at 0 and decreasing (docs/model.md, "Small deformation")
     xi = np.array([0.0, 0.3, 1.0, 3.0, 10.0])
     values = [deformation_integral(x) for x in xi]
     assert np.all(np.diff(values) < 0)

@@ -1,6 +1,6 @@
 """Figures of one collision: profiles, motion, energies, dimple close-up.
 
-Everything is plotted in the dimensionless variables of physics.md, with the scaling written on
+Everything is plotted in the dimensionless variables of docs/model.md ("Scales"), with the scaling written on
 each axis: axial lengths (gap ``h``, deformation ``w``, separation ``x``) over ``x1``, radius over
 ``sqrt(a x1)``, pressure over ``mu a v0 / x1^2``, force over ``6 pi mu a^2 v0 / x1``, velocity over
 ``v0``, energies over ``m v0^2 / 2``, time as ``tau = v0 t / x0``. The figures read a finished

@@ -1,7 +1,7 @@
 """A scene in physical units: two bodies and a fluid -> (St, eps), validity checks, results in SI.
 
 A *scene* is what a user sees: "two 100 um sandstone grains meeting in water at 10 cm/s". From it
-(physics.md, all SI):
+(docs/model.md, "Setting" and "The parameters"; all SI):
 
 - reduced radius ``a = a1 a2 / (a1 + a2)`` and mass ``m = m1 m2 / (m1 + m2)``; a plane wall is
   ``a2 = m2 = inf``, so a sphere against a wall has ``a = a1``, ``m = m1``;
@@ -11,7 +11,7 @@ A *scene* is what a user sees: "two 100 um sandstone grains meeting in water at 
 - Reynolds number ``Re = rho_f v0 a / mu`` (the film's inertia relative to viscosity is
   ``Re x0/a``); bar sound speed of a solid ``c = sqrt(E / rho)``.
 
-The solver works in the dimensionless variables of physics.md; results are converted back with
+The solver works in the dimensionless variables of docs/model.md ("Scales"); results are converted back with
 the scales ``x1`` (axial lengths), ``mu a v0 / x1^2`` (pressure), ``6 pi mu a^2 v0 / x1`` (force)
 and ``x0 / v0`` (time: ``t = tau x0 / v0``).
 
@@ -46,18 +46,18 @@ class SceneError(ValueError):
     """A scene that cannot be built or solved (the message names the field or parameter)."""
 
 
-DEFAULT_X0_OVER_A = 0.01  # physics.md: the close stage starts at x0 ~ 0.01 a
+DEFAULT_X0_OVER_A = 0.01  # docs/model.md "Setting": the close stage starts at x0 ~ 0.01 a
 
 # Thresholds of the validity checks (each check warns when its number exceeds the threshold).
 THRESHOLDS = {
-    # w(0)/x0 at the start is 3 pi^2 eps / (4 sqrt 2) = 5.23 eps (physics.md). Above 0.05, the
+    # w(0)/x0 at the start is 3 pi^2 eps / (4 sqrt 2) = 5.23 eps (docs/model.md, "Small deformation"). Above 0.05, the
     # level at which the classic scheme stops trusting the rigid solution, the spheres would
     # already be deformed where the model assumes they are not: eps > 0.05 / 5.23 = 0.0096.
     "eps": rigid.eps_for_start_deformation(0.05),
     # Lubrication theory keeps the leading order in x/a; the outer-flow and curvature corrections
     # to the film force are of relative size O(x0/a) (up to logs), so 5% of a as the start.
     "x0_over_a": 0.05,
-    # Fluid inertia in a squeeze film relative to viscous stress is Re x0/a (physics.md neglects
+    # Fluid inertia in a squeeze film relative to viscous stress is Re x0/a (docs/model.md, "Setting", neglects
     # it); 0.1 keeps the neglected term at the 10% level at the start, and smaller afterwards.
     "Re_x0_over_a": 0.1,
     # Quasi-static elasticity: the sound transit time over the Hertz contact time scales as
@@ -126,7 +126,7 @@ class Scene:
     x0: float
     ambient_pressure: float | None = None  # Pa, absolute; enables the cavitation check
 
-    # ---- derived numbers (SI), physics.md ---------------------------------------------------
+    # ---- derived numbers (SI), docs/model.md---------------------------------------------------
     @property
     def reduced_radius(self) -> float:
         return _reduced(self.body1.radius, self.body2.radius)

@@ -11,7 +11,7 @@ from .._jit import jit
 __all__ = ["RELAXED", "reached"]
 
 # The deformation has relaxed and the remaining motion can only relax it further: from here the
-# rigid departure is exact (docs/model.md, "Rigid-sphere solution"). params = (release, V_peak):
+# rigid departure is exact (docs/model.md, "Rigid solution"). params = (release, V_peak):
 # stop once X > 0, max|W| < release X, and the spheres separate (V < 0) or are past the rigid
 # deformation peak (V < V_peak).
 RELAXED = 1

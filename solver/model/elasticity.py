@@ -1,6 +1,6 @@
 """Elastic deformation of two half-spaces under an axisymmetric film pressure.
 
-Dimensionless (scale ``x1``, physics.md): lengths along the axis by ``x1``, radii by
+Dimensionless (scale ``x1``, docs/model.md, "Scales" and "Elasticity"): lengths along the axis by ``x1``, radii by
 ``sqrt(a x1)``, pressure by ``mu a v0 / x1**2``. The total surface deflection is then
 
     W(R) = Int_0^inf P(rho) phi(R, rho) d rho,

@@ -2,7 +2,7 @@
 derivatives, and the implicit step's residual, Jacobian and energy terms assembled from them.
 
 Dimensionless, scale ``x1`` (docs/model.md, "Scales"). In ``s = R^2/2`` the Reynolds equation is a
-1-D conservation law (docs/model.md, "The film equation")
+1-D conservation law (docs/model.md, "Film equation")
 
     dH/dT = dq/ds,   q = (1/6) s H^3 dP/ds,   H = X + s + W,   W = K P,
 
@@ -10,15 +10,15 @@ integrated over finite volumes (integration/grid.py). The terms, one function ea
 
 - ``face_flux``: the flux between nodes ``i`` and ``i+1``,
   ``q_f = (P_{i+1} - P_i) s_f H_i^2 H_{i+1}^2 / (3 (s_{i+1} - s_i) (H_i + H_{i+1}))``, which
-  integrates ``1/(s H^3)`` across the face with ``H`` linear in ``s``: exact for the rigid pressure
-  ``3V/H^2`` on any grid, so the stretched far field costs no accuracy;
+  holds ``s`` at its face value and integrates ``1/H^3`` across the face with ``H`` linear in ``s``:
+  exact for the rigid pressure ``3V/H^2`` on any grid, so the stretched far field costs no accuracy;
 - ``far_field_row``: the outer boundary node keeps ``P H^2`` equal to its neighbour's (rigid far
   field ``P = 3V/H^2``); the pressure beyond it is the tail ``P_L (R_L/R)^4``;
 - ``cell_constraint``: a bound on the pressure of a cell (none in the classic model);
 - ``deflection`` and ``gap``: the surface load that deflects the solids, ``W = K P``;
 - ``film_force``: the load that moves them, ``Int P R dR = weight @ P``;
 - ``face_dissipation``, ``far_field_dissipation``, ``strain_energy``: the energy terms
-  (docs/model.md, "Energy balance").
+  (docs/model.md, "Energy").
 
 The unknowns of a step are ``y = (P_0..P_{N-1}, X, V)``; rows are scaled to gap units (``bh/area``
 for the cells, ``bh`` for the motion), ``bh`` the implicit BDF coefficient times the step. The
@@ -78,7 +78,7 @@ def far_field_row(p_in, p_out, h_in, h_out):
 @jit
 def far_field_dissipation(x, s_last, p_last, h_last):
     """Dissipation beyond the grid end ``s_L``: the rigid film of velocity ``V = P_L H_L^2 / 3``;
-    ``(2/(3 St))`` times this value is its part of ``D`` (docs/model.md, "Energy balance")."""
+    ``(2/(3 St))`` times this value is its part of ``D`` (docs/model.md, "Energy")."""
     v_far = p_last * h_last * h_last / 3.0
     xs = x + s_last
     return 6.0 * v_far * v_far * (1.0 / xs - x / (2.0 * xs * xs))
@@ -218,7 +218,7 @@ def jacobian(s, s_face, area, weight, influence, phys, bh, p, h, jac, dres_dh):
 def energy_rates(s, s_face, weight, phys, x, p, w, h, q):
     """Strain energy ``E_s`` and dissipation rate ``D = (2/(3St)) Int q dP/ds ds`` (both relative to
     the initial kinetic energy; equal to ``(1/(18 St)) Int H^3 (dP/dR)^2 R dR``, docs/model.md,
-    "Energy balance"), far field included. ``q`` must hold the face fluxes of ``p, h``."""
+    "Energy"), far field included. ``q`` must hold the face fluxes of ``p, h``."""
     n = s.size
     strain = strain_energy(weight, s[n - 1], p, w, phys)
     diss = 0.0

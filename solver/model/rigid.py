@@ -1,6 +1,6 @@
 """Rigid-sphere lubrication (W = 0): the exact solution and the small-deformation estimate.
 
-Dimensionless, scale ``x1`` (docs/model.md, "Rigid-sphere solution"). With no deformation the
+Dimensionless, scale ``x1`` (docs/model.md, "Rigid solution"). With no deformation the
 film pressure is
 ``P = 3 V / H^2``, the force ``Int P R dR = 3 V / X`` and the motion
 
@@ -70,7 +70,7 @@ def velocity(x, x_from, v_from, stokes):
 
 
 def elapsed_time(x, x_from, v_from, stokes):
-    """Time ``T - T1`` to move rigidly from ``X1`` (velocity ``V1``) to ``X`` (physics.md)."""
+    """Time ``T - T1`` to move rigidly from ``X1`` (velocity ``V1``) to ``X`` (docs/model.md, "Rigid solution")."""
     a = stokes * v_from
     u = np.log(np.asarray(x, dtype=float) / x_from)
     return stokes * x_from * (_scaled_ei(np.full_like(u, a)) - np.exp(u) * _scaled_ei(a + u))
