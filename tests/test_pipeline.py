@@ -573,3 +573,182 @@ def test_figures_are_redrawn_only_when_the_store_changes(tmp_path, monkeypatch):
     run(make_sweep(tmp_path, [3.0], [1e-2]))
     figures.update_figures(open_results(sweep.store), tmp_path / "f")
     assert len(drawn) == 1
+
+
+# ---- axes and fixed physics (the sweep's axes come from solver.Physics) ---------------------------
+def physics_sweep_text(grid: str, physics: str = "", store="results/test.zarr"):
+    return textwrap.dedent(f"""\
+        name = "physics"
+        store = "{store}"
+        [grid]
+        {grid}
+        [physics]
+        {physics}
+        [numerics]
+        accuracy = "fast"
+        """)
+
+
+def test_a_fixed_eps_and_an_St_axis_run_end_to_end(tmp_path, capsys):
+    from pipeline.cli import main
+    from pipeline.sweeps.analysis import critical_stokes_csv
+
+    text = physics_sweep_text("St = [1.0, 3.0, 10.0, 30.0]", "eps = 1e-2",
+                              store=str(tmp_path / "one.zarr"))
+    sweep = parse_sweep(text)
+    assert sweep.axis_names == ("St",) and sweep.fixed == {"eps": 1e-2}
+    assert sweep.n_scenes == 4
+    summary = run(sweep)
+    assert summary.done == 4 and sorted(CALLS) == [(s, 1e-2) for s in (1.0, 3.0, 10.0, 30.0)]
+    ds = open_results(sweep.store).load()
+    assert ds.status.dims == ("St",) and ds.attrs["fixed_physics"] == {"eps": 1e-2}
+    assert ds.attrs["axes"] == ["St"]
+    assert ds.status.encoding["chunks"] == (4,)  # one axis: one chunk
+    (row,) = critical_stokes(ds)  # the fixed eps is a plane one row high
+    assert row["eps"] == 1e-2 and row["St_c"] == pytest.approx(fake_st_c(1e-2), rel=1e-12)
+    assert critical_stokes_csv([row]).splitlines()[0].startswith("eps,St_c")
+    assert main(["status", str(sweep.store)]) == 0
+    out = capsys.readouterr().out
+    assert "4 St in [1, 30]" in out and "fixed eps=0.01" in out and "done           4" in out
+    CALLS.clear()
+    assert run(sweep).cached == 4 and CALLS == []
+
+
+def test_axes_in_either_order_give_the_same_sweep():
+    a = parse_sweep(physics_sweep_text("St = [1.0, 2.0]\neps = [1e-3, 1e-2]"))
+    b = parse_sweep(physics_sweep_text("eps = [1e-2, 1e-3]\nSt = [2.0, 1.0]"))
+    assert a.axis_names == b.axis_names == ("St", "eps")
+    assert a.axes == b.axes and a.cache_key() == b.cache_key()
+    fixed = parse_sweep(physics_sweep_text("St = [1.0, 2.0]", "eps = 1e-3"))
+    other = parse_sweep(physics_sweep_text("St = [1.0, 2.0]", "eps = 1e-2"))
+    assert len({a.cache_key(), fixed.cache_key(), other.cache_key()}) == 3
+
+
+@pytest.mark.parametrize("grid, physics, words", [
+    ("St = [1.0]\nPi = [0.1]", "eps = 1e-2", ["unknown physics field", "Pi", "valid", "'St'"]),
+    ("St = [1.0]", "eps = 1e-2\nbogus = 1", ["[physics]", "bogus", "valid"]),
+    ("St = [1.0]\neps = [1e-2]", "eps = 1e-2", ["eps", "both"]),
+    ("St = [1.0]", "", ["eps", "neither"]),
+    ("St = [1.0]", "eps = 0.5", ["physics.eps", "valid range"]),
+    ("St = [1.0]", "eps = true", ["physics.eps", "number"]),
+])
+def test_bad_axes_or_fixed_physics_are_named(grid, physics, words):
+    with pytest.raises(ConfigError) as err:
+        parse_sweep(physics_sweep_text(grid, physics))
+    for w in words:
+        assert w in str(err.value)
+
+
+def test_a_huge_grid_is_refused_before_any_array_is_built(monkeypatch):
+    import pipeline.sweeps.config as config
+
+    def no_arrays(*a, **k):
+        raise AssertionError("grid values built before the size check")
+
+    monkeypatch.setattr(config.np, "geomspace", no_arrays)
+    monkeypatch.setattr(config.np, "array", no_arrays)
+    with pytest.raises(ConfigError, match="100000000 scenes"):
+        parse_sweep(physics_sweep_text("St = {start = 1.0, stop = 10.0, num = 100000000}",
+                                       "eps = 1e-2"))
+    with pytest.raises(ConfigError, match="scenes; at most"):
+        parse_sweep(physics_sweep_text("St = {start = 1.0, stop = 10.0, num = 10000}\n"
+                                       "eps = {start = 1e-8, stop = 1e-2, num = 10000}"))
+
+
+def test_a_store_refuses_a_sweep_with_other_fixed_physics_or_axes(tmp_path):
+    store = tmp_path / "fixed.zarr"
+    first = parse_sweep(physics_sweep_text("St = [1.0, 3.0]", "eps = 1e-2")).with_store(store)
+    run(first)
+    before = data_vars(open_results(store))
+    CALLS.clear()
+    other = parse_sweep(physics_sweep_text("St = [1.0, 3.0, 5.0]", "eps = 1e-3")).with_store(store)
+    with pytest.raises(StoreMismatch) as err:
+        run(other)
+    msg = str(err.value)
+    assert "fixed physics" in msg and "eps = 0.01 in the store, 0.001 in this sweep" in msg
+    assert "--store" in msg and len(msg.splitlines()) == 1
+    grid = parse_sweep(physics_sweep_text("St = [1.0, 3.0]\neps = [1e-2]")).with_store(store)
+    with pytest.raises(StoreMismatch, match=r"axes are \['St'\], this sweep's are \['St', 'eps'\]"):
+        run(grid)
+    assert CALLS == []
+    xr.testing.assert_identical(before, data_vars(open_results(store)))
+
+
+def test_journal_lines_hold_the_physics_and_replay_matches_every_axis(tmp_path):
+    sweep = make_sweep(tmp_path, [1.0, 3.0], [1e-3, 1e-2])
+    with SweepStore.open(sweep, flush_seconds=1e9) as st:
+        cells = st.cells(sweep)
+        for cell in cells[:3]:
+            st.record(cell, fake_solve(st.scene(cell), "fast", {}), now=0.0)
+        st._dirty.clear()  # killed before the merge
+        st._close_journal()
+    lines = [json.loads(line) for line in Path(str(sweep.store) + ".journal").read_text().splitlines()]
+    assert [list(r["physics"]) for r in lines] == [["St", "eps"]] * 3
+    assert {(r["physics"]["St"], r["physics"]["eps"]) for r in lines} == \
+        {(1.0, 1e-3), (1.0, 1e-2), (3.0, 1e-3)}
+    CALLS.clear()
+    assert run(sweep).done == 4 and CALLS == [(3.0, 1e-2)]
+    ds = open_results(sweep.store).load()
+    for St, eps in ((1.0, 1e-3), (1.0, 1e-2), (3.0, 1e-3)):  # each record on its own cell
+        assert float(ds.v_r.sel(St=St, eps=eps)) == pytest.approx(St / (St + 10.0))
+
+
+@pytest.fixture
+def third_axis(monkeypatch):
+    """A test-only third Physics field ``Pi`` (the solver never sees it: fake solves only)."""
+    from solver.physics import Group, Physics
+
+    pi = Group("Pi", "test-only group", "test group", 0.0, 1.0)
+    names, group = Physics.names, Physics.group
+    monkeypatch.setattr(Physics, "names", staticmethod(lambda: (*names(), "Pi")))
+    monkeypatch.setattr(Physics, "group",
+                        staticmethod(lambda name: pi if name == "Pi" else group(name)))
+    return pi
+
+
+def test_a_three_axis_store_end_to_end(tmp_path, third_axis, capsys, monkeypatch):
+    from pipeline.cli import main
+    from pipeline.plots.sweep_maps import _suffix
+    from pipeline.sweeps.analysis import critical_stokes_csv, planes
+
+    text = physics_sweep_text("Pi = [0.001, 0.01]\nSt = [1.0, 3.0, 10.0, 30.0]\neps = [1e-3, 1e-2]",
+                              store=str(tmp_path / "three.zarr"))
+    sweep = parse_sweep(text)
+    assert sweep.axis_names == ("St", "eps", "Pi") and sweep.n_scenes == 16
+    assert run(sweep).done == 16 and len(CALLS) == 16
+    ds = open_results(sweep.store).load()
+    assert ds.status.dims == ("St", "eps", "Pi") and ds.status.encoding["chunks"] == (1, 1, 2)
+    # extend along the third axis only: just the new plane is computed, old cells kept
+    CALLS.clear()
+    bigger = parse_sweep(text.replace("Pi = [0.001, 0.01]", "Pi = [0.001, 0.01, 0.1]"))
+    assert bigger.cache_key() == sweep.cache_key()
+    assert run(bigger).computed == 8 and len(CALLS) == 8
+    ds3 = open_results(sweep.store).load()
+    xr.testing.assert_identical(data_vars(ds), data_vars(ds3.sel(Pi=ds.Pi)))
+    # one (eps, St) plane per Pi value; St_c per eps row per plane
+    assert [extra for extra, _ in planes(ds3)] == [{"Pi": 0.001}, {"Pi": 0.01}, {"Pi": 0.1}]
+    assert all(p.status.dims == ("eps", "St") for _, p in planes(ds3))
+    rows = critical_stokes(ds3)
+    assert len(rows) == 6 and rows[0]["Pi"] == 0.001
+    assert rows[0]["St_c"] == pytest.approx(fake_st_c(1e-3), rel=1e-12)
+    assert critical_stokes_csv(rows).splitlines()[0] == \
+        "Pi,eps,St_c,St_stuck,St_escaped,transitions,note"
+    assert _suffix({"Pi": 0.001}) == "_Pi=0.001"
+    assert main(["status", str(sweep.store)]) == 0
+    out = capsys.readouterr().out
+    assert "Pi=0.001:" in out and "Pi=0.1:" in out and "done          24" in out
+    # one set of figures per Pi value, file names suffixed with it (png only: quicker)
+    import pipeline.plots.sweep_maps as figures
+
+    monkeypatch.setattr(figures, "FORMATS", ("png",))
+    paths, rendered = figures.update_figures(ds3, tmp_path / "figs")
+    assert rendered and {p.name for p in paths} == {
+        f"{n}_Pi={v}.png" for n in figures.FIGURES for v in ("0.001", "0.01", "0.1")} | \
+        {"critical_stokes.csv"}
+    # a store without St or eps has no plane: figures refused with one line
+    ds_flat = ds3.isel(eps=0).drop_vars("eps")
+    ds_flat.attrs = {**ds3.attrs, "fixed_physics": {}}
+    from pipeline.sweeps.analysis import PlaneError
+
+    with pytest.raises(PlaneError, match="no eps axis"):
+        list(planes(ds_flat))
