@@ -752,3 +752,13 @@ def test_a_three_axis_store_end_to_end(tmp_path, third_axis, capsys, monkeypatch
 
     with pytest.raises(PlaneError, match="no eps axis"):
         list(planes(ds_flat))
+
+
+def test_docs_list_every_store_variable_and_status_code():
+    from solver.observables import STATUS
+
+    doc = (REPO / "docs" / "pipeline.md").read_text()
+    for name in VARIABLES:
+        assert f"`{name}`" in doc, name
+    for name, (code, _) in STATUS.items():
+        assert f"| {code} | `{name}` |" in doc, name
