@@ -32,6 +32,7 @@ class Group:
     hi: float
     closed_lo: bool = False
     units: str = "1"
+    default: float | None = None  # value when a sweep file omits the group (None: required)
 
     def check(self, value) -> float:
         """``value`` as a float, or ValueError naming the group and its valid range."""

@@ -27,7 +27,7 @@ from pipeline.sweeps.config import ConfigError, cache_key, parse_sweep
 from pipeline.sweeps.store import (MODEL_CODES, STATUS_CODES, VARIABLES, StoreBusy, StoreMismatch,
                             SweepStore, pending_journal)
 from pipeline.sweeps.run import EXIT_FAILED, run_sweep
-from pipeline.sweeps.tasks import FLOAT_FIELDS
+from pipeline.sweeps.store import FLOATS as FLOAT_FIELDS
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -42,9 +42,10 @@ def fake_st_c(eps):
     return 5.0 - math.log10(eps)
 
 
-def fake_solve(St, eps, accuracy, overrides):
+def fake_solve(physics, accuracy, overrides):
     """A record like ``pipeline.sweeps.tasks.solve_scene``'s, with a known answer; ``ln(x_e/x0)`` is
     linear in ln St and changes sign at ``fake_st_c(eps)``."""
+    St, eps = physics["St"], physics["eps"]
     CALLS.append((St, eps))
     if any(math.isclose(St, s) for s in RAISING):
         raise RuntimeError(f"stand-in blew up at St={St}")
@@ -65,12 +66,12 @@ def fake_solve(St, eps, accuracy, overrides):
     return rec
 
 
-def slow_fake_solve(St, eps, accuracy, overrides):
+def slow_fake_solve(physics, accuracy, overrides):
     """The stand-in, slowed down and logging each finished scene (for the kill test)."""
     time.sleep(0.03)
-    rec = fake_solve(St, eps, accuracy, overrides)
+    rec = fake_solve(physics, accuracy, overrides)
     with open(os.environ["FAKE_SOLVE_LOG"], "a") as f:
-        f.write(json.dumps([St, eps]) + "\n")
+        f.write(json.dumps([physics["St"], physics["eps"]]) + "\n")
     return rec
 
 
@@ -119,9 +120,11 @@ def test_paper_sweep_file_meets_the_issue():
     from pipeline.sweeps.config import load_sweep
 
     s = load_sweep(REPO / "sweeps" / "paper.toml")
-    assert len(s.St) >= 60 and s.St[0] <= 0.5 and s.St[-1] >= 100.0
-    assert np.allclose(np.diff(np.log(s.St)), np.log(s.St[1] / s.St[0]))  # log-spaced
-    assert {1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8} <= set(s.eps)
+    St, eps = s.axes["St"], s.axes["eps"]
+    assert len(St) >= 60 and St[0] <= 0.5 and St[-1] >= 100.0
+    assert np.allclose(np.diff(np.log(St)), np.log(St[1] / St[0]))  # log-spaced
+    assert {1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8} <= set(eps)
+    assert s.axis_names == ("St", "eps") and s.fixed == {}
     assert s.accuracy == "standard" and str(s.store) == "results/paper.zarr"
     q = load_sweep(REPO / "sweeps" / "quick.toml")
     assert q.n_scenes <= 30
@@ -146,8 +149,8 @@ def test_bad_sweep_file_names_the_parameter(St, eps, extra, words):
 
 def test_range_axis_is_log_spaced_and_sorted():
     s = parse_sweep(sweep_text("{start = 100.0, stop = 1.0, num = 3}", [1e-3, 1e-2]))
-    assert s.St == pytest.approx((1.0, 10.0, 100.0), rel=1e-12)
-    assert s.eps == (1e-3, 1e-2)
+    assert s.axes["St"] == pytest.approx((1.0, 10.0, 100.0), rel=1e-12)
+    assert s.axes["eps"] == (1e-3, 1e-2)
 
 
 def test_cache_key_is_canonical_sha256():
@@ -179,12 +182,12 @@ def test_extending_the_grid_computes_only_new_scenes(tmp_path):
     # geomspace round-off too (3.0000000000000004 must match 3.0)
     big = make_sweep(tmp_path, [1.0, 1.5, 3.0 * (1 + 2e-16), 5.0, 10.0, 30.0], [1e-6, 1e-4, 1e-2])
     summary = run(big)
-    new_scenes = {(round(St, 9), e) for St in big.St for e in big.eps} - \
+    new_scenes = {(round(St, 9), e) for St in big.axes["St"] for e in big.axes["eps"]} - \
         {(St, e) for St in (1.0, 3.0, 10.0) for e in (1e-4, 1e-2)}
     assert {(round(s, 9), e) for s, e in CALLS} == new_scenes
     assert summary.cached == 6 and summary.computed == 12
     ds = open_results(big.store).load()
-    assert ds.sizes == {"eps": 3, "St": 6}
+    assert ds.sizes == {"St": 6, "eps": 3}
     kept = ds.sel(St=old.St, eps=old.eps)
     xr.testing.assert_identical(data_vars(old), data_vars(kept))
     # a sweep that covers only part of the store leaves the rest alone (union layout)
@@ -193,7 +196,7 @@ def test_extending_the_grid_computes_only_new_scenes(tmp_path):
     run(other)
     assert CALLS == [(50.0, 1e-2)]
     ds2 = open_results(other.store).load()
-    assert ds2.sizes == {"eps": 3, "St": 7}
+    assert ds2.sizes == {"St": 7, "eps": 3}
     xr.testing.assert_identical(data_vars(ds), data_vars(ds2.sel(St=ds.St, eps=ds.eps)))
 
 
@@ -227,8 +230,9 @@ def test_a_result_from_a_worker_with_another_installation_is_not_stored_as_ok(tm
     sweep = make_sweep(tmp_path, [1.0, 3.0], [1e-2])
     with SweepStore.open(sweep) as st:
         good, bad = st.cells(sweep)
-        st.record(good, {**fake_solve(1.0, 1e-2, "fast", {}), "cache_key": sweep.cache_key()})
-        st.record(bad, {**fake_solve(3.0, 1e-2, "fast", {}), "cache_key": "0" * 64})
+        st.record(good, {**fake_solve(st.scene(good), "fast", {}),
+                         "cache_key": sweep.worker_key()})
+        st.record(bad, {**fake_solve(st.scene(bad), "fast", {}), "cache_key": "0" * 64})
     ds = open_results(sweep.store).load().sel(eps=1e-2)
     assert int(ds.status.sel(St=1.0)) == STATUS_CODES["ok"]
     assert int(ds.status.sel(St=3.0)) == STATUS_CODES["error"]
@@ -268,7 +272,7 @@ def test_store_schema_and_attrs(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # plain xarray opens it without any warning
         ds = xr.open_zarr(sweep.store)
-    assert ds.status.dims == ("eps", "St")
+    assert ds.status.dims == ("St", "eps")  # the sweep's axes in Physics order
     assert list(ds.eps.values) == [1e-8, 1e-2] and list(ds.St.values) == [0.5, 1.0, 3.0]
     issue_vars = {"v_r", "h_m_x1", "h_m_x0", "h_m_approach_x1", "x_e_x1", "x_e_x0", "escaped",
                   "tau_v_zero", "peak_force", "dimple", "energy_error", "model", "status",
@@ -276,7 +280,9 @@ def test_store_schema_and_attrs(tmp_path):
     assert issue_vars <= set(ds.data_vars) and set(VARIABLES) == set(ds.data_vars)
     for name in ds.data_vars:
         assert ds[name].attrs["long_name"] and "units" in ds[name].attrs, name
-        assert ds[name].encoding["chunks"] == (1, 3), name  # one eps row per chunk
+        assert ds[name].encoding["chunks"] == (1, 2), name  # whole along the last axis
+    assert {"p_max", "p_min", "start_strain_energy"} <= set(ds.data_vars)
+    assert ds.p_max.attrs["units"] == "mu a v0 / x1^2"
     assert ds.status.attrs["flag_meanings"].split() == list(STATUS_CODES)
     assert ds.status.attrs["flag_values"] == list(STATUS_CODES.values())
     a = ds.attrs
@@ -284,6 +290,7 @@ def test_store_schema_and_attrs(tmp_path):
 
     assert a["solver_version"] == SOLVER_VERSION and a["accuracy"] == "fast"
     assert a["cache_key"] == sweep.cache_key() and a["numerics"] == sweep.numerics()
+    assert a["axes"] == ["St", "eps"] and a["fixed_physics"] == {} and a["store_schema"] == 3
     assert a["sweep_file"] == text
     assert {"python", "numpy", "numba", "dask", "xarray", "zarr"} <= set(a["package_versions"])
     assert a["created"].startswith("20")
@@ -314,8 +321,8 @@ def test_journal_of_an_interrupted_run_is_merged_not_recomputed(tmp_path):
     with SweepStore.open(sweep, flush_seconds=1e9) as st:
         cells = st.cells(sweep)
         for cell in cells[:2]:
-            st.record(cell, fake_solve(*st.scene(cell), "fast", {}), now=0.0)
-        st._dirty_rows.clear()  # simulate the kill: nothing merged into the store
+            st.record(cell, fake_solve(st.scene(cell), "fast", {}), now=0.0)
+        st._dirty.clear()  # simulate the kill: nothing merged into the store
         st._close_journal()
     assert pending_journal(sweep.store) == 2
     with pytest.warns(UserWarning, match="journal"):
@@ -369,8 +376,9 @@ def test_kill_9_loses_nothing_and_recomputes_nothing(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # a pending journal is announced with a warning
         ds = open_results(store).load()  # readable right after the kill
-    stored = {(float(ds.St[j]), float(ds.eps[i])) for i, j in zip(*np.nonzero(ds.status.values))}
-    journal = {(r["St"], r["eps"]) for r in map(json.loads, _lines(Path(str(store) + ".journal")))}
+    stored = {(float(ds.St[j]), float(ds.eps[i])) for j, i in zip(*np.nonzero(ds.status.values))}
+    journal = {(r["physics"]["St"], r["physics"]["eps"])
+               for r in map(json.loads, _lines(Path(str(store) + ".journal")))}
     committed = stored | journal
     assert committed <= finished
     assert len(finished - committed) <= 1  # at most the scene being handed over at the kill
@@ -448,12 +456,12 @@ def test_existing_scheduler_runner_matches_serial(tmp_path):
                                 data_vars(open_results(other.store)))
 
 
-def crashing_solve(St, eps, accuracy, overrides):
+def crashing_solve(physics, accuracy, overrides):
     """The stand-in, except that the worker process dies at once at St = 3 (as on a segfault;
     os._exit rather than os.abort, which could leave a core file)."""
-    if math.isclose(St, 3.0):
+    if math.isclose(physics["St"], 3.0):
         os._exit(70)
-    return fake_solve(St, eps, accuracy, overrides)
+    return fake_solve(physics, accuracy, overrides)
 
 
 def test_a_crashing_worker_is_stored_as_an_error_and_the_sweep_goes_on(tmp_path, monkeypatch):
@@ -565,3 +573,192 @@ def test_figures_are_redrawn_only_when_the_store_changes(tmp_path, monkeypatch):
     run(make_sweep(tmp_path, [3.0], [1e-2]))
     figures.update_figures(open_results(sweep.store), tmp_path / "f")
     assert len(drawn) == 1
+
+
+# ---- axes and fixed physics (the sweep's axes come from solver.Physics) ---------------------------
+def physics_sweep_text(grid: str, physics: str = "", store="results/test.zarr"):
+    return textwrap.dedent(f"""\
+        name = "physics"
+        store = "{store}"
+        [grid]
+        {grid}
+        [physics]
+        {physics}
+        [numerics]
+        accuracy = "fast"
+        """)
+
+
+def test_a_fixed_eps_and_an_St_axis_run_end_to_end(tmp_path, capsys):
+    from pipeline.cli import main
+    from pipeline.sweeps.analysis import critical_stokes_csv
+
+    text = physics_sweep_text("St = [1.0, 3.0, 10.0, 30.0]", "eps = 1e-2",
+                              store=str(tmp_path / "one.zarr"))
+    sweep = parse_sweep(text)
+    assert sweep.axis_names == ("St",) and sweep.fixed == {"eps": 1e-2}
+    assert sweep.n_scenes == 4
+    summary = run(sweep)
+    assert summary.done == 4 and sorted(CALLS) == [(s, 1e-2) for s in (1.0, 3.0, 10.0, 30.0)]
+    ds = open_results(sweep.store).load()
+    assert ds.status.dims == ("St",) and ds.attrs["fixed_physics"] == {"eps": 1e-2}
+    assert ds.attrs["axes"] == ["St"]
+    assert ds.status.encoding["chunks"] == (4,)  # one axis: one chunk
+    (row,) = critical_stokes(ds)  # the fixed eps is a plane one row high
+    assert row["eps"] == 1e-2 and row["St_c"] == pytest.approx(fake_st_c(1e-2), rel=1e-12)
+    assert critical_stokes_csv([row]).splitlines()[0].startswith("eps,St_c")
+    assert main(["status", str(sweep.store)]) == 0
+    out = capsys.readouterr().out
+    assert "4 St in [1, 30]" in out and "fixed eps=0.01" in out and "done           4" in out
+    CALLS.clear()
+    assert run(sweep).cached == 4 and CALLS == []
+
+
+def test_axes_in_either_order_give_the_same_sweep():
+    a = parse_sweep(physics_sweep_text("St = [1.0, 2.0]\neps = [1e-3, 1e-2]"))
+    b = parse_sweep(physics_sweep_text("eps = [1e-2, 1e-3]\nSt = [2.0, 1.0]"))
+    assert a.axis_names == b.axis_names == ("St", "eps")
+    assert a.axes == b.axes and a.cache_key() == b.cache_key()
+    fixed = parse_sweep(physics_sweep_text("St = [1.0, 2.0]", "eps = 1e-3"))
+    other = parse_sweep(physics_sweep_text("St = [1.0, 2.0]", "eps = 1e-2"))
+    assert len({a.cache_key(), fixed.cache_key(), other.cache_key()}) == 3
+
+
+@pytest.mark.parametrize("grid, physics, words", [
+    ("St = [1.0]\nPi = [0.1]", "eps = 1e-2", ["unknown physics field", "Pi", "valid", "'St'"]),
+    ("St = [1.0]", "eps = 1e-2\nbogus = 1", ["[physics]", "bogus", "valid"]),
+    ("St = [1.0]\neps = [1e-2]", "eps = 1e-2", ["eps", "both"]),
+    ("St = [1.0]", "", ["eps", "neither"]),
+    ("St = [1.0]", "eps = 0.5", ["physics.eps", "valid range"]),
+    ("St = [1.0]", "eps = true", ["physics.eps", "number"]),
+])
+def test_bad_axes_or_fixed_physics_are_named(grid, physics, words):
+    with pytest.raises(ConfigError) as err:
+        parse_sweep(physics_sweep_text(grid, physics))
+    for w in words:
+        assert w in str(err.value)
+
+
+def test_a_huge_grid_is_refused_before_any_array_is_built(monkeypatch):
+    import pipeline.sweeps.config as config
+
+    def no_arrays(*a, **k):
+        raise AssertionError("grid values built before the size check")
+
+    monkeypatch.setattr(config.np, "geomspace", no_arrays)
+    monkeypatch.setattr(config.np, "array", no_arrays)
+    with pytest.raises(ConfigError, match="100000000 scenes"):
+        parse_sweep(physics_sweep_text("St = {start = 1.0, stop = 10.0, num = 100000000}",
+                                       "eps = 1e-2"))
+    with pytest.raises(ConfigError, match="scenes; at most"):
+        parse_sweep(physics_sweep_text("St = {start = 1.0, stop = 10.0, num = 10000}\n"
+                                       "eps = {start = 1e-8, stop = 1e-2, num = 10000}"))
+
+
+def test_a_store_refuses_a_sweep_with_other_fixed_physics_or_axes(tmp_path):
+    store = tmp_path / "fixed.zarr"
+    first = parse_sweep(physics_sweep_text("St = [1.0, 3.0]", "eps = 1e-2")).with_store(store)
+    run(first)
+    before = data_vars(open_results(store))
+    CALLS.clear()
+    other = parse_sweep(physics_sweep_text("St = [1.0, 3.0, 5.0]", "eps = 1e-3")).with_store(store)
+    with pytest.raises(StoreMismatch) as err:
+        run(other)
+    msg = str(err.value)
+    assert "fixed physics" in msg and "eps = 0.01 in the store, 0.001 in this sweep" in msg
+    assert "--store" in msg and len(msg.splitlines()) == 1
+    grid = parse_sweep(physics_sweep_text("St = [1.0, 3.0]\neps = [1e-2]")).with_store(store)
+    with pytest.raises(StoreMismatch, match=r"axes are \['St'\], this sweep's are \['St', 'eps'\]"):
+        run(grid)
+    assert CALLS == []
+    xr.testing.assert_identical(before, data_vars(open_results(store)))
+
+
+def test_journal_lines_hold_the_physics_and_replay_matches_every_axis(tmp_path):
+    sweep = make_sweep(tmp_path, [1.0, 3.0], [1e-3, 1e-2])
+    with SweepStore.open(sweep, flush_seconds=1e9) as st:
+        cells = st.cells(sweep)
+        for cell in cells[:3]:
+            st.record(cell, fake_solve(st.scene(cell), "fast", {}), now=0.0)
+        st._dirty.clear()  # killed before the merge
+        st._close_journal()
+    lines = [json.loads(line) for line in Path(str(sweep.store) + ".journal").read_text().splitlines()]
+    assert [list(r["physics"]) for r in lines] == [["St", "eps"]] * 3
+    assert {(r["physics"]["St"], r["physics"]["eps"]) for r in lines} == \
+        {(1.0, 1e-3), (1.0, 1e-2), (3.0, 1e-3)}
+    CALLS.clear()
+    assert run(sweep).done == 4 and CALLS == [(3.0, 1e-2)]
+    ds = open_results(sweep.store).load()
+    for St, eps in ((1.0, 1e-3), (1.0, 1e-2), (3.0, 1e-3)):  # each record on its own cell
+        assert float(ds.v_r.sel(St=St, eps=eps)) == pytest.approx(St / (St + 10.0))
+
+
+@pytest.fixture
+def third_axis(monkeypatch):
+    """A test-only third Physics field ``Pi`` (the solver never sees it: fake solves only)."""
+    from solver.physics import Group, Physics
+
+    pi = Group("Pi", "test-only group", "test group", 0.0, 1.0)
+    names, group = Physics.names, Physics.group
+    monkeypatch.setattr(Physics, "names", staticmethod(lambda: (*names(), "Pi")))
+    monkeypatch.setattr(Physics, "group",
+                        staticmethod(lambda name: pi if name == "Pi" else group(name)))
+    return pi
+
+
+def test_a_three_axis_store_end_to_end(tmp_path, third_axis, capsys, monkeypatch):
+    from pipeline.cli import main
+    from pipeline.plots.sweep_maps import _suffix
+    from pipeline.sweeps.analysis import critical_stokes_csv, planes
+
+    text = physics_sweep_text("Pi = [0.001, 0.01]\nSt = [1.0, 3.0, 10.0, 30.0]\neps = [1e-3, 1e-2]",
+                              store=str(tmp_path / "three.zarr"))
+    sweep = parse_sweep(text)
+    assert sweep.axis_names == ("St", "eps", "Pi") and sweep.n_scenes == 16
+    assert run(sweep).done == 16 and len(CALLS) == 16
+    ds = open_results(sweep.store).load()
+    assert ds.status.dims == ("St", "eps", "Pi") and ds.status.encoding["chunks"] == (1, 1, 2)
+    # extend along the third axis only: just the new plane is computed, old cells kept
+    CALLS.clear()
+    bigger = parse_sweep(text.replace("Pi = [0.001, 0.01]", "Pi = [0.001, 0.01, 0.1]"))
+    assert bigger.cache_key() == sweep.cache_key()
+    assert run(bigger).computed == 8 and len(CALLS) == 8
+    ds3 = open_results(sweep.store).load()
+    xr.testing.assert_identical(data_vars(ds), data_vars(ds3.sel(Pi=ds.Pi)))
+    # one (eps, St) plane per Pi value; St_c per eps row per plane
+    assert [extra for extra, _ in planes(ds3)] == [{"Pi": 0.001}, {"Pi": 0.01}, {"Pi": 0.1}]
+    assert all(p.status.dims == ("eps", "St") for _, p in planes(ds3))
+    rows = critical_stokes(ds3)
+    assert len(rows) == 6 and rows[0]["Pi"] == 0.001
+    assert rows[0]["St_c"] == pytest.approx(fake_st_c(1e-3), rel=1e-12)
+    assert critical_stokes_csv(rows).splitlines()[0] == \
+        "Pi,eps,St_c,St_stuck,St_escaped,transitions,note"
+    assert _suffix({"Pi": 0.001}) == "_Pi=0.001"
+    assert main(["status", str(sweep.store)]) == 0
+    out = capsys.readouterr().out
+    assert "Pi=0.001:" in out and "Pi=0.1:" in out and "done          24" in out
+    # one set of figures per Pi value, file names suffixed with it (png only: quicker)
+    import pipeline.plots.sweep_maps as figures
+
+    monkeypatch.setattr(figures, "FORMATS", ("png",))
+    paths, rendered = figures.update_figures(ds3, tmp_path / "figs")
+    assert rendered and {p.name for p in paths} == {
+        f"{n}_Pi={v}.png" for n in figures.FIGURES for v in ("0.001", "0.01", "0.1")} | \
+        {"critical_stokes.csv"}
+    # a store without St or eps has no plane: figures refused with one line
+    ds_flat = ds3.isel(eps=0).drop_vars("eps")
+    ds_flat.attrs = {**ds3.attrs, "fixed_physics": {}}
+    from pipeline.sweeps.analysis import PlaneError
+
+    with pytest.raises(PlaneError, match="no eps axis"):
+        list(planes(ds_flat))
+
+
+def test_docs_list_every_store_variable_and_status_code():
+    from solver.observables import STATUS
+
+    doc = (REPO / "docs" / "pipeline.md").read_text()
+    for name in VARIABLES:
+        assert f"`{name}`" in doc, name
+    for name, (code, _) in STATUS.items():
+        assert f"| {code} | `{name}` |" in doc, name

@@ -9,6 +9,11 @@ bytes).
 - stick or rebound: the map of ``escaped`` with the critical Stokes number St_c(eps) against the
   experimental St ~ 10, and the St_c table as CSV.
 
+Every figure is drawn on an (eps, St) plane of the store (``analysis.planes``: St or eps fixed by
+the sweep is a plane one row or column wide). A store with further axes gets one set of figures
+per value combination of them, the file names suffixed with the values (``_Pi=0.001``); the CSV
+holds every plane, those values in its first columns.
+
 Maps are drawn in log10 coordinates (linear axes labelled in powers of ten): cell edges are the
 midpoints of neighbouring log10 grid values, and contours are interpolated in log coordinates
 (matplotlib's ``shading="nearest"`` would take arithmetic edges, and ``contour`` on log axes
@@ -24,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from ..sweeps.analysis import (EXPERIMENT_REFERENCE, EXPERIMENT_ST_C, critical_stokes,
-                       critical_stokes_csv, valid)
+                               critical_stokes_csv, planes, valid)
 
 __all__ = ["render_all", "update_figures", "fingerprint", "FIGURES"]
 
@@ -61,19 +66,18 @@ def render_all(ds, out) -> list:
     out.mkdir(parents=True, exist_ok=True)
     ds = ds.load()
     paths = []
+    draws = dict(zip(FIGURES, (_fig12, _fig13, _fig14, _map_vr, _map_hm, _map_xe,
+                               _stick_or_rebound)))
     # the default style, not the user's matplotlibrc: the figures depend on the store only
     with matplotlib.style.context("default"), matplotlib.rc_context(_RC):
-        for name, draw in (("fig12_rebound_velocity", _fig12), ("fig13_closest_approach", _fig13),
-                           ("fig14_equilibrium_separation", _fig14),
-                           ("map_rebound_velocity", _map_vr), ("map_closest_approach", _map_hm),
-                           ("map_equilibrium_separation", _map_xe),
-                           ("stick_or_rebound", _stick_or_rebound)):
-            fig = draw(ds)
-            _footer(fig, ds)
-            for fmt in FORMATS:
-                path = out / f"{name}.{fmt}"
-                fig.savefig(path, format=fmt, dpi=DPI, metadata=_METADATA[fmt])
-                paths.append(path)
+        for extra, plane in planes(ds):
+            for name, draw in draws.items():
+                fig = draw(plane)
+                _footer(fig, plane, extra)
+                for fmt in FORMATS:
+                    path = out / f"{name}{_suffix(extra)}.{fmt}"
+                    fig.savefig(path, format=fmt, dpi=DPI, metadata=_METADATA[fmt])
+                    paths.append(path)
     csv_path = out / CSV_NAME
     csv_path.write_text(critical_stokes_csv(critical_stokes(ds)))
     paths.append(csv_path)
@@ -112,7 +116,8 @@ def update_figures(ds, out) -> tuple[list, bool]:
     ds = ds.load()
     key = fingerprint(ds)
     stamp = out / STAMP_NAME
-    expected = [out / f"{n}.{f}" for n in FIGURES for f in FORMATS] + [out / CSV_NAME]
+    expected = [out / f"{n}{_suffix(extra)}.{f}" for extra, _ in planes(ds) for n in FIGURES
+                for f in FORMATS] + [out / CSV_NAME]
     if stamp.is_file() and stamp.read_text().strip() == key and all(p.is_file() for p in expected):
         return expected, False
     out.mkdir(parents=True, exist_ok=True)
@@ -129,11 +134,17 @@ def _figure(figsize=(6.0, 4.2)):
     return Figure(figsize=figsize, layout="constrained")
 
 
-def _footer(fig, ds) -> None:
+def _suffix(extra: dict) -> str:
+    """File-name suffix of the plane at ``extra`` (values of the store's other axes)."""
+    return "".join(f"_{k}={v:g}" for k, v in extra.items())
+
+
+def _footer(fig, ds, extra: dict | None = None) -> None:
     a = ds.attrs
+    where = "".join(f", {k} = {v:g}" for k, v in (extra or {}).items())
     fig.get_layout_engine().set(rect=(0.0, 0.03, 1.0, 0.97))  # keep a strip for the footer
     fig.text(0.995, 0.004, f"sweep {a.get('sweep_name', '?')}, solver {a.get('solver_version', '?')}"
-             f", accuracy {a.get('accuracy', '?')}", ha="right", va="bottom", fontsize=6,
+             f", accuracy {a.get('accuracy', '?')}{where}", ha="right", va="bottom", fontsize=6,
              color="0.45")
 
 
@@ -376,7 +387,7 @@ def _stick_or_rebound(ds):
                   vmin=0, vmax=1, shading="flat")
     failed = _failed(ds)
     _mark_failed(ax, ex, ey, failed)
-    rows = critical_stokes(ds)
+    rows = critical_stokes(ds)  # ds is one plane here
     st_c = np.array([r["St_c"] for r in rows])
     eps = np.array([r["eps"] for r in rows])
     ok = np.isfinite(st_c)

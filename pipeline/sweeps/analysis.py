@@ -2,7 +2,8 @@
 
 Stick or rebound: a collision "escapes" when the rebound carries the spheres back beyond the
 start separation, ``x_e > x0`` (``ln_x_e_x0 > 0``). The critical Stokes number ``St_c(eps)`` is
-where this first happens along each eps row of the grid: bracketed by the last stuck and the first
+where this first happens along each eps row of an (eps, St) plane of the store (one plane per
+value combination of the store's other axes, :func:`planes`): bracketed by the last stuck and the first
 escaped scene, and placed by linear interpolation of ``ln(x_e/x0)`` in ``ln St`` (the grid is
 log-spaced and ``ln(x_e/x0)`` is smooth and changes sign there).
 """
@@ -15,8 +16,8 @@ import math
 
 import numpy as np
 
-__all__ = ["valid", "critical_stokes", "critical_stokes_csv", "EXPERIMENT_ST_C",
-           "EXPERIMENT_REFERENCE"]
+__all__ = ["valid", "critical_stokes", "critical_stokes_csv", "planes", "extra_axes",
+           "PlaneError", "critical_stokes_plane", "EXPERIMENT_ST_C", "EXPERIMENT_REFERENCE", "PLANE"]
 
 # Solid spheres do not rebound from a wall in liquid below St of about 10 (St = m v0/(6 pi mu a^2),
 # the same definition as ours: Joseph et al. 2001 write St = rho_p v D / (9 mu)).
@@ -25,32 +26,80 @@ EXPERIMENT_REFERENCE = ("Joseph, Zenit, Hunt & Rosenwinkel, J. Fluid Mech. 433 (
                         "Gondret, Lance & Petit, Phys. Fluids 14 (2002)")
 
 CSV_FIELDS = ("eps", "St_c", "St_stuck", "St_escaped", "transitions", "note")
+PLANE = ("eps", "St")  # the plane of the classic figures and of St_c: rows eps, columns St
+
+
+class PlaneError(ValueError):
+    """The store has no (eps, St) plane: St or eps is neither an axis nor fixed."""
 
 
 def valid(ds) -> np.ndarray:
-    """Boolean ``(eps, St)`` mask of scenes stored as ok (``status == 1``)."""
+    """Boolean mask of scenes stored as ok (``status == 1``), in the Dataset's dim order."""
     return np.asarray(ds["status"].values == 1)
 
 
+def extra_axes(ds) -> tuple:
+    """The store's axes other than St and eps, in store order."""
+    return tuple(d for d in ds["status"].dims if d not in PLANE)
+
+
+def planes(ds):
+    """Yield ``(extra, plane)`` for every value combination of the axes other than St and eps:
+    ``extra`` is ``{name: value}`` of those axes (empty for an (St, eps) store), ``plane`` the
+    2-D Dataset with dims ``(eps, St)``. St or eps fixed by the sweep (``attrs
+    ["fixed_physics"]``) becomes a length-1 axis.
+
+    Raises
+    ------
+    PlaneError
+        St or eps is neither an axis nor fixed.
+    """
+    import itertools
+
+    fixed = dict(ds.attrs.get("fixed_physics", {}))
+    for name in PLANE:
+        if name not in ds["status"].dims:
+            if name not in fixed:
+                raise PlaneError(f"the store has no {name} axis or fixed {name} (axes "
+                                 f"{list(ds['status'].dims)}); the (eps, St) figures and St_c need "
+                                 "both")
+            ds = ds.expand_dims({name: [float(fixed[name])]})
+    extra = extra_axes(ds)
+    for values in itertools.product(*(range(ds.sizes[a]) for a in extra)):
+        sel = dict(zip(extra, values))
+        plane = ds.isel(sel).transpose(*PLANE, ...)
+        yield {a: float(ds[a].values[i]) for a, i in sel.items()}, plane
+
+
 def critical_stokes(ds) -> list[dict]:
-    """St_c for every eps row of a sweep Dataset.
+    """St_c for every eps row of every (eps, St) plane of a sweep Dataset (:func:`planes`).
 
     Returns
     -------
     list of dict
-        One per eps (ascending): ``eps``; ``St_c`` (NaN when the row does not change from stuck to
+        One per eps (ascending) and combination of the other axes (their values as keys first):
+        ``eps``; ``St_c`` (NaN when the row does not change from stuck to
         escaped inside the grid); ``St_stuck``/``St_escaped``, the bracketing grid points;
         ``transitions``, the number of stuck/escaped changes along the row (1 for a clean
         threshold); ``note`` ("", "all escaped", "none escaped", "no valid scenes",
         "bracket spans failed or missing scenes").
     """
+    rows = []
+    for extra, plane in planes(ds):
+        rows += critical_stokes_plane(plane, extra)
+    return rows
+
+
+def critical_stokes_plane(ds, extra: dict | None = None) -> list[dict]:
+    """St_c per eps row of one (eps, St) plane (rows carry ``extra`` first)."""
+    extra = extra or {}
     St = np.asarray(ds["St"].values, dtype=float)
     ok = valid(ds)
     esc = np.asarray(ds["escaped"].values, dtype=float)
     ln = np.asarray(ds["ln_x_e_x0"].values, dtype=float)
     rows = []
     for i, eps in enumerate(np.asarray(ds["eps"].values, dtype=float)):
-        row = {"eps": float(eps), "St_c": math.nan, "St_stuck": math.nan,
+        row = {**extra, "eps": float(eps), "St_c": math.nan, "St_stuck": math.nan,
                "St_escaped": math.nan, "transitions": 0, "note": ""}
         k = np.nonzero(ok[i] & np.isfinite(esc[i]))[0]
         if k.size == 0:
@@ -80,12 +129,15 @@ def critical_stokes(ds) -> list[dict]:
 
 
 def critical_stokes_csv(rows) -> str:
-    """The St_c table as CSV text (fixed formatting: same table, same bytes)."""
+    """The St_c table as CSV text (fixed formatting: same table, same bytes); the values of the
+    store's other axes, if any, come first."""
+    rows = list(rows)
+    extra = [k for k in rows[0] if k not in CSV_FIELDS] if rows else []
     out = io.StringIO()
     w = csv.writer(out, lineterminator="\n")
-    w.writerow(CSV_FIELDS)
+    w.writerow([*extra, *CSV_FIELDS])
     for r in rows:
-        w.writerow([f"{r['eps']:.6g}", _g(r["St_c"]), _g(r["St_stuck"]), _g(r["St_escaped"]),
+        w.writerow([*(f"{r[k]:.6g}" for k in extra), f"{r['eps']:.6g}", _g(r["St_c"]), _g(r["St_stuck"]), _g(r["St_escaped"]),
                     r["transitions"], r["note"]])
     return out.getvalue()
 

@@ -27,7 +27,7 @@ def _positive_int(text: str) -> int:
 
 def register(sub) -> None:
     p = sub.add_parser(
-        "sweep", help="compute a St x eps sweep into its zarr store (cached, resumable)",
+        "sweep", help="compute a sweep (grid over Physics fields) into its zarr store (cached, resumable)",
         description="Compute every scene of a sweep file that its store lacks. Exit codes: 0 all "
                     "scenes ok, 2 bad input, 3 finished with failed scenes, 130 interrupted.")
     p.add_argument("sweep_file", metavar="SWEEP_FILE", help="sweep definition, e.g. sweeps/paper.toml")
@@ -54,7 +54,7 @@ def register(sub) -> None:
     p.set_defaults(func=cmd_status)
 
     p = sub.add_parser("figures", help="Figures 12-14, (St, eps) maps and stick/rebound from a "
-                                        "sweep store (never computes scenes; skipped when the "
+                                        "sweep store (one set per value of its other axes) (never computes scenes; skipped when the "
                                         "folder is up to date with the store)")
     p.add_argument("store", metavar="STORE", help="sweep store, e.g. results/paper.zarr")
     p.add_argument("--out", metavar="DIR", default="figures", help="output folder (default figures)")
@@ -83,13 +83,14 @@ def cmd_sweep(args) -> int:
 
 
 def cmd_status(args) -> int:
+    import warnings
+
     import numpy as np
 
-    from .analysis import critical_stokes
     from ..cli import UsageError
+    from .analysis import PlaneError, planes
+    from .run import format_physics
     from .store import MODEL_CODES, STATUS_CODES, open_results, pending_journal
-
-    import warnings
 
     try:
         with warnings.catch_warnings():
@@ -100,16 +101,20 @@ def cmd_status(args) -> int:
     status = ds["status"].values
     model = ds["model"].values
     ok = status == STATUS_CODES["ok"]
+    rigid = MODEL_CODES["rigid"]
     a = ds.attrs
     print(f"store {args.store}: sweep {a.get('sweep_name')!r}, solver {a.get('solver_version')}, "
           f"accuracy {a.get('accuracy')}, cache key {str(a.get('cache_key'))[:12]}, "
           f"created {a.get('created')}")
-    St, eps = ds["St"].values, ds["eps"].values
-    print(f"grid: {eps.size} eps in [{eps.min():.3g}, {eps.max():.3g}] x {St.size} St in "
-          f"[{St.min():.4g}, {St.max():.4g}] = {status.size} scenes")
+    dims = ds["status"].dims
+    grid = " x ".join(f"{ds.sizes[d]} {d} in [{ds[d].values.min():.4g}, {ds[d].values.max():.4g}]"
+                      for d in dims)
+    fixed = a.get("fixed_physics") or {}
+    print(f"grid: {grid} = {status.size} scenes"
+          + (f"; fixed {format_physics(fixed)}" if fixed else ""))
     names = {v: k for k, v in STATUS_CODES.items()}
     failed = status >= 2
-    print(f"  done      {int(ok.sum()):6d}   (rigid-only {int((ok & (model == MODEL_CODES['rigid'])).sum())}, "
+    print(f"  done      {int(ok.sum()):6d}   (rigid-only {int((ok & (model == rigid)).sum())}, "
           f"escaped {int(np.nansum(ds['escaped'].values[ok]))})")
     by_code = ", ".join(f"{names[c]} {int((status == c).sum())}" for c in sorted(set(status[failed])))
     print(f"  failed    {int(failed.sum()):6d}" + (f"   ({by_code})" if by_code else ""))
@@ -118,32 +123,55 @@ def cmd_status(args) -> int:
     if pending:
         print(f"  journal   {pending:6d}   finished scenes of an interrupted run, merged by the "
               "next ehd sweep")
-    stc = {r["eps"]: r for r in critical_stokes(ds)}
+    try:
+        for extra, plane in planes(ds):
+            _status_table(plane, extra, format_physics)
+    except PlaneError as exc:
+        print(f"  (no St_c table: {exc})")
+    cells = np.argwhere(failed)
+    for cell in cells[:20]:
+        physics = {**fixed, **{d: float(ds[d].values[i]) for d, i in zip(dims, cell)}}
+        print(f"  failed: {format_physics(physics)} {names[int(status[tuple(cell)])]}: "
+              f"{ds['message'].values[tuple(cell)]}")
+    if len(cells) > 20:
+        print(f"  ... {len(cells) - 20} more failed scenes")
+    return 0
+
+
+def _status_table(plane, extra: dict, format_physics) -> None:
+    """Counts and St_c per eps row of one (eps, St) plane."""
+    from .analysis import critical_stokes_plane
+    from .store import MODEL_CODES
+
+    rows = critical_stokes_plane(plane, extra)
+    rigid = MODEL_CODES["rigid"]
+    status = plane["status"].values
+    model = plane["model"].values
+    ok = status == 1
+    failed = status >= 2
+    if extra:
+        print(f"  {format_physics(extra)}:")
     print(f"  {'eps':>8} {'ok':>5} {'failed':>6} {'not run':>7} {'rigid':>5}  St_c")
-    for i, e in enumerate(eps):
-        r = stc[float(e)]
+    for i, (e, r) in enumerate(zip(plane["eps"].values, rows)):
         st_c = f"{r['St_c']:.4g}" if math.isfinite(r["St_c"]) else (r["note"] or "-")
         print(f"  {e:8.2g} {int(ok[i].sum()):5d} {int(failed[i].sum()):6d} "
-              f"{int((status[i] == 0).sum()):7d} {int((ok[i] & (model[i] == 1)).sum()):5d}  {st_c}")
-    rows, cols = np.nonzero(failed)
-    for i, j in list(zip(rows, cols))[:20]:
-        print(f"  failed: St={St[j]:.6g} eps={eps[i]:.3g} {names[int(status[i, j])]}: "
-              f"{ds['message'].values[i, j]}")
-    if rows.size > 20:
-        print(f"  ... {rows.size - 20} more failed scenes")
-    return 0
+              f"{int((status[i] == 0).sum()):7d} {int((ok[i] & (model[i] == rigid)).sum()):5d}  {st_c}")
 
 
 def cmd_figures(args) -> int:
     from ..cli import UsageError
     from ..plots.sweep_maps import update_figures
+    from .analysis import PlaneError
     from .store import open_results
 
     try:
         ds = open_results(args.store, chunks=None)
     except FileNotFoundError as exc:
         raise UsageError(str(exc)) from None
-    paths, rendered = update_figures(ds, args.out)
+    try:
+        paths, rendered = update_figures(ds, args.out)
+    except PlaneError as exc:
+        raise UsageError(f"no figures for {args.store}: {exc}") from None
     if not rendered:
         print(f"figures in {args.out} are up to date with {args.store}")
     else:

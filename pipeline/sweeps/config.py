@@ -1,23 +1,29 @@
 """Sweep definitions: a TOML file -> a frozen :class:`Sweep` (the plan as plain data).
 
-A sweep file holds what decides the *results*: the grid, the accuracy preset and any numerical
-overrides, and where the store lives. How the sweep is executed (scheduler, workers) comes from the
-command line and never changes a number. Format (``sweeps/paper.toml`` is the reference)::
+A sweep file holds what decides the *results*: the grid, the fixed physics, the accuracy preset and
+any numerical overrides, and where the store lives. How the sweep is executed (scheduler, workers)
+comes from the command line and never changes a number. Format (``sweeps/paper.toml`` is the
+reference)::
 
     name = "paper"
     store = "results/paper.zarr"          # relative paths: from the directory ehd runs in
 
-    [grid]
+    [grid]                                # the axes: any fields of solver.Physics (at least one)
     St = {start = 0.5, stop = 100.0, num = 64}   # log-spaced, endpoints included (geomspace)
     eps = [1e-2, 1e-3, 1e-4]                     # or an explicit list
+
+    [physics]                             # optional: fixed values of the other Physics fields
+    # eps = 1e-3                          # (a field is an axis or fixed, never both)
 
     [numerics]
     accuracy = "standard"                 # preset: fast, standard, fine
     # fast_path = true                    # master curve in S = St V_switch (solver/master.py)
     # rtol = 1e-4                         # optional overrides of solver.Numerics fields
 
-The cache key of a sweep is the sha256 of the canonical JSON of the solver version and the fully
-resolved numerical settings (never ``dask.base.tokenize``: not stable across interpreters).
+Every field of ``solver.Physics`` must be an axis, fixed, or have a default (``Group.default``).
+The cache key of a sweep is the sha256 of the canonical JSON of the solver version, the fully
+resolved numerical settings, the fixed physics and the axis names (never ``dask.base.tokenize``:
+not stable across interpreters).
 """
 
 from __future__ import annotations
@@ -33,8 +39,7 @@ import numpy as np
 
 __all__ = ["Sweep", "load_sweep", "parse_sweep", "cache_key", "canonical_json", "ConfigError"]
 
-_TOP_KEYS = {"name", "store", "grid", "numerics"}
-_AXES = ("St", "eps")
+_TOP_KEYS = {"name", "store", "grid", "physics", "numerics"}
 _RANGE_KEYS = {"start", "stop", "num"}
 MAX_SCENES = 10**7  # a typo guard (num = 1e9), far above any real sweep
 
@@ -48,22 +53,28 @@ def canonical_json(obj) -> str:
     return json.dumps(obj, sort_keys=True, separators=(",", ":"), allow_nan=False)
 
 
-def cache_key(solver_version: str, numerics: dict) -> str:
-    """sha256 (hex) of the canonical JSON of the solver version and the resolved numerics."""
-    payload = canonical_json({"solver_version": solver_version, "numerics": numerics})
+def cache_key(solver_version: str, numerics: dict, fixed_physics: dict | None = None,
+              axes=()) -> str:
+    """sha256 (hex) of the canonical JSON of the solver version, the resolved numerics, the fixed
+    physics and the axis names: stores computed with other physics never share a key."""
+    payload = canonical_json({"solver_version": solver_version, "numerics": numerics,
+                              "fixed_physics": dict(fixed_physics or {}), "axes": list(axes)})
     return hashlib.sha256(payload.encode()).hexdigest()
 
 
 @dataclass(frozen=True)
 class Sweep:
-    """One sweep: the (St, eps) grid, its numerical settings and its store.
+    """One sweep: its axes and fixed physics, its numerical settings and its store.
 
     Attributes
     ----------
     name : str
         Short label (defaults to the file's stem).
-    St, eps : tuple of float
-        Grid values, sorted ascending, each validated against the solver's range.
+    axes : dict
+        ``{name: values}`` for every swept field of ``solver.Physics``, in ``Physics.names()``
+        order; values sorted ascending, each validated against its group's range.
+    fixed : dict
+        ``{name: value}`` for every other field (from ``[physics]`` or the group's default).
     accuracy : str
         Solver preset name.
     overrides : dict
@@ -77,8 +88,8 @@ class Sweep:
     """
 
     name: str
-    St: tuple
-    eps: tuple
+    axes: dict
+    fixed: dict
     accuracy: str
     overrides: dict = field(default_factory=dict)
     fast_path: bool = False  # answer scenes from a master curve in S = St V_switch (opt-in)
@@ -87,8 +98,16 @@ class Sweep:
     path: Path | None = None
 
     @property
+    def axis_names(self) -> tuple:
+        return tuple(self.axes)
+
+    @property
+    def shape(self) -> tuple:
+        return tuple(len(v) for v in self.axes.values())
+
+    @property
     def n_scenes(self) -> int:
-        return len(self.St) * len(self.eps)
+        return math.prod(self.shape)
 
     def numerics(self) -> dict:
         """The fully resolved numerical settings of every scene (profiles never kept in sweeps)."""
@@ -105,6 +124,13 @@ class Sweep:
         return SOLVER_VERSION
 
     def cache_key(self) -> str:
+        """The store's key: solver version, numerics, fixed physics and axis names."""
+        return cache_key(self.solver_version(), self.numerics(), self.fixed, self.axis_names)
+
+    def worker_key(self) -> str:
+        """The key a worker stamps on its records (``tasks.collision_record``): solver version
+        and numerics of the installation that computed it (the scene's physics is the store's
+        business)."""
         return cache_key(self.solver_version(), self.numerics())
 
     def with_store(self, store) -> "Sweep":
@@ -147,17 +173,7 @@ def parse_sweep(text: str, path: Path | None = None) -> Sweep:
     if not isinstance(store, str) or not store.strip():
         raise ConfigError(f"{where}: store must be a path string, e.g. store = \"results/{name}.zarr\"")
 
-    grid = doc.get("grid")
-    if not isinstance(grid, dict):
-        raise ConfigError(f"{where}: missing [grid] table with St and eps")
-    unknown = set(grid) - set(_AXES)
-    if unknown or any(a not in grid for a in _AXES):
-        raise ConfigError(f"{where}: [grid] must hold exactly St and eps, got {sorted(grid)}")
-    axes = {a: _axis(where, a, grid[a]) for a in _AXES}
-    n = len(axes["St"]) * len(axes["eps"])
-    if n > MAX_SCENES:
-        raise ConfigError(f"{where}: the grid has {n} scenes; at most {MAX_SCENES} allowed")
-
+    axes, fixed = _physics(where, doc)
     numerics = dict(doc.get("numerics", {}))
     accuracy = numerics.pop("accuracy", "standard")
     fast_path = numerics.pop("fast_path", False)
@@ -166,7 +182,7 @@ def parse_sweep(text: str, path: Path | None = None) -> Sweep:
     if "save_profiles" in numerics:
         raise ConfigError(f"{where}: [numerics] save_profiles is fixed by the pipeline (sweeps "
                           "store scalars only); remove it")
-    sweep = Sweep(name=name, St=axes["St"], eps=axes["eps"], accuracy=accuracy,
+    sweep = Sweep(name=name, axes=axes, fixed=fixed, accuracy=accuracy,
                   overrides=numerics, fast_path=fast_path, store=Path(store), source=text,
                   path=path)
     try:
@@ -176,12 +192,56 @@ def parse_sweep(text: str, path: Path | None = None) -> Sweep:
     return sweep
 
 
-def _axis(where: str, name: str, spec) -> tuple:
-    """Grid values of one axis: a list of numbers, or {start, stop, num} log-spaced."""
-    from solver.settings import EPS_RANGE, STOKES_RANGE
+def _physics(where: str, doc: dict) -> tuple[dict, dict]:
+    """``(axes, fixed)`` of a sweep file: ``[grid]`` and ``[physics]`` checked against
+    ``solver.Physics``. The grid's size is checked before any array is built."""
+    from solver.physics import Physics
 
-    lo, hi = STOKES_RANGE if name == "St" else EPS_RANGE
-    valid = f"valid range ({lo:g}, {hi:g}]"
+    names = Physics.names()
+    grid = doc.get("grid")
+    if not isinstance(grid, dict) or not grid:
+        raise ConfigError(f"{where}: missing [grid] table with at least one axis, one of "
+                          f"{list(names)}")
+    table = doc.get("physics", {})
+    if not isinstance(table, dict):
+        raise ConfigError(f"{where}: [physics] must be a table of fixed values, got {table!r}")
+    for section, keys in (("grid", grid), ("physics", table)):
+        unknown = [k for k in keys if k not in names]
+        if unknown:
+            raise ConfigError(f"{where}: [{section}] has unknown physics field(s) {unknown}; "
+                              f"valid: {list(names)}")
+    both = [n for n in names if n in grid and n in table]
+    if both:
+        raise ConfigError(f"{where}: {both} both in [grid] and [physics]; a field is swept or "
+                          "fixed, not both")
+    missing = [n for n in names if n not in grid and n not in table
+               and Physics.group(n).default is None]
+    if missing:
+        raise ConfigError(f"{where}: {missing} neither in [grid] nor in [physics]; give each "
+                          "field a grid axis or a fixed value")
+    n = 1
+    for name in names:  # size first: a typo (num = 1e9) must not allocate gigabytes
+        if name in grid:
+            n *= _axis_size(where, name, grid[name])
+    if n > MAX_SCENES:
+        raise ConfigError(f"{where}: the grid has {n} scenes; at most {MAX_SCENES} allowed")
+    axes = {name: _axis(where, name, grid[name]) for name in names if name in grid}
+    fixed = {}
+    for name in names:
+        if name in grid:
+            continue
+        if name in table:
+            try:
+                fixed[name] = Physics.group(name).check(table[name])
+            except ValueError as exc:
+                raise ConfigError(f"{where}: physics.{exc}") from None
+        else:
+            fixed[name] = float(Physics.group(name).default)
+    return axes, fixed
+
+
+def _axis_size(where: str, name: str, spec) -> int:
+    """Number of values of one axis, read without building them."""
     if isinstance(spec, dict):
         if set(spec) != _RANGE_KEYS:
             raise ConfigError(f"{where}: grid.{name} as a range needs exactly {sorted(_RANGE_KEYS)} "
@@ -189,23 +249,39 @@ def _axis(where: str, name: str, spec) -> tuple:
         num = spec["num"]
         if not isinstance(num, int) or isinstance(num, bool) or num < 1:
             raise ConfigError(f"{where}: grid.{name}.num must be a whole number >= 1, got {num!r}")
-        start, stop = (_number(where, f"{name}.{k}", spec[k]) for k in ("start", "stop"))
-        for k, v in (("start", start), ("stop", stop)):
-            if not lo < v <= hi:
-                raise ConfigError(f"{where}: grid.{name}.{k} = {v!r} is outside the {valid}")
-        values = np.geomspace(start, stop, num)
-    elif isinstance(spec, list):
+        return num
+    if isinstance(spec, list):
         if not spec:
             raise ConfigError(f"{where}: grid.{name} is empty")
-        values = np.array([_number(where, name, v) for v in spec])
+        return len(spec)
+    raise ConfigError(f"{where}: grid.{name} must be a list of numbers or "
+                      f"{{start, stop, num}}, got {spec!r}")
+
+
+def _axis(where: str, name: str, spec) -> tuple:
+    """Grid values of one axis: a list of numbers, or {start, stop, num} log-spaced (the spec is
+    already checked by :func:`_axis_size`)."""
+    from solver.physics import Physics
+
+    group = Physics.group(name)
+
+    def check(label, v):
+        try:
+            group.check(v)
+        except ValueError as exc:
+            raise ConfigError(f"{where}: grid.{label}: {exc}") from None
+
+    if isinstance(spec, dict):
+        start, stop = (_number(where, f"{name}.{k}", spec[k]) for k in ("start", "stop"))
+        check(f"{name}.start", start)
+        check(f"{name}.stop", stop)
+        values = np.geomspace(start, stop, spec["num"])
     else:
-        raise ConfigError(f"{where}: grid.{name} must be a list of numbers or "
-                          f"{{start, stop, num}}, got {spec!r}")
+        values = np.array([_number(where, name, v) for v in spec])
     for v in values:
-        if not lo < v <= hi:
-            raise ConfigError(f"{where}: grid.{name} value {v!r} is outside the {valid}")
+        check(name, float(v))
     values = np.sort(values)
-    if np.any(np.diff(values) <= 1e-9 * values[1:]):
+    if np.any(np.diff(values) <= 1e-9 * np.abs(values[1:])):
         raise ConfigError(f"{where}: grid.{name} has repeated values")
     return tuple(float(v) for v in values)
 

@@ -18,7 +18,7 @@ from .runners import open_runner
 from .store import MODEL_CODES, STATUS_CODES, SweepStore
 from .tasks import MasterSolve, ensure_environment, solve_scene, warm
 
-__all__ = ["run_sweep", "Summary", "EXIT_OK", "EXIT_FAILED"]
+__all__ = ["run_sweep", "Summary", "EXIT_OK", "EXIT_FAILED", "format_physics"]
 
 EXIT_OK = 0
 EXIT_FAILED = 3  # the sweep finished, but some of its scenes are stored as failed
@@ -32,7 +32,8 @@ class Summary:
 
     name: str
     store: str
-    shape: tuple  # (n_eps, n_St)
+    shape: tuple  # points along each axis
+    axes: tuple = ()  # axis names (fields of solver.Physics), same order as shape
     runner: str = "-"
     scenes: int = 0
     cached: int = 0  # already in the store (ok or failed) and not recomputed
@@ -44,7 +45,7 @@ class Summary:
     rigid: int = 0  # answered by the rigid solution, no PDE solve
     rigid_computed: int = 0
     wall_s: float = 0.0
-    failures: list = field(default_factory=list)  # (St, eps, status, message), at most 20
+    failures: list = field(default_factory=list)  # (physics dict, status, message), at most 20
 
     @property
     def exit_code(self) -> int:
@@ -55,9 +56,9 @@ class Summary:
         return self.computed / self.wall_s if self.wall_s > 0 else float("nan")
 
     def text(self) -> str:
-        n_eps, n_st = self.shape
+        grid = " x ".join(f"{n} {a}" for n, a in zip(self.shape, self.axes))
         lines = [
-            f"sweep {self.name!r}: {self.scenes} scenes ({n_eps} eps x {n_st} St) in {self.store}",
+            f"sweep {self.name!r}: {self.scenes} scenes ({grid}) in {self.store}",
             f"  done        {self.done:6d}   (computed now {self.computed - self.computed_failed}, "
             f"cached {self.done - (self.computed - self.computed_failed)})",
             f"  failed      {self.failed:6d}   (now {self.computed_failed})",
@@ -68,8 +69,8 @@ class Summary:
             lines.append(f"  not run     {self.not_run:6d}")
         lines.append(f"  runner      {self.runner}; {self.computed} scenes in {self.wall_s:.1f} s"
                      + (f" ({self.rate:.1f} scenes/s)" if self.computed else ""))
-        for St, eps, status, message in self.failures:
-            lines.append(f"  failed: St={St:.6g} eps={eps:.3g} {status}: {message}")
+        for physics, status, message in self.failures:
+            lines.append(f"  failed: {format_physics(physics)} {status}: {message}")
         if self.failed > len(self.failures):
             lines.append(f"  ... {self.failed - len(self.failures)} more (ehd status {self.store})")
         if self.failed:
@@ -98,7 +99,7 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
     retry_failed : bool
         Also rerun scenes stored as failed (otherwise they count as cached).
     solve : callable
-        ``solve(St, eps, accuracy, overrides) -> record``; the real solver by default (tests pass
+        ``solve(physics: dict, accuracy, overrides) -> record``; the real solver by default (tests pass
         a stand-in). Must be importable by workers.
     warm_up : bool, optional
         Warm the compiled solver before workers start; default: only for the real solver.
@@ -119,7 +120,8 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         warm_up = solve is solve_scene
     overrides = dict(sweep.overrides)
     with SweepStore.open(sweep, store, **kwargs) as st:
-        summary = Summary(name=sweep.name, store=str(st.path), shape=(len(sweep.eps), len(sweep.St)))
+        summary = Summary(name=sweep.name, store=str(st.path), shape=sweep.shape,
+                          axes=sweep.axis_names)
         cells = st.cells(sweep)
         status = st.status_of(cells)
         rerun = (status == 0) | (retry_failed & (status >= 2))
@@ -128,7 +130,7 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         if todo and sweep.fast_path and solve is solve_scene:
             solve = _master_solve(sweep, progress)
         if todo:
-            jobs = [(cell, (*st.scene(cell), sweep.accuracy, overrides)) for cell in todo]
+            jobs = [(cell, (st.scene(cell), sweep.accuracy, overrides)) for cell in todo]
             bar = Progress(len(jobs), stream=progress)
             warm_fn = _Warm(sweep.accuracy, overrides) if warm_up else None
             try:
@@ -180,16 +182,20 @@ class _Warm:
         return warm(self.accuracy, self.overrides)
 
 
+def format_physics(physics: dict) -> str:
+    """``St=20 eps=1e-08``: a scene's physics in one short line."""
+    return " ".join(f"{k}={v:.6g}" for k, v in physics.items())
+
+
 def _count(summary: Summary, st, cells) -> None:
-    ie = np.array([c[0] for c in cells], dtype=int)
-    js = np.array([c[1] for c in cells], dtype=int)
-    status = st.ds["status"].values[ie, js]
-    model = st.ds["model"].values[ie, js]
+    index = tuple(np.array(cells, dtype=int).reshape(len(cells), -1).T)
+    status = st.ds["status"].values[index]
+    model = st.ds["model"].values[index]
+    messages = st.ds["message"].values[index]
     summary.done = int(np.sum(status == STATUS_CODES["ok"]))
     summary.failed = int(np.sum(status >= 2))
     summary.not_run = int(np.sum(status == 0))
     summary.rigid = int(np.sum((status == STATUS_CODES["ok"]) & (model == MODEL_CODES["rigid"])))
     for k in np.nonzero(status >= 2)[0][:20]:
-        St, eps = st.scene(cells[k])
-        summary.failures.append((St, eps, _CODE_NAMES.get(int(status[k]), "?"),
-                                 str(st.ds["message"].values[ie[k], js[k]])))
+        summary.failures.append((st.scene(cells[k]), _CODE_NAMES.get(int(status[k]), "?"),
+                                 str(messages[k])))

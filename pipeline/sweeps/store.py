@@ -1,20 +1,24 @@
-"""The sweep store: one zarr store per sweep, dims ``(eps, St)``, and its single writer.
+"""The sweep store: one zarr store per sweep, dims = the sweep's axes, and its single writer.
 
-Layout (``STORE_SCHEMA``): every variable of ``VARIABLES`` is a 2-D ``(eps, St)`` array, chunked
-one eps row per chunk; coordinates are sorted ascending. ``status`` (``STATUS_CODES``; 0 = not
-run) is written *after* a cell's data, so a cell with a non-zero status always has its data.
-Root attrs carry the solver version, the cache key and the resolved numerics, the sweep file
-verbatim, package versions and the creation time.
+Layout (``STORE_SCHEMA``): every variable of ``VARIABLES`` (generated from the registry
+``solver.observables.OBSERVABLES`` plus ``model``, ``status``, ``message``) is an N-D array over
+the sweep's axes (fields of ``solver.Physics``, in ``Physics.names()`` order, e.g. ``(St, eps)``),
+chunked 1 along every axis but the last and whole along the last; coordinates are sorted
+ascending. ``status`` (``STATUS_CODES``; 0 = not run) is written *after* a cell's data, so a cell
+with a non-zero status always has its data. Root attrs carry the axis names (``axes``), the fixed
+physics (``fixed_physics``), the solver version, the cache key and the resolved numerics, the
+sweep file verbatim, package versions and the creation time.
 
 Rules this module enforces (docs/pipeline.md):
 
-- Cache: a store belongs to one cache key (solver version + numerics). Opening it for a sweep with
-  another key raises :class:`StoreMismatch`: old and new results never mix. A new grid is laid out
-  as the union of the old and the new coordinates, existing cells copied over.
+- Cache: a store belongs to one cache key (solver version + numerics + fixed physics + axis
+  names). Opening it for a sweep with another key raises :class:`StoreMismatch` naming the
+  difference: old and new results never mix. A new grid is laid out as the union of the old and
+  the new coordinates along every axis, existing cells copied over.
 - One writer: :class:`SweepStore` is the only code that writes a store; an exclusive lock
   (``<store>.lock``, released by the OS even after ``kill -9``) keeps a second sweep out.
-- Crash safety: each finished scene is appended to a journal (``<store>.journal``, one JSON line,
-  flushed to the OS) before anything else, then merged into the store in batches; a new run
+- Crash safety: each finished scene is appended to a journal (``<store>.journal``, one JSON line
+  ``{"physics": {...}, "key": ..., **record}``, flushed to the OS) before anything else, then merged into the store in batches; a new run
   merges a journal left by a killed run first, so no finished scene is ever computed twice.
   New layouts are written to a temporary directory and moved into place by ``rename``; zarr
   writes each chunk atomically, so a reader always sees a valid store.
@@ -33,55 +37,30 @@ from pathlib import Path
 
 import numpy as np
 
-from .tasks import COUNT_FIELDS, FAILURE_FIELDS, FLAG_FIELDS, FLOAT_FIELDS
+from solver.observables import MODEL_CODES, OBSERVABLES, STATUS_CODES
+from solver.physics import Physics
 
 __all__ = ["open_results", "SweepStore", "StoreMismatch", "StoreBusy", "STATUS_CODES",
            "MODEL_CODES", "VARIABLES", "STORE_SCHEMA", "pending_journal", "zarr_warnings"]
 
-STORE_SCHEMA = 2  # bump when variables or their meaning change (an old store is then refused)
+STORE_SCHEMA = 3  # bump when variables or their meaning change (an old store is then refused)
 
-STATUS_CODES = {"not_run": 0, "ok": 1, "max_steps": 2, "step_underflow": 3, "nonfinite": 4,
-                "error": 5, "start_deformed": 6}
-MODEL_CODES = {"unknown": 0, "rigid": 1, "ehd": 2, "master": 3}
 RTOL_COORD = 1e-9  # grid values this close are the same scene (geomspace round-off is ~1e-16)
 FLUSH_SECONDS = 2.0  # journal -> store merge interval: the journal already makes results durable
 
-# name: (dtype, long_name, units); flags are int8 0/1 with fill -1 (read back as NaN: unknown)
-VARIABLES = {
-    "v_r": ("f8", "maximum rebound (separation) velocity max(-v)/v0, 0 without rebound", "v0"),
-    "h_m_x1": ("f8", "closest approach of the deformed surfaces, whole collision", "x1"),
-    "h_m_x0": ("f8", "closest approach of the deformed surfaces, whole collision", "x0"),
-    "h_m_approach_x1": ("f8", "closest approach until v first reaches 0", "x1"),
-    "h_m_approach_x0": ("f8", "closest approach until v first reaches 0", "x0"),
-    "x_e_x1": ("f8", "equilibrium separation of the undeformed surfaces (inf: exp overflow, "
-               "see ln_x_e_x1)", "x1"),
-    "x_e_x0": ("f8", "equilibrium separation of the undeformed surfaces (inf: exp overflow, "
-               "see ln_x_e_x0)", "x0"),
-    "ln_x_e_x1": ("f8", "natural log of x_e/x1 (finite where x_e/x1 overflows)", "1"),
-    "ln_x_e_x0": ("f8", "natural log of x_e/x0; > 0 means escaped", "1"),
-    "escaped": ("i1", "rebound carries the spheres back beyond x0 (x_e > x0): no sticking", "1"),
-    "tau_max_deformation": ("f8", "time of the largest central deformation W(0)", "x0/v0"),
-    "tau_v_zero": ("f8", "first time v = 0 (inf: the spheres never stop in finite time)",
-                   "x0/v0"),
-    "tau_max_rebound": ("f8", "time of the largest rebound speed (NaN: no rebound)", "x0/v0"),
-    "tau_peak_force": ("f8", "time of the peak film force", "x0/v0"),
-    "peak_force": ("f8", "peak film force", "6 pi mu a^2 v0 / x1"),
-    "w0_max_x1": ("f8", "largest central deformation W(0)", "x1"),
-    "x_min_x1": ("f8", "smallest separation X of the undeformed surfaces (< 0: overlap)", "x1"),
-    "dimple": ("i1", "a dimple forms (central gap above the minimum by more than 1e-3 x1)", "1"),
-    "dimple_depth_x1": ("f8", "largest dimple depth H(0) - min_R H", "x1"),
-    "tau_dimple": ("f8", "first time the dimple is deeper than 1e-3 x1", "x0/v0"),
-    "energy_error": ("f8", "max energy-closure error of the coupled phase", "m v0^2 / 2"),
+_DTYPE = {"float": "f8", "flag": "i1", "count": "i4"}
+# name: (dtype, long_name, units), generated from the registry; flags are int8 0/1 with fill -1
+# (read back as NaN: unknown)
+VARIABLES = {o.name: (_DTYPE[o.kind], o.long_name, o.units) for o in OBSERVABLES}
+VARIABLES.update({
     "model": ("i1", "model that answered the scene", "1"),
     "status": ("i1", "scene status (0 = not run; see flag_meanings)", "1"),
     "message": ("str", "solver message or failure reason", ""),
-    "wall_s": ("f8", "wall time of the scene on its worker", "s"),
-    "steps": ("i4", "accepted time steps of the coupled solve", "1"),
-    "rejected_steps": ("i4", "rejected time steps of the coupled solve", "1"),
-    "newton_iterations": ("i4", "Newton iterations of the coupled solve", "1"),
-    "lu_factorizations": ("i4", "LU factorisations of the coupled solve", "1"),
-}
-assert set(VARIABLES) == {*FLOAT_FIELDS, *FLAG_FIELDS, *COUNT_FIELDS, "model", "status", "message"}
+})
+FLOATS = tuple(o.name for o in OBSERVABLES if o.kind == "float")
+FLAGS = tuple(o.name for o in OBSERVABLES if o.kind == "flag")
+COUNTS = tuple(o.name for o in OBSERVABLES if o.kind == "count")
+DIAGNOSTIC = frozenset(o.name for o in OBSERVABLES if o.diagnostic)
 
 SCALING = ("lengths along the axis in x1 = (4 theta mu a^1.5 v0)^0.4 (suffix _x1) or x0 (suffix "
            "_x0); eps = (x1/x0)^2.5; tau = v0 t / x0; velocity / v0; force / (6 pi mu a^2 v0 / x1); "
@@ -89,7 +68,7 @@ SCALING = ("lengths along the axis in x1 = (4 theta mu a^1.5 v0)^0.4 (suffix _x1
 
 
 class StoreMismatch(ValueError):
-    """The store belongs to another solver version, numerics or schema: refuse to mix."""
+    """The store belongs to another solver version, numerics, physics or schema: refuse to mix."""
 
 
 class StoreBusy(RuntimeError):
@@ -142,7 +121,8 @@ def open_results(path, **open_kwargs):
     Returns
     -------
     xarray.Dataset
-        Lazily loaded, dims ``(eps, St)``. Use ``ds.status == 1`` for valid cells (codes in
+        Lazily loaded, dims = the sweep's axes (``ds.attrs["axes"]``, e.g. ``(St, eps)``); the
+        fixed physics in ``ds.attrs["fixed_physics"]``. Use ``ds.status == 1`` for valid cells (codes in
         ``ds.status.attrs["flag_meanings"]``); ``escaped``/``dimple`` read as float (NaN unknown).
         Plain ``xarray.open_zarr(path)`` gives the same Dataset.
 
@@ -181,7 +161,7 @@ def _read_journal(jpath: Path) -> list:
                 rec = json.loads(line)
             except json.JSONDecodeError:
                 continue
-            if isinstance(rec, dict) and "St" in rec and "eps" in rec and "status" in rec:
+            if isinstance(rec, dict) and isinstance(rec.get("physics"), dict) and "status" in rec:
                 out.append(rec)
     return out
 
@@ -207,16 +187,21 @@ def _fill(dtype: str):
     return {"f8": math.nan, "i1": 0, "i4": 0, "str": ""}[dtype]
 
 
-def empty_dataset(St, eps, attrs: dict):
-    """An in-memory store layout with every cell "not run" (decoded form, as read back)."""
+def empty_dataset(axes: dict, attrs: dict):
+    """An in-memory store layout over ``axes`` (``{name: values}``) with every cell "not run"
+    (decoded form, as read back)."""
     import xarray as xr
 
-    St = np.asarray(St, dtype=float)
-    eps = np.asarray(eps, dtype=float)
-    shape = (eps.size, St.size)
+    dims = tuple(axes)
+    coords = {}
+    for name, values in axes.items():
+        g = Physics.group(name)
+        coords[name] = (name, np.asarray(values, dtype=float),
+                        {"long_name": g.long_name, "units": g.units})
+    shape = tuple(len(v) for v in axes.values())
     data = {}
     for name, (dtype, long_name, units) in VARIABLES.items():
-        if name in FLAG_FIELDS:
+        if name in FLAGS:
             arr = np.full(shape, np.nan, dtype="f4")  # decoded view of int8 with fill -1
         elif dtype == "str":
             arr = np.full(shape, "", dtype=object)
@@ -229,26 +214,28 @@ def empty_dataset(St, eps, attrs: dict):
         elif name == "model":
             var_attrs.update(flag_values=list(MODEL_CODES.values()),
                              flag_meanings=" ".join(MODEL_CODES))
-        elif name in FLAG_FIELDS:
+        elif name in FLAGS:
             var_attrs.update(flag_values=[0, 1], flag_meanings="no yes",
                              comment="missing (NaN when read) where status != 1")
-        elif name not in FAILURE_FIELDS:
+        elif name not in DIAGNOSTIC and name != "message":
             var_attrs["comment"] = "NaN where status != 1 (not run or failed)"
-        data[name] = (("eps", "St"), arr, var_attrs)
-    coords = {
-        "eps": ("eps", eps, {"long_name": "elasticity parameter 4 theta mu v0 a^1.5 / x0^2.5",
-                             "units": "1"}),
-        "St": ("St", St, {"long_name": "Stokes number m v0 / (6 pi mu a^2)", "units": "1"}),
-    }
+        data[name] = (dims, arr, var_attrs)
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
+def _chunks(ds) -> tuple:
+    """1 along every axis but the last, whole along the last: a flush rewrites only the chunks
+    of the cells it touched."""
+    dims = ds["status"].dims
+    return tuple(1 for _ in dims[:-1]) + (ds.sizes[dims[-1]],)
+
+
 def _encoding(ds) -> dict:
-    row = (1, ds.sizes["St"])  # one chunk per eps row: a flush rewrites only the rows it touched
+    chunks = _chunks(ds)
     enc = {}
     for name in VARIABLES:
-        enc[name] = {"chunks": row}
-        if name in FLAG_FIELDS:
+        enc[name] = {"chunks": chunks}
+        if name in FLAGS:
             enc[name].update(dtype="i1", _FillValue=-1)
     return enc
 
@@ -315,13 +302,16 @@ class SweepStore:
         Interval of journal -> store merges.
     """
 
-    def __init__(self, path: Path, key: str, flush_seconds: float = FLUSH_SECONDS):
+    def __init__(self, path: Path, key: str, flush_seconds: float = FLUSH_SECONDS,
+                 worker_key: str | None = None, fixed: dict | None = None):
         self.path = Path(path)
         self.key = key
+        self.worker_key = worker_key  # what records of this installation carry (None: any)
+        self.fixed = dict(fixed or {})
         self.flush_seconds = flush_seconds
         self._journal = None
         self._lock = None
-        self._dirty_rows: set[int] = set()
+        self._dirty: set[tuple] = set()  # leading indices (all axes but the last) to write
         self._last_flush = 0.0
         self.ds = None
 
@@ -334,12 +324,14 @@ class SweepStore:
         Raises
         ------
         StoreMismatch
-            The store at ``path`` was computed with another solver version, numerics or schema.
+            The store at ``path`` was computed with another solver version, numerics, fixed
+            physics, axes or schema.
         StoreBusy
             Another process holds the store's lock.
         """
         path = Path(path if path is not None else sweep.store)
-        self = cls(path, sweep.cache_key(), flush_seconds)
+        self = cls(path, sweep.cache_key(), flush_seconds, worker_key=sweep.worker_key(),
+                   fixed=sweep.fixed)
         self._acquire_lock()
         try:
             self._prepare(sweep)
@@ -381,6 +373,8 @@ class SweepStore:
         return {
             "title": "ehd-collision sweep: elastohydrodynamic collision of two elastic spheres",
             "store_schema": STORE_SCHEMA,
+            "axes": list(sweep.axis_names),
+            "fixed_physics": dict(sweep.fixed),
             "solver_version": sweep.solver_version(),
             "cache_key": self.key,
             "accuracy": sweep.accuracy,
@@ -396,7 +390,7 @@ class SweepStore:
     def _prepare(self, sweep) -> None:
         _recover(self.path)
         if not self.path.exists():
-            _write_new(empty_dataset(sweep.St, sweep.eps, self._attrs(sweep)), self.path)
+            _write_new(empty_dataset(sweep.axes, self._attrs(sweep)), self.path)
         elif not (self.path / "zarr.json").is_file():
             raise StoreMismatch(f"{str(self.path)!r} exists but is not a zarr store; choose "
                                 "another --store")
@@ -428,6 +422,7 @@ class SweepStore:
             raise StoreMismatch(
                 f"{str(self.path)!r} has store schema {attrs.get('store_schema')!r}, this "
                 f"pipeline writes schema {STORE_SCHEMA}; move the old store aside or use --store")
+        self._check_physics(sweep)
         if attrs.get("cache_key") == self.key:
             return
         old_num, new_num = attrs.get("numerics", {}), sweep.numerics()
@@ -443,6 +438,23 @@ class SweepStore:
             f"(e.g. mv {self.path} {self.path.with_name(self.path.stem + '-' + version)}"
             f"{self.path.suffix}) or write this sweep elsewhere with --store PATH")
 
+    def _check_physics(self, sweep) -> None:
+        """Same axes and same fixed physics, or one line naming the difference and the fix."""
+        attrs = self.ds.attrs
+        fix = f"write this sweep elsewhere with --store PATH (store {str(self.path)!r})"
+        axes = list(attrs.get("axes", []))
+        if axes != list(sweep.axis_names):
+            raise StoreMismatch(f"the store's axes are {axes}, this sweep's are "
+                                f"{list(sweep.axis_names)}; results never mix: {fix}")
+        old = dict(attrs.get("fixed_physics", {}))
+        diffs = [f"{k} = {old.get(k, 'unset')!r} in the store, {sweep.fixed.get(k, 'unset')!r} "
+                 "in this sweep" for k in Physics.names() if old.get(k) != sweep.fixed.get(k)]
+        diffs += [f"{k} = {old[k]!r} in the store, unknown to this solver"
+                  for k in old if k not in Physics.names()]
+        if diffs:
+            raise StoreMismatch(f"the store was computed with other fixed physics "
+                                f"({'; '.join(diffs)}); results never mix: {fix}")
+
     def _set_attrs(self, **attrs) -> None:
         import zarr
 
@@ -453,15 +465,14 @@ class SweepStore:
         self.ds.attrs.update(attrs)
 
     def _extend(self, sweep) -> None:
-        """Re-lay the store out on the union grid if the sweep adds St or eps values."""
-        St_old, eps_old = self.ds["St"].values, self.ds["eps"].values
-        St_new, eps_new = _union(St_old, sweep.St), _union(eps_old, sweep.eps)
-        if St_new.size == St_old.size and eps_new.size == eps_old.size:
+        """Re-lay the store out on the union grid if the sweep adds values on any axis."""
+        union = {a: _union(self.ds[a].values, sweep.axes[a]) for a in sweep.axis_names}
+        if all(union[a].size == self.ds.sizes[a] for a in union):
             return
         fills = {}
         for name, (dtype, _, _) in VARIABLES.items():
-            fills[name] = math.nan if name in FLAG_FIELDS else _fill(dtype)
-        grown = self.ds.reindex(St=St_new, eps=eps_new, fill_value=fills)
+            fills[name] = math.nan if name in FLAGS else _fill(dtype)
+        grown = self.ds.reindex(union, fill_value=fills)
         for name in VARIABLES:  # reindex keeps values; restore dtypes the fill may have widened
             grown[name] = grown[name].astype(self.ds[name].dtype)
         grown.attrs.update(updated=_now())
@@ -469,19 +480,29 @@ class SweepStore:
         self._load()
 
     # ---- work list ------------------------------------------------------------------------------
+    @property
+    def axes(self) -> tuple:
+        return tuple(self.ds["status"].dims)
+
     def cells(self, sweep):
-        """Store indices ``(i_eps, j_St)`` of every scene of ``sweep`` (row-major)."""
-        ie = _index(self.ds["eps"].values, sweep.eps)
-        js = _index(self.ds["St"].values, sweep.St)
-        return [(int(i), int(j)) for i in ie for j in js]
+        """Store index tuples (one index per axis, in the store's order) of every scene of
+        ``sweep`` (row-major)."""
+        import itertools
+
+        idx = [_index(self.ds[a].values, sweep.axes[a]) for a in self.axes]
+        return [tuple(int(i) for i in cell) for cell in itertools.product(*idx)]
 
     def status_of(self, cells) -> np.ndarray:
         st = self.ds["status"].values
-        return np.array([st[i, j] for i, j in cells], dtype=int)
+        return np.array([st[cell] for cell in cells], dtype=int)
 
-    def scene(self, cell) -> tuple:
-        i, j = cell
-        return float(self.ds["St"].values[j]), float(self.ds["eps"].values[i])
+    def scene(self, cell) -> dict:
+        """The physics of a cell: ``{name: value}`` for every field, in ``Physics.names()``
+        order (axes from the coordinates, the rest from the fixed physics)."""
+        values = dict(self.fixed)
+        for a, i in zip(self.axes, cell):
+            values[a] = float(self.ds[a].values[i])
+        return {n: values[n] for n in Physics.names() if n in values}
 
     # ---- writing --------------------------------------------------------------------------------
     def record(self, cell, rec: dict, now: float | None = None) -> None:
@@ -489,10 +510,10 @@ class SweepStore:
         the store when the flush interval has passed."""
         import time
 
-        St, eps = self.scene(cell)
+        physics = self.scene(cell)
         if self._journal is None:
             self._journal = _journal_path(self.path).open("a")
-        self._journal.write(json.dumps({"St": St, "eps": eps, "key": self.key, **rec}) + "\n")
+        self._journal.write(json.dumps({"physics": physics, "key": self.key, **rec}) + "\n")
         self._journal.flush()  # in the OS page cache: survives the process being killed
         self._apply(cell, rec)
         now = time.monotonic() if now is None else now
@@ -500,7 +521,7 @@ class SweepStore:
             self.flush()
 
     def _apply(self, cell, rec: dict) -> None:
-        i, j = cell
+        cell = tuple(cell)
         status = rec.get("status")
         message = str(rec.get("message", ""))
         code = STATUS_CODES.get(status)
@@ -508,53 +529,67 @@ class SweepStore:
             code = STATUS_CODES["error"]
             message = f"unknown solver status {status!r}: {message}"
         key = rec.get("cache_key")
-        if key is not None and key != self.key:  # never store another version's numbers as ok
+        if key is not None and self.worker_key is not None and key != self.worker_key:
+            # never store another installation's numbers as ok
             code = STATUS_CODES["error"]
             message = (f"computed by a worker with another solver version or numerics (key "
-                       f"{str(key)[:12]}, store {self.key[:12]}): every worker must run the same "
-                       "installation; rerun with --retry-failed once it does")
+                       f"{str(key)[:12]}, expected {self.worker_key[:12]}): every worker must run "
+                       "the same installation; rerun with --retry-failed once it does")
         ok = code == STATUS_CODES["ok"]
         ds = self.ds
-        for name in FLOAT_FIELDS:
-            keep = ok or name in FAILURE_FIELDS
-            ds[name].values[i, j] = float(rec.get(name, math.nan)) if keep else math.nan
-        for name in FLAG_FIELDS:
-            ds[name].values[i, j] = float(bool(rec[name])) if ok and name in rec else math.nan
-        for name in COUNT_FIELDS:
-            ds[name].values[i, j] = int(rec.get(name, 0))
-        ds["model"].values[i, j] = MODEL_CODES.get(rec.get("model"), 0)
-        ds["message"].values[i, j] = message
-        ds["status"].values[i, j] = code
-        self._dirty_rows.add(i)
+        for name in FLOATS:
+            keep = ok or name in DIAGNOSTIC
+            value = rec.get(name, math.nan)
+            ds[name].values[cell] = float(math.nan if value is None else value) if keep \
+                else math.nan
+        for name in FLAGS:
+            value = rec.get(name)
+            ds[name].values[cell] = float(bool(value)) if ok and value is not None else math.nan
+        for name in COUNTS:
+            ds[name].values[cell] = int(rec.get(name, 0) or 0) if ok or name in DIAGNOSTIC else 0
+        ds["model"].values[cell] = MODEL_CODES.get(rec.get("model"), 0)
+        ds["message"].values[cell] = message
+        ds["status"].values[cell] = code
+        self._dirty.add(cell[:-1])
 
     def _replay(self) -> None:
-        """Merge the journal of an interrupted run (records of this cache key only)."""
+        """Merge the journal of an interrupted run: records of this cache key whose physics
+        matches the store on every axis and in its fixed values."""
         recs = _read_journal(_journal_path(self.path))
-        St, eps = self.ds["St"].values, self.ds["eps"].values
+        axes = self.axes
         for rec in recs:
             if rec.get("key") != self.key:
                 continue
-            try:
-                cell = (int(_index(eps, [rec["eps"]])[0]), int(_index(St, [rec["St"]])[0]))
-            except KeyError:
+            physics = rec["physics"]
+            if any(physics.get(k) != v for k, v in self.fixed.items()):
                 continue
-            self._apply(cell, {k: v for k, v in rec.items() if k not in ("St", "eps", "key")})
+            try:
+                cell = tuple(int(_index(self.ds[a].values, [physics[a]])[0]) for a in axes)
+            except (KeyError, TypeError):
+                continue
+            self._apply(cell, {k: v for k, v in rec.items() if k not in ("physics", "key")})
         self.flush(force=True)
 
     def flush(self, force: bool = False) -> None:
-        """Write the touched rows: data first, status last; then drop the merged journal."""
+        """Write the touched cells: data first, status last; then drop the merged journal.
+
+        The region written is the bounding box of the touched chunks (1 along every axis but the
+        last, whole along the last)."""
         import time
 
-        if self._dirty_rows:
-            rows = slice(min(self._dirty_rows), max(self._dirty_rows) + 1)
-            block = self.ds.isel(eps=rows).drop_vars(["eps", "St"])
-            region = {"eps": rows, "St": slice(None)}
+        if self._dirty:
+            axes = self.axes
+            lead = np.array(sorted(self._dirty), dtype=int).reshape(len(self._dirty), -1)
+            region = {a: slice(int(lead[:, k].min()), int(lead[:, k].max()) + 1)
+                      for k, a in enumerate(axes[:-1])}
+            region[axes[-1]] = slice(None)
+            block = self.ds.isel({a: r for a, r in region.items()}).drop_vars(list(axes))
             with zarr_warnings():
                 block.drop_vars("status").to_zarr(self.path, region=region, mode="r+",
                                                   consolidated=False)
                 block[["status"]].to_zarr(self.path, region=region, mode="r+",
                                           consolidated=False)
-            self._dirty_rows.clear()
+            self._dirty.clear()
             force = True
         if force:
             self._close_journal()

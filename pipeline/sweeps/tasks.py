@@ -13,22 +13,20 @@ import os
 import traceback
 from pathlib import Path
 
-__all__ = ["solve_scene", "warm", "ensure_environment", "FAILURE_FIELDS", "FLOAT_FIELDS",
-           "FLAG_FIELDS", "COUNT_FIELDS"]
+from solver.observables import OBSERVABLES
 
-# observables and diagnostics copied from a Collision (JSON_KEYS minus labels held elsewhere:
-# St/eps are coordinates, accuracy/solver_version are store attrs)
-FLOAT_FIELDS = (
-    "v_r", "h_m_x1", "h_m_x0", "h_m_approach_x1", "h_m_approach_x0", "x_e_x1", "x_e_x0",
-    "ln_x_e_x1", "ln_x_e_x0", "tau_max_deformation", "tau_v_zero", "tau_max_rebound",
-    "tau_peak_force", "peak_force", "w0_max_x1", "x_min_x1", "dimple_depth_x1", "tau_dimple",
-    "energy_error", "wall_s",
-)
-FLAG_FIELDS = ("dimple", "escaped")
-COUNT_FIELDS = ("steps", "rejected_steps", "newton_iterations", "lu_factorizations")
-# what a failed scene keeps: the solver's observables of a failed scene are defaults (v_r = 0,
-# escaped = False, ...), not measurements, so they are stored as missing, never as a guess
-FAILURE_FIELDS = ("model", "status", "message", "wall_s", *COUNT_FIELDS)
+__all__ = ["solve_scene", "warm", "ensure_environment", "collision_record", "error_record",
+           "MasterSolve", "RECORD_FIELDS", "DIAGNOSTIC_FIELDS"]
+
+# the record of a scene: every observable of the registry (solver/observables.py) plus labels;
+# the scene's physics is not in it (the store's coordinates and fixed physics hold it)
+RECORD_FIELDS = tuple(o.name for o in OBSERVABLES)
+# what a failed scene keeps besides model/status/message: the solver's observables of a failed
+# scene are defaults (v_r = 0, escaped = False, ...), not measurements, so they are missing
+DIAGNOSTIC_FIELDS = tuple(o.name for o in OBSERVABLES if o.diagnostic)
+# observables the solver of this branch may not compute yet (the lead's solver adds them):
+# NaN until then
+_PENDING = {"p_max", "p_min"}
 
 _REPO = Path(__file__).resolve().parent.parent
 
@@ -48,13 +46,13 @@ def ensure_environment() -> None:
         os.environ.setdefault(var, "1")
 
 
-def solve_scene(St: float, eps: float, accuracy: str, overrides: dict) -> dict:
+def solve_scene(physics: dict, accuracy: str, overrides: dict) -> dict:
     """Solve one scene with the real solver and return its record.
 
     Parameters
     ----------
-    St, eps : float
-        The scene.
+    physics : dict
+        The scene: ``{name: value}`` for every field of ``solver.Physics``.
     accuracy : str
         Solver preset.
     overrides : dict
@@ -63,19 +61,34 @@ def solve_scene(St: float, eps: float, accuracy: str, overrides: dict) -> dict:
     Returns
     -------
     dict
-        ``status`` ("ok", a solver failure code, or "error"), ``message``, ``model``, and the
-        fields of ``FLOAT_FIELDS``, ``FLAG_FIELDS``, ``COUNT_FIELDS``. Floats keep ``inf``
-        (``tau_v_zero = inf``: the spheres never stop; ``x_e_x1 = inf``: exp overflow, see
-        ``ln_x_e_x1``), which ``Collision.to_dict`` would turn into None.
+        ``status`` ("ok", a solver failure code, or "error"), ``message``, ``model``,
+        ``cache_key`` and the observables of ``solver.observables.OBSERVABLES`` (a failed scene:
+        only the diagnostic ones). Floats keep ``inf`` (``tau_v_zero = inf``: the spheres never
+        stop; ``x_e_x1 = inf``: exp overflow, see ``ln_x_e_x1``), which ``Collision.to_dict``
+        would turn into None.
     """
     ensure_environment()
     try:
         from solver import collide
+        from solver.physics import Physics
 
-        c = collide(St, eps, accuracy=accuracy, **{**overrides, "save_profiles": False})
+        scene = Physics.from_mapping(physics)
+        c = _collide(collide, scene, accuracy=accuracy, **{**overrides, "save_profiles": False})
         return collision_record(c)
     except Exception as exc:  # a bug or a bad scene must not stop the sweep: store it as data
         return error_record(exc)
+
+
+def _collide(collide, physics, **kwargs):
+    """``collide(physics, **kwargs)``; a solver whose ``collide`` still takes the groups one by
+    one (``collide(St, eps, ...)``) gets them as keywords. Drop the fallback once the solver
+    takes a ``Physics`` everywhere."""
+    import inspect
+
+    first = next(iter(inspect.signature(collide).parameters))
+    if first == "physics":
+        return collide(physics, **kwargs)
+    return collide(**physics.as_dict(), **kwargs)
 
 
 def error_record(exc: BaseException) -> dict:
@@ -90,7 +103,8 @@ def collision_record(c, extra_numerics: dict | None = None) -> dict:
     """The record of a ``solver.Collision`` (see :func:`solve_scene`), with the cache key of the
     solver version and numerics that computed it *on this worker* (the store checks it: a worker
     with another installation must not slip its results in). ``extra_numerics``: settings
-    outside ``solver.Numerics`` that are part of the key (``fast_path``)."""
+    outside ``solver.Numerics`` that are part of the key (``fast_path``). This is the key of the
+    installation (``Sweep.worker_key``); the scene's physics is checked by the store."""
     from solver import SOLVER_VERSION
 
     from .config import cache_key
@@ -98,12 +112,17 @@ def collision_record(c, extra_numerics: dict | None = None) -> dict:
     numerics = {**c.numerics.as_dict(), **(extra_numerics or {})}
     record = {"status": c.status, "message": c.message, "model": c.model,
               "cache_key": cache_key(SOLVER_VERSION, numerics)}
-    for name in FLOAT_FIELDS:
-        record[name] = float(getattr(c, name))
-    for name in FLAG_FIELDS:
-        record[name] = bool(getattr(c, name))
-    for name in COUNT_FIELDS:
-        record[name] = int(getattr(c, name))
+    ok = c.status == "ok"
+    for o in OBSERVABLES:
+        if not (ok or o.diagnostic):
+            continue
+        value = getattr(c, o.name, math.nan) if o.name in _PENDING else getattr(c, o.name)
+        if o.kind == "float":
+            record[o.name] = float(value)
+        elif o.kind == "flag":
+            record[o.name] = None if value is None else bool(value)
+        else:
+            record[o.name] = int(value)
     return record
 
 
@@ -115,10 +134,20 @@ class MasterSolve:
     def __init__(self, curve):
         self.curve = curve
 
-    def __call__(self, St: float, eps: float, accuracy: str, overrides: dict) -> dict:
+    def __call__(self, physics: dict, accuracy: str, overrides: dict) -> dict:
         ensure_environment()
         try:
-            return collision_record(self.curve.collide(St, eps), {"fast_path": True})
+            from solver.physics import Physics
+
+            scene = Physics.from_mapping(physics)
+            if scene.classic:
+                c = self.curve.collide(scene.St, scene.eps)
+            else:  # the master curve is the classic model's: solve directly
+                from solver import collide
+
+                c = _collide(collide, scene, accuracy=accuracy,
+                             **{**overrides, "save_profiles": False})
+            return collision_record(c, {"fast_path": True})
         except Exception as exc:  # stored as data, as in solve_scene
             return error_record(exc)
 
