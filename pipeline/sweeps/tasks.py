@@ -26,8 +26,6 @@ RECORD_FIELDS = tuple(o.name for o in OBSERVABLES)
 DIAGNOSTIC_FIELDS = tuple(o.name for o in OBSERVABLES if o.diagnostic)
 # observables the solver of this branch may not compute yet (the lead's solver adds them):
 # NaN until then
-_PENDING = {"p_max", "p_min"}
-
 _REPO = Path(__file__).resolve().parent.parent
 
 
@@ -73,22 +71,10 @@ def solve_scene(physics: dict, accuracy: str, overrides: dict) -> dict:
         from solver.physics import Physics
 
         scene = Physics.from_mapping(physics)
-        c = _collide(collide, scene, accuracy=accuracy, **{**overrides, "save_profiles": False})
+        c = collide(scene, accuracy=accuracy, **{**overrides, "save_profiles": False})
         return collision_record(c)
     except Exception as exc:  # a bug or a bad scene must not stop the sweep: store it as data
         return error_record(exc)
-
-
-def _collide(collide, physics, **kwargs):
-    """``collide(physics, **kwargs)``; a solver whose ``collide`` still takes the groups one by
-    one (``collide(St, eps, ...)``) gets them as keywords. Drop the fallback once the solver
-    takes a ``Physics`` everywhere."""
-    import inspect
-
-    first = next(iter(inspect.signature(collide).parameters))
-    if first == "physics":
-        return collide(physics, **kwargs)
-    return collide(**physics.as_dict(), **kwargs)
 
 
 def error_record(exc: BaseException) -> dict:
@@ -116,7 +102,7 @@ def collision_record(c, extra_numerics: dict | None = None) -> dict:
     for o in OBSERVABLES:
         if not (ok or o.diagnostic):
             continue
-        value = getattr(c, o.name, math.nan) if o.name in _PENDING else getattr(c, o.name)
+        value = getattr(c, o.name)
         if o.kind == "float":
             record[o.name] = float(value)
         elif o.kind == "flag":
@@ -139,14 +125,15 @@ class MasterSolve:
         try:
             from solver.physics import Physics
 
+            from solver.model import rigid
+
             scene = Physics.from_mapping(physics)
-            if scene.classic:
-                c = self.curve.collide(scene.St, scene.eps)
-            else:  # the master curve is the classic model's: solve directly
+            if rigid.exact_for(scene):
+                c = self.curve.collide(scene)
+            else:  # the master curve holds the classic film only: never answer with it
                 from solver import collide
 
-                c = _collide(collide, scene, accuracy=accuracy,
-                             **{**overrides, "save_profiles": False})
+                c = collide(scene, accuracy=accuracy, **{**overrides, "save_profiles": False})
             return collision_record(c, {"fast_path": True})
         except Exception as exc:  # stored as data, as in solve_scene
             return error_record(exc)
