@@ -9,11 +9,10 @@ scene finishes and stores the failure.
 from __future__ import annotations
 
 import math
-import os
 import traceback
 from pathlib import Path
 
-__all__ = ["solve_scene", "warm", "ensure_environment", "FAILURE_FIELDS", "FLOAT_FIELDS",
+__all__ = ["solve_scene", "warm", "FAILURE_FIELDS", "FLOAT_FIELDS",
            "FLAG_FIELDS", "COUNT_FIELDS"]
 
 # observables and diagnostics copied from a Collision (JSON_KEYS minus labels held elsewhere:
@@ -29,23 +28,6 @@ COUNT_FIELDS = ("steps", "rejected_steps", "newton_iterations", "lu_factorizatio
 # what a failed scene keeps: the solver's observables of a failed scene are defaults (v_r = 0,
 # escaped = False, ...), not measurements, so they are stored as missing, never as a guess
 FAILURE_FIELDS = ("model", "status", "message", "wall_s", *COUNT_FIELDS)
-
-_REPO = Path(__file__).resolve().parent.parent
-
-
-def ensure_environment() -> None:
-    """Settings every process that solves scenes needs; called before numba is imported.
-
-    - ``NUMBA_CACHE_DIR``: compiled kernels are cached in the project folder (as the Makefile
-      does), so a worker loads the kernels the parent compiled instead of compiling again, and
-      read-only installs still cache.
-    - one BLAS/OpenMP thread: the sweep runs one scene per core; threaded BLAS only slows the
-      small dense solves.
-    Existing settings are respected.
-    """
-    os.environ.setdefault("NUMBA_CACHE_DIR", str(_REPO / ".numba_cache"))
-    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ.setdefault(var, "1")
 
 
 def solve_scene(St: float, eps: float, accuracy: str, overrides: dict) -> dict:
@@ -68,7 +50,6 @@ def solve_scene(St: float, eps: float, accuracy: str, overrides: dict) -> dict:
         (``tau_v_zero = inf``: the spheres never stop; ``x_e_x1 = inf``: exp overflow, see
         ``ln_x_e_x1``), which ``Collision.to_dict`` would turn into None.
     """
-    ensure_environment()
     try:
         from solver import collide
 
@@ -116,7 +97,6 @@ class MasterSolve:
         self.curve = curve
 
     def __call__(self, St: float, eps: float, accuracy: str, overrides: dict) -> dict:
-        ensure_environment()
         try:
             return collision_record(self.curve.collide(St, eps), {"fast_path": True})
         except Exception as exc:  # stored as data, as in solve_scene
@@ -131,7 +111,6 @@ def warm(accuracy: str = "fast", overrides: dict | None = None) -> float:
     """
     import time
 
-    ensure_environment()
     t = time.perf_counter()
     from solver import collide
 
