@@ -105,7 +105,7 @@ class Runner:
 @contextmanager
 def open_runner(kind: str | None = "processes", workers: int | None = None,
                 address: str | None = None, scheduler_file: str | None = None, warm=None,
-                wait_workers: float = WAIT_WORKERS_SECONDS, stream=sys.stderr):
+                wait_workers: float = WAIT_WORKERS_SECONDS, stream=None):
     """Start (or connect to) an executor and yield a :class:`Runner`.
 
     Parameters
@@ -145,7 +145,8 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
             raise RunnerError(f"cannot reach the dask scheduler ({target}): {exc}") from None
         with client:
             if workers:
-                _wait_for_workers(client, workers, wait_workers, stream)
+                _wait_for_workers(client, workers, wait_workers,
+                                  sys.stderr if stream is None else stream)
             yield _dask_runner(client, f"dask scheduler {client.scheduler.address}", warm)
         return
 
