@@ -5,6 +5,9 @@
   the last digits of results (docs/solver.md). Existing settings win. ``pipeline/__init__.py``
   calls it first thing, and the dask worker plugin (``pipeline.sweeps.runners.WorkerSetup``) on
   every worker, also on workers that join the cluster later. This module imports nothing heavy.
+  A worker started by ``dask worker`` has loaded numpy before the plugin runs, so there the
+  variables must also be exported by whoever starts it (docs/pipeline.md, SLURM); local clusters
+  inherit them from this process.
 - Where compiled kernels are cached is the solver's decision (``solver._jit``, documented in
   docs/solver.md), the same for every command and install kind; nothing here changes it.
 """
