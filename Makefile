@@ -3,9 +3,12 @@ PYTHON ?= python3.11
 VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
-# Compiled numba code is cached inside the project (works for read-only installs too).
-export NUMBA_CACHE_DIR := $(CURDIR)/.numba_cache
+# Compiled numba code goes to the one documented cache folder, as outside make (docs/solver.md:
+# $EHD_CACHE_DIR, else $NUMBA_CACHE_DIR, else $XDG_CACHE_HOME/ehd-collision or
+# ~/.cache/ehd-collision; `ehd info` prints it). Nothing here overrides it.
 # One scene per core: threaded BLAS only slows the small dense solves (shared/numerics-notes.md).
+# `ehd` sets these itself (pipeline/environment.py); exported here for the benchmarks and tests,
+# which import `solver` directly.
 export OMP_NUM_THREADS := 1
 export OPENBLAS_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
@@ -53,8 +56,10 @@ bench-sweep: $(STAMP)
 bench-accuracy: $(STAMP)
 	$(PY) benchmarks/bench_accuracy.py
 
+# the compiled kernels of every solver version (solver-*/ under <cache root>/numba, the root
+# resolved as in solver/_jit.py:cache_root), and the project-local folder older versions used
 clean-cache:
-	rm -rf .numba_cache
+	rm -rf "$${EHD_CACHE_DIR:-$${NUMBA_CACHE_DIR:-$${XDG_CACHE_HOME:-$$HOME/.cache}/ehd-collision}}/numba" .numba_cache
 
 clean: clean-cache
 	rm -rf $(VENV) .pytest_cache

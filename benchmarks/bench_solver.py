@@ -29,7 +29,7 @@ _FIRST_CALL = (
 
 
 def first_call_seconds(cache_dir: str) -> float:
-    env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir)
+    env = dict(os.environ, EHD_CACHE_DIR=cache_dir)  # the solver's cache root, first in order
     out = subprocess.run([sys.executable, "-c", _FIRST_CALL], env=env, capture_output=True,
                          text=True, check=True)
     return float(out.stdout.strip().splitlines()[-1])

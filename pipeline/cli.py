@@ -1,4 +1,6 @@
-"""Command line: ``ehd run`` (one scene); other modules add subcommands (``COMMAND_MODULES``).
+"""Command line: ``ehd run`` (one scene), ``ehd info`` (versions, cache folder, threads); other
+modules add subcommands (``COMMAND_MODULES``). Importing ``pipeline`` (this module's package) sets
+the process environment first (pipeline/environment.py).
 
 Exit codes: 0 success, 1 a scene failed (its status and message are printed), 2 bad input
 (including output paths that cannot be written, checked before any solve), 130 interrupted,
@@ -173,8 +175,21 @@ def _build_run(sub) -> None:
     p.set_defaults(func=cmd_run)
 
 
+def cmd_info(args) -> int:
+    from .environment import info
+
+    for key, value in info().items():
+        print(f"{key:<22}{value if value is not None else 'none (not writable: not cached)'}")
+    return 0
+
+
+def _build_info(sub) -> None:
+    p = sub.add_parser("info", help="solver version, compiled-code cache folder, BLAS threads")
+    p.set_defaults(func=cmd_info)
+
+
 # name -> builder(subparsers) of the commands defined here
-COMMANDS = {"run": _build_run}
+COMMANDS = {"run": _build_run, "info": _build_info}
 # modules that add their own subcommands through ``register(subparsers)``
 COMMAND_MODULES = ("pipeline.sweeps.commands", "pipeline.scenes.commands")
 

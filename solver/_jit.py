@@ -2,8 +2,13 @@
 
 - ``cache=True``, in a cache folder keyed by a hash of every solver source file: numba checks only
   the defining file's time stamp, so a change in a kernel that another file calls would otherwise
-  run stale machine code (numba issues 1833, 9483). The folder sits under ``NUMBA_CACHE_DIR``
-  (the Makefile points it at ``.numba_cache/`` in the project) or ``~/.cache/ehd-collision``.
+  run stale machine code (numba issues 1833, 9483).
+- The cache folder is decided here, once, at import, for every caller (``ehd`` commands, dask
+  workers, library users, editable or not, ``make`` or not): ``<root>/numba/solver-<hash>``, with
+  ``<root>`` = ``$EHD_CACHE_DIR``, else ``$NUMBA_CACHE_DIR``, else ``$XDG_CACHE_HOME/ehd-collision``
+  (``~/.cache/ehd-collision``). An unwritable folder gives one warning line on stderr and a
+  per-user temporary folder instead; numba is never left to fall back silently to
+  ``__pycache__`` (outside the source-hash folder). ``CACHE_DIR`` is the folder in use.
 - ``nogil=True`` so threads can run scenes side by side.
 - A NaN-safe fastmath subset: ``fastmath=True`` would make ``np.isfinite`` always true
   (numba issues 2919, 6217), and failure detection depends on it. Without ``reassoc``: it let
@@ -14,6 +19,8 @@
 
 import hashlib
 import os
+import sys
+import tempfile
 from pathlib import Path
 
 import numba
@@ -30,14 +37,63 @@ def _source_hash() -> str:
     return digest.hexdigest()[:16]
 
 
-def _cache_dir() -> str:
-    base = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
-        os.path.expanduser("~"), ".cache", "ehd-collision", "numba")
-    return os.path.join(base, f"solver-{_source_hash()}")
+def cache_root() -> Path:
+    """The documented cache root: ``EHD_CACHE_DIR``, else ``NUMBA_CACHE_DIR`` (respected for
+    users who set numba's own variable), else ``$XDG_CACHE_HOME/ehd-collision``, else
+    ``~/.cache/ehd-collision``."""
+    for var in ("EHD_CACHE_DIR", "NUMBA_CACHE_DIR"):
+        if os.environ.get(var):
+            return Path(os.environ[var]).expanduser()
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base).expanduser() / "ehd-collision"
 
 
-numba.config.CACHE_DIR = _cache_dir()
+def _kernel_dir(root: Path) -> Path:
+    return root / "numba" / f"solver-{_source_hash()}"
+
+
+def _writable(folder: Path) -> str | None:
+    """None if ``folder`` can be created and written to, else why not."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=".write-test-"):
+            pass
+    except OSError as exc:
+        return f"{type(exc).__name__}: {exc.strerror or exc}"
+    return None
+
+
+def _fallback_root() -> Path:
+    try:
+        user = str(os.getuid())
+    except AttributeError:  # pragma: no cover - not POSIX
+        import getpass
+
+        user = getpass.getuser()
+    return Path(tempfile.gettempdir()) / f"ehd-collision-{user}"
+
+
+def _resolve_cache_dir() -> str | None:
+    wanted = _kernel_dir(cache_root())
+    why = _writable(wanted)
+    if why is None:
+        return str(wanted)
+    fallback = _kernel_dir(_fallback_root())
+    ok = _writable(fallback) is None
+    instead = f"using {fallback} instead" if ok else "compiled code is not cached (slow start)"
+    print(f"ehd-collision: warning: numba cache folder {wanted} is not writable ({why}); "
+          f"{instead}. Set EHD_CACHE_DIR to a writable folder.", file=sys.stderr, flush=True)
+    return str(fallback) if ok else None
+
+
+# Every kernel's cache locator is fixed when it is decorated (below, at solver import), so this
+# holds for the process whatever happens to the environment later.
+CACHE_DIR = _resolve_cache_dir()
+if CACHE_DIR is not None:
+    numba.config.CACHE_DIR = CACHE_DIR
 
 
 def jit(func):
-    return numba.njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")(func)
+    # no cache at all rather than numba's silent fallback to __pycache__ (no source-hash guard)
+    return numba.njit(cache=CACHE_DIR is not None, nogil=True, fastmath=FASTMATH,
+                      error_model="numpy")(func)

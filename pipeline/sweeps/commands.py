@@ -45,6 +45,9 @@ def register(sub) -> None:
     p.add_argument("--workers", metavar="N", type=_positive_int, default=None,
                    help="local workers (default: all usable cores); with --scheduler/"
                         "--scheduler-file: wait for N workers before starting")
+    p.add_argument("--wait-workers", metavar="SECONDS", type=float, default=None,
+                   help="with --scheduler/--scheduler-file and --workers N: give up (exit 2) when "
+                        "N workers are not connected after SECONDS (default 60)")
     p.add_argument("--retry-failed", action="store_true",
                    help="rerun the scenes stored as failed (by default they are kept as they are)")
     p.set_defaults(func=cmd_sweep)
@@ -75,7 +78,8 @@ def cmd_sweep(args) -> int:
     try:
         summary = run_sweep(sweep, store=args.store, runner=args.executor or "processes",
                             workers=args.workers, address=args.scheduler,
-                            scheduler_file=args.scheduler_file, retry_failed=args.retry_failed)
+                            scheduler_file=args.scheduler_file, retry_failed=args.retry_failed,
+                            wait_workers=args.wait_workers)
     except (StoreMismatch, StoreBusy, RunnerError) as exc:
         raise UsageError(str(exc)) from None
     print(summary.text())

@@ -16,7 +16,7 @@ import numpy as np
 from .progress import Progress
 from .runners import open_runner
 from .store import MODEL_CODES, STATUS_CODES, SweepStore
-from .tasks import MasterSolve, ensure_environment, solve_scene, warm
+from .tasks import MasterSolve, solve_scene, warm
 
 __all__ = ["run_sweep", "Summary", "EXIT_OK", "EXIT_FAILED", "format_physics"]
 
@@ -81,7 +81,8 @@ class Summary:
 def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: int | None = None,
               address: str | None = None, scheduler_file: str | None = None,
               retry_failed: bool = False, solve=solve_scene, warm_up: bool | None = None,
-              progress=sys.stderr, flush_seconds: float | None = None) -> Summary:
+              progress=sys.stderr, flush_seconds: float | None = None,
+              wait_workers: float | None = None) -> Summary:
     """Compute every scene of ``sweep`` that its store lacks.
 
     Parameters
@@ -107,13 +108,14 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         Stream for the progress bar.
     flush_seconds : float, optional
         Journal -> store merge interval (default ``store.FLUSH_SECONDS``).
+    wait_workers : float, optional
+        With a scheduler: seconds to wait for ``workers`` (default ``runners.WAIT_WORKERS_SECONDS``).
 
     Returns
     -------
     Summary
         Counts; ``summary.exit_code`` is ``EXIT_FAILED`` (3) when failed scenes remain.
     """
-    ensure_environment()
     t0 = time.monotonic()
     kwargs = {} if flush_seconds is None else {"flush_seconds": flush_seconds}
     if warm_up is None:
@@ -134,7 +136,9 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
             bar = Progress(len(jobs), stream=progress)
             warm_fn = _Warm(sweep.accuracy, overrides) if warm_up else None
             try:
-                with open_runner(runner, workers, address, scheduler_file, warm=warm_fn) as run:
+                with open_runner(runner, workers, address, scheduler_file, warm=warm_fn,
+                                 **({} if wait_workers is None else {"wait_workers": wait_workers})
+                                 ) as run:
                     summary.runner = run.description
                     if progress is not None:
                         print(f"{len(jobs)} scenes to compute ({summary.cached} cached) on "
@@ -173,7 +177,7 @@ def _master_solve(sweep, progress) -> MasterSolve:
 
 
 class _Warm:
-    """Picklable warm-up call (sent to every worker by ``client.run``)."""
+    """Picklable warm-up call (run on every worker by ``runners.WorkerSetup``)."""
 
     def __init__(self, accuracy, overrides):
         self.accuracy, self.overrides = accuracy, overrides

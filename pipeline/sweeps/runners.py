@@ -12,19 +12,28 @@ whatever runs the scenes:
 
 dask futures go through ``client.get_executor()``, a standard ``concurrent.futures`` executor, and
 ``concurrent.futures.as_completed``. Compiled code is warmed once in this process *before* any
-worker starts (it writes the on-disk numba cache), then every worker loads it before its first
-scene (``client.run``), so no worker compiles on its own.
+worker starts (it writes the on-disk numba cache, solver/_jit.py), then every worker loads it
+before its first scene (the worker plugin :class:`WorkerSetup`, which also sets the environment;
+workers that join later run it too), so no worker compiles on its own.
 """
 
 from __future__ import annotations
 
 import os
+import sys
+import time
 from concurrent.futures import as_completed
 from contextlib import contextmanager
 
-__all__ = ["open_runner", "default_workers", "RUNNERS", "Runner", "RunnerError"]
+from distributed import WorkerPlugin
+
+from ..environment import configure
+
+__all__ = ["open_runner", "default_workers", "max_local_workers", "RUNNERS", "Runner",
+           "RunnerError", "WorkerSetup", "WAIT_WORKERS_SECONDS"]
 
 RUNNERS = ("processes", "threads", "serial")
+WAIT_WORKERS_SECONDS = 60.0  # how long a sweep waits for --workers N on an existing scheduler
 
 
 class RunnerError(RuntimeError):
@@ -38,6 +47,28 @@ def default_workers() -> int:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # pragma: no cover - not on Linux
         return os.cpu_count() or 1
+
+
+def max_local_workers() -> int:
+    """More local workers than this only queue for the cores (and 1000 of them stall the
+    machine starting up): 4 per usable core."""
+    return 4 * default_workers()
+
+
+class WorkerSetup(WorkerPlugin):
+    """Runs on every dask worker before its first task, also on workers that join later: the
+    process environment (pipeline/environment.py), then ``warm()``, which loads the kernels the
+    parent compiled into the on-disk cache instead of compiling them again."""
+
+    name = "ehd-worker-setup"
+
+    def __init__(self, warm=None):
+        self.warm = warm
+
+    def setup(self, worker):
+        configure()
+        if self.warm is not None:
+            self.warm()
 
 
 class Runner:
@@ -73,7 +104,8 @@ class Runner:
 
 @contextmanager
 def open_runner(kind: str | None = "processes", workers: int | None = None,
-                address: str | None = None, scheduler_file: str | None = None, warm=None):
+                address: str | None = None, scheduler_file: str | None = None, warm=None,
+                wait_workers: float = WAIT_WORKERS_SECONDS, stream=None):
     """Start (or connect to) an executor and yield a :class:`Runner`.
 
     Parameters
@@ -81,16 +113,21 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
     kind : {"processes", "threads", "serial"} or None
         Local executor; ignored when ``address`` or ``scheduler_file`` is given.
     workers : int, optional
-        Local: worker processes (or threads); default all usable cores. Existing scheduler: wait
-        until this many workers are connected before submitting.
+        Local: worker processes (or threads); default all usable cores, at most
+        :func:`max_local_workers`. Existing scheduler: wait until this many workers are connected
+        before submitting (at most ``wait_workers`` seconds, reporting progress on ``stream``).
     address, scheduler_file : str, optional
         Connect to an existing dask.distributed scheduler instead of starting one.
     warm : callable, optional
-        Called once here before any worker starts, then on every worker (``client.run``).
+        Called once here before any worker starts, then on every worker (:class:`WorkerSetup`).
     """
     local = address is None and scheduler_file is None
     if local and kind not in RUNNERS:
         raise ValueError(f"executor must be one of {RUNNERS}, got {kind!r}")
+    if local and kind != "serial" and workers and workers > max_local_workers():
+        raise RunnerError(f"--workers {workers} is more than {max_local_workers()} (4 per usable "
+                          f"core, {default_workers()} here): extra local workers only queue for "
+                          "the cores; use a dask scheduler for more")
     if warm is not None:
         warm()  # compile once, here: writes the on-disk numba cache the workers will load
     if local and kind == "serial":
@@ -108,7 +145,8 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
             raise RunnerError(f"cannot reach the dask scheduler ({target}): {exc}") from None
         with client:
             if workers:
-                client.wait_for_workers(workers)
+                _wait_for_workers(client, workers, wait_workers,
+                                  sys.stderr if stream is None else stream)
             yield _dask_runner(client, f"dask scheduler {client.scheduler.address}", warm)
         return
 
@@ -123,11 +161,32 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
         yield _dask_runner(client, f"local {'processes' if processes else 'threads'} x{n}", warm)
 
 
+def _wait_for_workers(client, n: int, timeout: float, stream) -> None:
+    """Wait until ``n`` workers are connected, saying so every 10 s; RunnerError after
+    ``timeout`` seconds."""
+    t0 = time.monotonic()
+    said = None
+    while True:
+        connected = len(client.nthreads())
+        if connected >= n:
+            return
+        waited = time.monotonic() - t0
+        if waited >= timeout:
+            raise RunnerError(f"only {connected} of {n} workers connected to the scheduler after "
+                              f"{timeout:g} s; start more workers, lower --workers or raise "
+                              "--wait-workers")
+        if stream is not None and (said is None or waited - said >= 10):
+            print(f"waiting for {n} workers ({connected} connected)...", file=stream, flush=True)
+            said = waited
+        time.sleep(min(0.5, max(timeout - waited, 0.01)))
+
+
 def _dask_runner(client, description: str, warm) -> Runner:
-    if warm is not None:
-        try:
-            client.run(warm)  # each worker process loads the cached kernels before its first scene
-        except Exception as exc:
-            raise RunnerError(f"warming the workers failed ({type(exc).__name__}: {exc}); every "
-                              "worker needs this project installed (pip install -e .)") from None
+    try:
+        # every worker (also one that joins later) sets the environment and loads the cached
+        # kernels before its first scene
+        client.register_plugin(WorkerSetup(warm))
+    except Exception as exc:
+        raise RunnerError(f"setting up the workers failed ({type(exc).__name__}: {exc}); every "
+                          "worker needs this project installed (pip install -e .)") from None
     return Runner(description, executor=client.get_executor(pure=False), client=client)

@@ -9,14 +9,13 @@ scene finishes and stores the failure.
 from __future__ import annotations
 
 import math
-import os
 import traceback
 from pathlib import Path
 
 from solver.observables import OBSERVABLES
 
-__all__ = ["solve_scene", "warm", "ensure_environment", "collision_record", "error_record",
-           "MasterSolve", "RECORD_FIELDS", "DIAGNOSTIC_FIELDS"]
+__all__ = ["solve_scene", "warm", "collision_record", "error_record", "MasterSolve",
+           "RECORD_FIELDS", "DIAGNOSTIC_FIELDS"]
 
 # the record of a scene: every observable of the registry (solver/observables.py) plus labels;
 # the scene's physics is not in it (the store's coordinates and fixed physics hold it)
@@ -24,24 +23,6 @@ RECORD_FIELDS = tuple(o.name for o in OBSERVABLES)
 # what a failed scene keeps besides model/status/message: the solver's observables of a failed
 # scene are defaults (v_r = 0, escaped = False, ...), not measurements, so they are missing
 DIAGNOSTIC_FIELDS = tuple(o.name for o in OBSERVABLES if o.diagnostic)
-# observables the solver of this branch may not compute yet (the lead's solver adds them):
-# NaN until then
-_REPO = Path(__file__).resolve().parent.parent
-
-
-def ensure_environment() -> None:
-    """Settings every process that solves scenes needs; called before numba is imported.
-
-    - ``NUMBA_CACHE_DIR``: compiled kernels are cached in the project folder (as the Makefile
-      does), so a worker loads the kernels the parent compiled instead of compiling again, and
-      read-only installs still cache.
-    - one BLAS/OpenMP thread: the sweep runs one scene per core; threaded BLAS only slows the
-      small dense solves.
-    Existing settings are respected.
-    """
-    os.environ.setdefault("NUMBA_CACHE_DIR", str(_REPO / ".numba_cache"))
-    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ.setdefault(var, "1")
 
 
 def solve_scene(physics: dict, accuracy: str, overrides: dict) -> dict:
@@ -65,7 +46,6 @@ def solve_scene(physics: dict, accuracy: str, overrides: dict) -> dict:
         stop; ``x_e_x1 = inf``: exp overflow, see ``ln_x_e_x1``), which ``Collision.to_dict``
         would turn into None.
     """
-    ensure_environment()
     try:
         from solver import collide
         from solver.physics import Physics
@@ -121,11 +101,9 @@ class MasterSolve:
         self.curve = curve
 
     def __call__(self, physics: dict, accuracy: str, overrides: dict) -> dict:
-        ensure_environment()
         try:
-            from solver.physics import Physics
-
             from solver.model import rigid
+            from solver.physics import Physics
 
             scene = Physics.from_mapping(physics)
             if rigid.exact_for(scene):
@@ -147,7 +125,6 @@ def warm(accuracy: str = "fast", overrides: dict | None = None) -> float:
     """
     import time
 
-    ensure_environment()
     t = time.perf_counter()
     from solver import collide
 
