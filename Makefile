@@ -6,14 +6,14 @@ STAMP  := $(VENV)/.installed
 # Compiled numba code goes to the one documented cache folder, as outside make (docs/solver.md:
 # $EHD_CACHE_DIR, else $NUMBA_CACHE_DIR, else $XDG_CACHE_HOME/ehd-collision or
 # ~/.cache/ehd-collision; `ehd info` prints it). Nothing here overrides it.
-# One scene per core: threaded BLAS only slows the small dense solves (shared/numerics-notes.md).
+# One scene per core: threaded BLAS only slows the small dense solves (docs/solver.md).
 # `ehd` sets these itself (pipeline/environment.py); exported here for the benchmarks and tests,
 # which import `solver` directly.
 export OMP_NUM_THREADS := 1
 export OPENBLAS_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: install test test-all sweep quick figures bench bench-sweep bench-accuracy clean-cache clean
+.PHONY: install test sweep quick figures bench bench-sweep bench-accuracy clean-cache clean
 
 $(STAMP): pyproject.toml
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "error: $(PYTHON) not found; set PYTHON=/path/to/python3.11"; exit 1; }
@@ -26,9 +26,6 @@ install: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m pytest -q
-
-test-all: $(STAMP)
-	$(PY) -m pytest -q --runslow
 
 # The sweep's figures are drawn also when some scenes failed (exit 3: failures are masked in
 # them); make still reports the sweep's exit code. Exit 2 (bad input) draws nothing.

@@ -1,4 +1,9 @@
-"""Shared test set-up: Agg backend, --runslow for long studies, figures closed after each test."""
+"""Shared test set-up: Agg backend, figures closed after each test.
+
+There is no "slow" tier: every test runs in ``make test`` (a couple of minutes on 2 cores). The
+long convergence and accuracy studies are benchmarks (``make bench``, benchmarks/accuracy.md);
+tests/test_convergence.py checks the observed orders on a short refinement ladder by default.
+"""
 
 import os
 
@@ -7,20 +12,6 @@ import pytest
 
 matplotlib.use("Agg")
 os.environ.setdefault("NUMBA_BOUNDSCHECK", "0")
-
-
-def pytest_addoption(parser):
-    parser.addoption("--runslow", action="store_true", default=False,
-                     help="also run the long studies marked @pytest.mark.slow")
-
-
-def pytest_collection_modifyitems(config, items):
-    if config.getoption("--runslow"):
-        return
-    skip = pytest.mark.skip(reason="slow study: run with --runslow (make test-all)")
-    for item in items:
-        if "slow" in item.keywords:
-            item.add_marker(skip)
 
 
 @pytest.fixture(autouse=True)
