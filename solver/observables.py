@@ -77,7 +77,7 @@ OBSERVABLES = (
     Observable("p_max", "float", "largest film pressure over the collision", _P,
                "peak film pressure / (mu a v0/x1^2)", master="log pressure"),
     Observable("p_min", "float", "lowest film pressure over the collision (< 0: tension)", _P,
-               "lowest film pressure (tension < 0)", master="lin pressure"),
+               "lowest film pressure (< 0: tension)", master="lin pressure"),
     Observable("w0_max_x1", "float", "largest central deformation W(0)", "x1",
                "max central deformation W(0)/x1", master="log length"),
     Observable("x_min_x1", "float", "smallest separation X of the undeformed surfaces (< 0: "
