@@ -145,7 +145,7 @@ def cmd_run(args) -> int:
 
 def _save_dataset(ds, path: str) -> None:
     if path.endswith(".zarr"):
-        from .sweeps.store import zarr_warnings
+        from .sweeps.layout import zarr_warnings
 
         with zarr_warnings():  # we consolidate on purpose, as the sweep stores do
             ds.to_zarr(path, mode="w")

@@ -24,10 +24,11 @@ import xarray as xr
 from pipeline import open_results
 from pipeline.sweeps.analysis import critical_stokes
 from pipeline.sweeps.config import ConfigError, cache_key, parse_sweep
-from pipeline.sweeps.store import (MODEL_CODES, STATUS_CODES, VARIABLES, StoreBusy, StoreMismatch,
-                            SweepStore, pending_journal)
+from pipeline.sweeps.journal import pending_journal
+from pipeline.sweeps.layout import FLOATS as FLOAT_FIELDS
+from pipeline.sweeps.layout import MODEL_CODES, STATUS_CODES, VARIABLES
 from pipeline.sweeps.run import EXIT_FAILED, run_sweep
-from pipeline.sweeps.store import FLOATS as FLOAT_FIELDS
+from pipeline.sweeps.store import StoreBusy, StoreMismatch, SweepStore
 
 REPO = Path(__file__).resolve().parent.parent
 

@@ -7,8 +7,10 @@ import pytest
 
 from pipeline.cli import main
 from pipeline.scenes.materials import MaterialError, load_table
-from pipeline.scenes.scene import (RESULT_KEYS, THRESHOLDS, SceneError, check_solvable,
-                                   premise_checks, run_scene, scene_from_dict)
+from pipeline.scenes.checks import THRESHOLDS, premise_checks
+from pipeline.scenes.run import RESULT_KEYS, check_solvable, run_scene
+from pipeline.scenes.scene import SceneError
+from pipeline.scenes.scene_file import scene_from_dict
 from pipeline.scenes.units import FieldSpec, UnitError, to_si
 
 
@@ -327,9 +329,9 @@ def test_cli_missing_file_and_no_scene(capsys, tmp_path):
 
 
 def test_cli_scene_plot_onto_a_file_exits_2_before_solving(tmp_path, capsys, monkeypatch):
-    import pipeline.scenes.scene as scene_module
+    import pipeline.scenes.run as run_module
 
-    monkeypatch.setattr(scene_module, "run_scene", lambda *a, **k: pytest.fail("solved"))
+    monkeypatch.setattr(run_module, "run_scene", lambda *a, **k: pytest.fail("solved"))
     not_a_dir = tmp_path / "figs"
     not_a_dir.write_text("")
     assert main(["scene", write(tmp_path, SCENE), "--plot", str(not_a_dir)]) == 2

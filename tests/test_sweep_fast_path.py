@@ -4,7 +4,7 @@ import math
 
 from pipeline import open_results
 from pipeline.sweeps.config import parse_sweep
-from pipeline.sweeps.store import MODEL_CODES
+from pipeline.sweeps.layout import MODEL_CODES
 from pipeline.sweeps.run import run_sweep
 from solver import collide
 

@@ -64,7 +64,7 @@ def load_scene(path=None, flags: dict | None = None, materials=(), *, user_files
         With a message naming the field (SceneError, UnitError, MaterialError).
     """
     from .materials import load_table
-    from .scene import scene_from_dict
+    from .scene_file import scene_from_dict
 
     data = _read_scene_file(path) if path else {}
     for dest, value in (flags or {}).items():
@@ -170,7 +170,7 @@ def format_report(d: dict) -> str:
 
 
 def cmd_scene(args) -> int:
-    from .scene import run_scene
+    from .run import run_scene
 
     if args.list_materials:
         return _list_materials(args)

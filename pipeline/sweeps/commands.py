@@ -93,8 +93,10 @@ def cmd_status(args) -> int:
 
     from ..cli import UsageError
     from .analysis import PlaneError, planes
+    from .journal import pending_journal
+    from .layout import MODEL_CODES, STATUS_CODES
     from .run import format_physics
-    from .store import MODEL_CODES, STATUS_CODES, open_results, pending_journal
+    from .store import open_results
 
     try:
         with warnings.catch_warnings():
@@ -145,7 +147,7 @@ def cmd_status(args) -> int:
 def _status_table(plane, extra: dict, format_physics) -> None:
     """Counts and St_c per eps row of one (eps, St) plane."""
     from .analysis import critical_stokes_plane
-    from .store import MODEL_CODES
+    from .layout import MODEL_CODES
 
     rows = critical_stokes_plane(plane, extra)
     rigid = MODEL_CODES["rigid"]

@@ -13,9 +13,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .layout import MODEL_CODES, STATUS_CODES
 from .progress import Progress
 from .runners import open_runner
-from .store import MODEL_CODES, STATUS_CODES, SweepStore
+from .store import SweepStore
 from .tasks import MasterSolve, solve_scene, warm
 
 __all__ = ["run_sweep", "Summary", "EXIT_OK", "EXIT_FAILED", "format_physics"]

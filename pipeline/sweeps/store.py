@@ -1,13 +1,7 @@
 """The sweep store: one zarr store per sweep, dims = the sweep's axes, and its single writer.
 
-Layout (``STORE_SCHEMA``): every variable of ``VARIABLES`` (generated from the registry
-``solver.observables.OBSERVABLES`` plus ``model``, ``status``, ``message``) is an N-D array over
-the sweep's axes (fields of ``solver.Physics``, in ``Physics.names()`` order, e.g. ``(St, eps)``),
-chunked 1 along every axis but the last and whole along the last; coordinates are sorted
-ascending. ``status`` (``STATUS_CODES``; 0 = not run) is written *after* a cell's data, so a cell
-with a non-zero status always has its data. Root attrs carry the axis names (``axes``), the fixed
-physics (``fixed_physics``), the solver version, the cache key and the resolved numerics, the
-sweep file verbatim, package versions and the creation time.
+The layout (variables, encoding, attributes) is in :mod:`pipeline.sweeps.layout`, the journal in
+:mod:`pipeline.sweeps.journal`.
 
 Rules this module enforces (docs/pipeline.md):
 
@@ -26,7 +20,6 @@ Rules this module enforces (docs/pipeline.md):
 
 from __future__ import annotations
 
-import datetime
 import json
 import math
 import os
@@ -37,34 +30,17 @@ from pathlib import Path
 
 import numpy as np
 
-from solver.observables import MODEL_CODES, OBSERVABLES, STATUS_CODES
+from solver.observables import MODEL_CODES, STATUS_CODES
 from solver.physics import Physics
 
-__all__ = ["open_results", "SweepStore", "StoreMismatch", "StoreBusy", "STATUS_CODES",
-           "MODEL_CODES", "VARIABLES", "STORE_SCHEMA", "pending_journal", "zarr_warnings"]
+from .journal import _journal_path, _read_journal, pending_journal
+from .layout import (COUNTS, DIAGNOSTIC, FLAGS, FLOATS, SCALING, STORE_SCHEMA, VARIABLES, _encoding,
+                     _fill, _now, _package_versions, empty_dataset, zarr_warnings)
 
-STORE_SCHEMA = 3  # bump when variables or their meaning change (an old store is then refused)
+__all__ = ["open_results", "SweepStore", "StoreMismatch", "StoreBusy"]
 
 RTOL_COORD = 1e-9  # grid values this close are the same scene (geomspace round-off is ~1e-16)
 FLUSH_SECONDS = 2.0  # journal -> store merge interval: the journal already makes results durable
-
-_DTYPE = {"float": "f8", "flag": "i1", "count": "i4"}
-# name: (dtype, long_name, units), generated from the registry; flags are int8 0/1 with fill -1
-# (read back as NaN: unknown)
-VARIABLES = {o.name: (_DTYPE[o.kind], o.long_name, o.units) for o in OBSERVABLES}
-VARIABLES.update({
-    "model": ("i1", "model that answered the scene", "1"),
-    "status": ("i1", "scene status (0 = not run; see flag_meanings)", "1"),
-    "message": ("str", "solver message or failure reason", ""),
-})
-FLOATS = tuple(o.name for o in OBSERVABLES if o.kind == "float")
-FLAGS = tuple(o.name for o in OBSERVABLES if o.kind == "flag")
-COUNTS = tuple(o.name for o in OBSERVABLES if o.kind == "count")
-DIAGNOSTIC = frozenset(o.name for o in OBSERVABLES if o.diagnostic)
-
-SCALING = ("lengths along the axis in x1 = (4 theta mu a^1.5 v0)^0.4 (suffix _x1) or x0 (suffix "
-           "_x0); eps = (x1/x0)^2.5; tau = v0 t / x0; velocity / v0; force / (6 pi mu a^2 v0 / x1); "
-           "energies / (m v0^2 / 2)")
 
 
 class StoreMismatch(ValueError):
@@ -73,21 +49,6 @@ class StoreMismatch(ValueError):
 
 class StoreBusy(RuntimeError):
     """Another process is writing the store."""
-
-
-@contextmanager
-def zarr_warnings():
-    """The one place that silences zarr 3's notice that consolidated metadata is not part of the
-    v3 spec: we consolidate on purpose, so plain ``xr.open_zarr(path)`` opens the store without
-    falling back (and warning) to listing every array."""
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", message="Consolidated metadata is currently not part",
-                                category=UserWarning)
-        yield
-
-
-def _journal_path(path: Path) -> Path:
-    return path.with_name(path.name + ".journal")
 
 
 def _lock_path(path: Path) -> Path:
@@ -100,11 +61,6 @@ def _old_path(path: Path) -> Path:
 
 def _tmp_path(path: Path) -> Path:
     return path.with_name(f"{path.name}.tmp-{os.getpid()}")
-
-
-def pending_journal(path) -> int:
-    """Finished scenes of an interrupted sweep not yet merged into the store at ``path``."""
-    return len(_read_journal(_journal_path(Path(path))))
 
 
 def open_results(path, **open_kwargs):
@@ -148,96 +104,6 @@ def open_results(path, **open_kwargs):
                       "and not yet in the store; run the sweep again to merge them",
                       stacklevel=2)
     return ds
-
-
-def _read_journal(jpath: Path) -> list:
-    """Records of a journal; a line cut short by a kill is ignored (its scene runs again)."""
-    if not jpath.exists():
-        return []
-    out = []
-    with jpath.open() as f:
-        for line in f:
-            try:
-                rec = json.loads(line)
-            except json.JSONDecodeError:
-                continue
-            if isinstance(rec, dict) and isinstance(rec.get("physics"), dict) and "status" in rec:
-                out.append(rec)
-    return out
-
-
-def _package_versions() -> dict:
-    import platform
-    from importlib.metadata import PackageNotFoundError, version
-
-    out = {"python": platform.python_version()}
-    for name in ("numpy", "scipy", "numba", "dask", "distributed", "xarray", "zarr"):
-        try:
-            out[name] = version(name)
-        except PackageNotFoundError:
-            out[name] = None
-    return out
-
-
-def _now() -> str:
-    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-
-
-def _fill(dtype: str):
-    return {"f8": math.nan, "i1": 0, "i4": 0, "str": ""}[dtype]
-
-
-def empty_dataset(axes: dict, attrs: dict):
-    """An in-memory store layout over ``axes`` (``{name: values}``) with every cell "not run"
-    (decoded form, as read back)."""
-    import xarray as xr
-
-    dims = tuple(axes)
-    coords = {}
-    for name, values in axes.items():
-        g = Physics.group(name)
-        coords[name] = (name, np.asarray(values, dtype=float),
-                        {"long_name": g.long_name, "units": g.units})
-    shape = tuple(len(v) for v in axes.values())
-    data = {}
-    for name, (dtype, long_name, units) in VARIABLES.items():
-        if name in FLAGS:
-            arr = np.full(shape, np.nan, dtype="f4")  # decoded view of int8 with fill -1
-        elif dtype == "str":
-            arr = np.full(shape, "", dtype=object)
-        else:
-            arr = np.full(shape, _fill(dtype), dtype=dtype)
-        var_attrs = {"long_name": long_name, "units": units}
-        if name == "status":
-            var_attrs.update(flag_values=list(STATUS_CODES.values()),
-                             flag_meanings=" ".join(STATUS_CODES))
-        elif name == "model":
-            var_attrs.update(flag_values=list(MODEL_CODES.values()),
-                             flag_meanings=" ".join(MODEL_CODES))
-        elif name in FLAGS:
-            var_attrs.update(flag_values=[0, 1], flag_meanings="no yes",
-                             comment="missing (NaN when read) where status != 1")
-        elif name not in DIAGNOSTIC and name != "message":
-            var_attrs["comment"] = "NaN where status != 1 (not run or failed)"
-        data[name] = (dims, arr, var_attrs)
-    return xr.Dataset(data, coords=coords, attrs=attrs)
-
-
-def _chunks(ds) -> tuple:
-    """1 along every axis but the last, whole along the last: a flush rewrites only the chunks
-    of the cells it touched."""
-    dims = ds["status"].dims
-    return tuple(1 for _ in dims[:-1]) + (ds.sizes[dims[-1]],)
-
-
-def _encoding(ds) -> dict:
-    chunks = _chunks(ds)
-    enc = {}
-    for name in VARIABLES:
-        enc[name] = {"chunks": chunks}
-        if name in FLAGS:
-            enc[name].update(dtype="i1", _FillValue=-1)
-    return enc
 
 
 def _write_new(ds, path: Path) -> None:

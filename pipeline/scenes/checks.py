@@ -1,0 +1,150 @@
+"""Validity checks of a scene: every premise of the model that a scene strains, with its number.
+
+Each premise is reported as a ``Check`` carrying the number that triggered it and its threshold
+(``THRESHOLDS``); ``premise_checks`` needs only the scene, ``outcome_checks`` the solution.
+``model_reason`` says why the rigid or the EHD model answered.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from solver.model import rigid
+
+from .scene import Scene
+from .units import format_quantity
+
+__all__ = ["Check", "premise_checks", "outcome_checks", "THRESHOLDS", "model_reason"]
+
+# Thresholds of the validity checks (each check warns when its number exceeds the threshold).
+THRESHOLDS = {
+    # w(0)/x0 at the start is 3 pi^2 eps / (4 sqrt 2) = 5.23 eps (docs/model.md, "Small deformation"). Above 0.05, the
+    # level at which the classic scheme stops trusting the rigid solution, the spheres would
+    # already be deformed where the model assumes they are not: eps > 0.05 / 5.23 = 0.0096.
+    "eps": rigid.eps_for_start_deformation(0.05),
+    # Lubrication theory keeps the leading order in x/a; the outer-flow and curvature corrections
+    # to the film force are of relative size O(x0/a) (up to logs), so 5% of a as the start.
+    "x0_over_a": 0.05,
+    # Fluid inertia in a squeeze film relative to viscous stress is Re x0/a (docs/model.md, "Setting", neglects
+    # it); 0.1 keeps the neglected term at the 10% level at the start, and smaller afterwards.
+    "Re_x0_over_a": 0.1,
+    # Quasi-static elasticity: the sound transit time over the Hertz contact time scales as
+    # (v0/c)^(1/5). At 0.25 (v0/c = 1e-3) Hunter's estimate of the energy radiated as elastic
+    # waves, 1.04 (v0/c)^(3/5), is already 2% of the impact energy.
+    "wave_parameter": 0.25,
+}
+
+
+@dataclass(frozen=True)
+class Check:
+    """One validity warning: which premise, the number that triggered it, and the threshold."""
+
+    check: str
+    value: float
+    threshold: float
+    message: str
+
+    def as_dict(self) -> dict:
+        return {"check": self.check, "value": self.value, "threshold": self.threshold,
+                "message": self.message}
+
+
+def premise_checks(scene: Scene) -> list[Check]:
+    """Checks that need only the scene: eps, x0/a, fluid inertia, elastic waves."""
+    out = []
+    eps, a = scene.eps, scene.reduced_radius
+    t = THRESHOLDS["eps"]
+    if eps > t:
+        out.append(Check("eps", eps, t, (
+            f"eps = {eps:.3g} is not small (> {t:.3g}): the spheres are already deformed by "
+            f"w(0)/x0 = {rigid.start_deformation_ratio(eps):.3g} at the start x0 = "
+            f"{format_quantity(scene.x0, 'm')}, which the model takes as undeformed; start "
+            "farther out (larger x0)")))
+    ratio = scene.x0 / a
+    t = THRESHOLDS["x0_over_a"]
+    if ratio > t:
+        out.append(Check("x0_over_a", ratio, t, (
+            f"x0/a = {ratio:.3g} is not small (> {t:g}): lubrication theory neglects corrections "
+            "of relative size x0/a to the film force at the start")))
+    inertia = scene.reynolds * ratio
+    t = THRESHOLDS["Re_x0_over_a"]
+    if inertia > t:
+        out.append(Check("Re_x0_over_a", inertia, t, (
+            f"Re x0/a = {inertia:.3g} is not small (> {t:g}; Re = rho_f v0 a / mu = "
+            f"{scene.reynolds:.3g}): fluid inertia in the film, neglected by the model, matters")))
+    wave = scene.wave_parameter
+    t = THRESHOLDS["wave_parameter"]
+    if wave is not None and wave > t:
+        out.append(Check("wave_parameter", wave, t, (
+            f"(v0/c)^(1/5) = {wave:.3g} is not small (> {t:g}; c = sqrt(E/rho) = "
+            f"{scene.sound_speed:.4g} m/s): elastic waves carry away energy the quasi-static "
+            "model does not see")))
+    return out
+
+
+def outcome_checks(scene: Scene, c, p_max: float, p_min: float) -> tuple[list[Check], list[str]]:
+    """Checks that need the solution: yield, cavitation, gas mean free path. Returns
+    ``(warnings, notes)``; ``p_max``, ``p_min`` in Pa (gauge, relative to ambient)."""
+    out, notes = [], []
+    for body in (scene.body1, scene.body2):
+        y = body.solid.yield_strength
+        if y is not None and p_max > y:
+            out.append(Check(f"yield_{body.label}", p_max, y, (
+                f"peak film pressure {format_quantity(p_max, 'Pa')} exceeds the yield strength "
+                f"{format_quantity(y, 'Pa')} of "
+                f"{body.label} ({body.solid.name}): plastic deformation is not modelled")))
+    if scene.ambient_pressure is not None:
+        pv = scene.fluid.vapour_pressure
+        if pv is None:
+            notes.append("cavitation check skipped: the fluid has no vapour_pressure")
+        else:
+            absolute = scene.ambient_pressure + p_min
+            if absolute < pv:
+                out.append(Check("cavitation", absolute, pv, (
+                    "the film tension brings the absolute pressure to "
+                    f"{format_quantity(absolute, 'Pa')} (ambient "
+                    f"{format_quantity(scene.ambient_pressure, 'Pa')} + min film pressure "
+                    f"{format_quantity(p_min, 'Pa')}), below the vapour pressure "
+                    f"{format_quantity(pv, 'Pa')}: cavitation is not modelled")))
+    elif p_min < 0.0 and scene.fluid.vapour_pressure is not None:
+        notes.append("cavitation not checked: give fluid.ambient_pressure to check the film "
+                     f"tension ({p_min:.3g} Pa) against the vapour pressure")
+    lam = scene.fluid.mean_free_path
+    if lam is not None and math.isfinite(c.h_m_x1):
+        h_m = c.h_m_x1 * scene.x1
+        if h_m < lam:
+            out.append(Check("mean_free_path", h_m, lam, (
+                f"closest approach {format_quantity(h_m, 'm')} is below the gas mean free "
+                f"path {format_quantity(lam, 'm')} (Knudsen number {lam / h_m:.3g}): continuum lubrication "
+                "is not valid")))
+    return out, notes
+
+
+def _fmt_log(log_value: float) -> str:
+    """Format ``exp(log_value)``, also when it overflows a float."""
+    if log_value < 700.0:
+        return f"{math.exp(log_value):.3g}"
+    return f"10^{log_value / math.log(10.0):.0f}"
+
+
+def model_reason(scene: Scene, c) -> str:
+    """Why the scene needed the rigid or the EHD model, in one sentence with numbers."""
+    physics, switch = scene.physics(), c.numerics.switch
+    peak = _fmt_log(rigid.log_peak_deformation_ratio(physics.x_start, physics.St))
+    if c.model == "rigid":
+        # the rigid path from (x0, V = 1) comes to rest at x0 exp(-St)
+        rest = scene.x1 * math.exp(rigid.rest_separation(physics.x_start, 1.0, physics.St))
+        return (f"rigid: along the rigid-sphere path the central deformation peaks at "
+                f"w(0)/x = {peak}, below the hand-over level {switch:g}, so the exact rigid "
+                f"solution holds; the spheres creep to rest at x0 exp(-St) = "
+                f"{format_quantity(rest, 'm')} "
+                "without rebounding")
+    phase = np.asarray(c.series["phase"])
+    coupled = np.asarray(c.series["X"])[phase == 1]
+    where = f" at x = {format_quantity(coupled[0] * scene.x1, 'm')}" if coupled.size else ""
+    return (f"EHD: along the rigid-sphere path w(0)/x would reach {peak} (hand-over level "
+            f"{switch:g}); it reaches that level{where}, where the coupled elastic-film solution "
+            "takes over")

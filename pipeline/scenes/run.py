@@ -1,0 +1,123 @@
+"""Solving a scene: ``run_scene`` runs the solver and the validity checks, ``SceneResult`` in SI.
+
+The solver works in the dimensionless variables of docs/model.md ("Scales"); results are converted
+back with the scene's scales (``Scene.x1``, ``pressure_scale``, ``force_scale``, ``time_scale``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from solver.physics import Physics
+
+from .checks import Check, model_reason, outcome_checks, premise_checks
+from .scene import Scene
+
+__all__ = ["SceneResult", "run_scene", "RESULT_KEYS", "check_solvable"]
+
+# Keys of SceneResult.to_dict() (a contract for scripts using `ehd scene --json`; see docs/scenes.md)
+RESULT_KEYS = (
+    "title", "inputs", "reduced_radius_m", "reduced_mass_kg", "theta_per_Pa", "effective_modulus_Pa",
+    "x0_m", "x0_over_a", "x1_m", *Physics.names(), "Re", "Re_x0_over_a", "sound_speed_m_per_s",
+    "wave_parameter", "model", "model_reason", "status", "message", "v_r",
+    "rebound_speed_m_per_s", "closest_approach_nm", "closest_approach_on_approach_nm",
+    "equilibrium_separation_m", "log10_equilibrium_separation_m", "escaped", "time_to_stop_s",
+    "time_of_max_rebound_s", "peak_force_N", "peak_pressure_Pa", "min_pressure_Pa",
+    "max_central_deformation_nm", "min_separation_nm", "dimple", "dimple_depth_nm",
+    "warnings", "notes", "dimensionless",
+)
+
+
+@dataclass
+class SceneResult:
+    """A solved scene: the dimensionless ``collision`` plus SI results and validity checks."""
+
+    scene: Scene
+    collision: object  # solver.Collision
+    warnings: list[Check] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    peak_pressure: float = math.nan  # Pa
+    min_pressure: float = math.nan  # Pa (negative: tension)
+
+    def to_dict(self) -> dict:
+        """All results (keys ``RESULT_KEYS``), SI with the unit in the key, non-finite as None."""
+        s, c = self.scene, self.collision
+        x1, x0 = s.x1, s.x0
+
+        def num(v):
+            v = float(v)
+            return v if math.isfinite(v) else None
+
+        ln_xe_m = c.ln_x_e_x1 + math.log(x1)
+        out = {
+            "title": s.title, "inputs": s.inputs(),
+            "reduced_radius_m": num(s.reduced_radius), "reduced_mass_kg": num(s.reduced_mass),
+            "theta_per_Pa": s.theta, "effective_modulus_Pa": s.effective_modulus,
+            "x0_m": x0, "x0_over_a": x0 / s.reduced_radius, "x1_m": x1,
+            **s.physics().as_dict(), "Re": s.reynolds,
+            "Re_x0_over_a": s.reynolds * x0 / s.reduced_radius,
+            "sound_speed_m_per_s": s.sound_speed, "wave_parameter": s.wave_parameter,
+            "model": c.model, "model_reason": model_reason(s, c),
+            "status": c.status, "message": c.message,
+            "v_r": num(c.v_r), "rebound_speed_m_per_s": num(c.v_r * s.v0),
+            "closest_approach_nm": num(c.h_m_x1 * x1 * 1e9),
+            "closest_approach_on_approach_nm": num(c.h_m_approach_x1 * x1 * 1e9),
+            "equilibrium_separation_m": num(math.exp(ln_xe_m)) if ln_xe_m < 700 else None,
+            "log10_equilibrium_separation_m": num(ln_xe_m / math.log(10.0)),
+            "escaped": bool(c.escaped),
+            "time_to_stop_s": num(c.tau_v_zero * s.time_scale),
+            "time_of_max_rebound_s": num(c.tau_max_rebound * s.time_scale),
+            "peak_force_N": num(c.peak_force * s.force_scale),
+            "peak_pressure_Pa": num(self.peak_pressure), "min_pressure_Pa": num(self.min_pressure),
+            "max_central_deformation_nm": num(c.w0_max_x1 * x1 * 1e9),
+            "min_separation_nm": num(c.x_min_x1 * x1 * 1e9),
+            "dimple": bool(c.dimple), "dimple_depth_nm": num(c.dimple_depth_x1 * x1 * 1e9),
+            "warnings": [w.as_dict() for w in self.warnings], "notes": list(self.notes),
+            "dimensionless": c.to_dict(),
+        }
+        assert tuple(out) == RESULT_KEYS
+        return out
+
+
+def check_solvable(scene: Scene) -> Physics:
+    """The scene's ``Physics``; SceneError, saying what to change, when a group lies outside
+    the solver's range (``Scene.physics``)."""
+    return scene.physics()
+
+
+def run_scene(scene: Scene, accuracy: str = "standard", **overrides) -> SceneResult:
+    """Solve a scene and check it.
+
+    Parameters
+    ----------
+    scene : Scene
+    accuracy : {"fast", "standard", "fine"}
+        Solver preset.
+    **overrides
+        Numerical settings passed to ``solver.collide``. Profiles are not saved unless
+        ``save_profiles=True`` (only the figures need them).
+
+    Returns
+    -------
+    SceneResult
+        ``collision.status`` tells whether the solve succeeded.
+    """
+    from solver import collide
+
+    physics = check_solvable(scene)
+    overrides = {k: v for k, v in overrides.items() if v is not None}
+    overrides.setdefault("save_profiles", False)
+    c = collide(physics, accuracy=accuracy, **overrides)
+    warnings = premise_checks(scene)
+    notes = []
+    p_max = p_min = math.nan
+    if c.ok:
+        # the solver's extremes over the whole collision, rigid phases included
+        p_max, p_min = c.p_max * scene.pressure_scale, c.p_min * scene.pressure_scale
+        post, notes = outcome_checks(scene, c, p_max, p_min)
+        warnings += post
+    if scene.sound_speed is None:
+        notes.append("elastic-wave check skipped: no density known for either solid")
+    return SceneResult(scene=scene, collision=c, warnings=warnings, notes=notes,
+                       peak_pressure=p_max, min_pressure=p_min)

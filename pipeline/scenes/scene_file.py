@@ -1,0 +1,154 @@
+"""Building a scene from a parsed TOML scene document (see docs/scenes.md for the format).
+
+Every field is checked and converted to SI; an error names the field and its valid range
+(``SceneError``). No file I/O here: ``scene_from_dict`` takes an already-parsed TOML document.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .materials import FLUID_FIELDS, SOLID_FIELDS, FluidProps, MaterialTable, Solid
+from .scene import Body, Scene, SceneError, _reduced
+from .units import FieldSpec, to_si
+
+__all__ = ["scene_from_dict", "DEFAULT_X0_OVER_A"]
+
+DEFAULT_X0_OVER_A = 0.01  # docs/model.md "Setting": the close stage starts at x0 ~ 0.01 a
+
+_LENGTH = FieldSpec("[length]", "50 um", hi_open=False, si_unit="m")  # radius: inf = plane wall
+_SPEED = FieldSpec("[length] / [time]", "10 cm/s", si_unit="m/s")
+_GAP = FieldSpec("[length]", "500 nm", si_unit="m")
+_RATIO = FieldSpec("", "0.01")
+_PRESSURE = FieldSpec("[pressure]", "101.325 kPa", si_unit="Pa")
+
+_TOP_KEYS = ("title", "v0", "x0", "x0_over_a", "body1", "body2", "fluid", "materials", "fluids")
+_BODY_KEYS = ("material", "radius", "wall", *SOLID_FIELDS)
+_FLUID_KEYS = ("name", "ambient_pressure", *FLUID_FIELDS)
+
+
+def _check_keys(raw, valid, where):
+    if not isinstance(raw, dict):
+        raise SceneError(f"{where} must be a table (e.g. [{where}])")
+    unknown = sorted(set(raw) - set(valid))
+    if unknown:
+        raise SceneError(f"{where}: unknown field(s) {unknown}; valid fields: {sorted(valid)}")
+
+
+def _body(data, label, table: MaterialTable) -> Body:
+    if label not in data:
+        raise SceneError(f"missing the table [{label}]: give a radius and a material "
+                         "(or youngs_modulus, poisson_ratio and density)")
+    raw = data[label]
+    _check_keys(raw, _BODY_KEYS, label)
+    wall = raw.get("wall", False)
+    if not isinstance(wall, bool):
+        raise SceneError(f"{label}.wall must be true or false, got {wall!r}")
+    if "radius" in raw:
+        r = raw["radius"]
+        if isinstance(r, str) and r.strip().lower() in ("inf", "infinity"):
+            r = math.inf
+        radius = to_si(r, _LENGTH, f"{label}.radius")
+        if wall and not math.isinf(radius):
+            raise SceneError(f"{label}: wall = true but radius = {raw['radius']!r}; a plane wall "
+                             "has an infinite radius (leave radius out)")
+    elif wall:
+        radius = math.inf
+    else:
+        raise SceneError(f"{label}: missing the field 'radius' (e.g. radius = '50 um'; "
+                         "or wall = true for a plane wall)")
+    base = None
+    if "material" in raw:
+        if not isinstance(raw["material"], str):
+            raise SceneError(f"{label}.material must be a name, got {raw['material']!r}")
+        base = table.solid(raw["material"], f"{label}.material")
+    # a plane wall needs no density (its mass is infinite)
+    optional = {"density"} if math.isinf(radius) else set()
+    values, name, source = _properties(raw, SOLID_FIELDS, base, label, "material", optional)
+    solid = Solid(name=name, source=source, description=base.description if base else "", **values)
+    return Body(label=label, radius=radius, solid=solid)
+
+
+def _properties(raw, fields, base, label, kind, optional=frozenset()):
+    """Field values of a solid or fluid: given in ``raw``, else from the named ``base`` entry,
+    else None for optional fields; returns ``(values, name, source)``."""
+    values = {}
+    for field_name, (spec, required) in fields.items():
+        if field_name in raw:
+            values[field_name] = to_si(raw[field_name], spec, f"{label}.{field_name}")
+        elif base is not None:
+            values[field_name] = getattr(base, field_name)
+        elif required and field_name not in optional:
+            raise SceneError(f"{label}: missing the field '{field_name}' (e.g. {field_name} = "
+                             f"'{spec.example}'), or name a {kind} = '...'")
+        else:
+            values[field_name] = None
+    overridden = sorted(set(raw) & set(fields))
+    if base is None:
+        return values, "custom", "given in the scene"
+    name = base.name + (f" (with {', '.join(overridden)} given)" if overridden else "")
+    source = base.source + ("; overrides given in the scene" if overridden else "")
+    return values, name, source
+
+
+def _fluid(data, table: MaterialTable):
+    if "fluid" not in data:
+        raise SceneError("missing the table [fluid]: give name = 'water' (or viscosity and density)")
+    raw = data["fluid"]
+    _check_keys(raw, _FLUID_KEYS, "fluid")
+    base = None
+    if "name" in raw:
+        if not isinstance(raw["name"], str):
+            raise SceneError(f"fluid.name must be a name, got {raw['name']!r}")
+        base = table.fluid(raw["name"], "fluid.name")
+    values, name, source = _properties(raw, FLUID_FIELDS, base, "fluid", "fluid")
+    fluid = FluidProps(name=name, source=source, description=base.description if base else "",
+                       **values)
+    ambient = None
+    if "ambient_pressure" in raw:
+        ambient = to_si(raw["ambient_pressure"], _PRESSURE, "fluid.ambient_pressure")
+    return fluid, ambient
+
+
+def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
+    """Build a ``Scene`` from a parsed scene document (see docs/scenes.md for the format).
+
+    Parameters
+    ----------
+    data : dict
+        Top-level keys ``title``, ``v0``, ``x0`` or ``x0_over_a``, tables ``body1``, ``body2``,
+        ``fluid`` (and optionally ``materials`` / ``fluids``, already merged into ``table``).
+    table : MaterialTable
+        Named materials and fluids.
+
+    Raises
+    ------
+    SceneError, ValueError
+        With a message naming the offending field and its valid range.
+    """
+    _check_keys(data, _TOP_KEYS, "scene")
+    body1 = _body(data, "body1", table)
+    body2 = _body(data, "body2", table)
+    if body1.wall and body2.wall:
+        raise SceneError("body1 and body2 are both plane walls; at least one must be a sphere")
+    if body1.wall:  # keep the sphere first: a wall is body2 by convention
+        body1, body2 = Body("body1", body2.radius, body2.solid), Body("body2", body1.radius,
+                                                                        body1.solid)
+    fluid, ambient = _fluid(data, table)
+    if "v0" not in data:
+        raise SceneError("missing the field 'v0' (approach speed, e.g. v0 = '10 cm/s')")
+    v0 = to_si(data["v0"], _SPEED, "v0")
+    a = _reduced(body1.radius, body2.radius)
+    if "x0" in data and "x0_over_a" in data:
+        raise SceneError("give either x0 (a length) or x0_over_a (a ratio), not both")
+    if "x0" in data:
+        x0 = to_si(data["x0"], _GAP, "x0")
+    elif "x0_over_a" in data:
+        x0 = to_si(data["x0_over_a"], _RATIO, "x0_over_a") * a
+    else:
+        x0 = DEFAULT_X0_OVER_A * a
+    title = data.get("title", "")
+    if not isinstance(title, str):
+        raise SceneError(f"title must be a string, got {title!r}")
+    return Scene(title=title, body1=body1, body2=body2, fluid=fluid, v0=v0, x0=x0,
+                 ambient_pressure=ambient)
