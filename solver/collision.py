@@ -22,7 +22,8 @@ import numpy as np
 
 from .integration import stepper
 from .integration.grid import reference_grid, scaled_grid
-from .model import rigid
+from .integration.events import RELAXED_FULL
+from .model import cavitation, rigid
 from .observables import SERIES, STATUS, failure_message
 from .physics import Physics
 from .result import JSON_KEYS, SOLVER_VERSION, Collision
@@ -65,19 +66,26 @@ def _parabolic_peak(t, f, i):
 
 
 FAR_FIELD_REACH = 8.0  # the grid reaches this many film widths sqrt(2 X) beyond the axis
+CAVITY_REACH = 4.0  # ... and this many times the widest cavity, sqrt(2) (V/Pi)^(1/4) at V = 1
+WIDEST_CAVITY = 400.0  # cap for Pi -> 0 (at Pi = 0 the whole opening film cavitates)
 
 
-def scene_grid(stokes, x_switch, numerics: Numerics):
+def scene_grid(stokes, x_switch, numerics: Numerics, pi=math.inf):
     """The radial grid of a scene.
 
     The inner region covers the Hertz contact radius ``sqrt(delta_H)`` (at least 2, the film's
     width at small St). The grid must also reach well beyond the widest film the coupled phase
     sees, ``sqrt(2 X)`` at the hand-over and at the release (where ``W(0)/X = release`` on the
-    rigid path with ``V <= 1``); its extent doubles until it does (a few outer cells each time).
+    rigid path with ``V <= 1``), and beyond the widest cavity of a film with the floor ``-pi``
+    (rigid separation at speed ``V``: radius ``sqrt(2 s_c) ~ sqrt(2) (V/Pi)^(1/4)``,
+    docs/model.md, "Cavitation"); its extent doubles until it does (a few outer cells each time).
     """
     inner = numerics.inner_factor * max(math.sqrt(hertz_overlap(stokes)), 2.0)
     x_release = (rigid.HANDOVER_COEFF / numerics.release) ** 0.4
     reach = FAR_FIELD_REACH * math.sqrt(2.0 * max(x_switch, x_release)) / inner
+    if math.isfinite(pi):
+        cavity = min(math.sqrt(2.0) * max(pi, 1e-12) ** -0.25, WIDEST_CAVITY)
+        reach = max(reach, CAVITY_REACH * cavity / inner)
     extent = numerics.outer_extent
     while extent < reach:
         extent *= 2.0
@@ -112,8 +120,9 @@ def collide(physics, eps=None, *, accuracy: str = "standard", **overrides) -> Co
     elif eps is not None:
         raise TypeError("collide(physics, ...): eps is part of the Physics; do not pass it twice")
     numerics = resolve(accuracy, **overrides)
-    if not rigid.exact_for(physics):  # no model beyond the classic film exists yet
-        raise NotImplementedError(f"no solver for non-classic physics {physics}")
+    if physics.cavitation == "jfo":
+        raise ValueError("cavitation model 'jfo' (mass-conserving) is not built yet; use "
+                         "'reynolds' (docs/model.md, \"Cavitation\")")
     wall = time.perf_counter()
     x_switch = rigid.handover_separation(physics.x_start, physics.St, numerics.switch)
     if x_switch is None:
@@ -142,12 +151,28 @@ def _rigid_block(t, x, v, tau_per_t, phase, dissipated):
         "W0": 3.0 * v * x**-1.5 * rigid.I0, "H_min": x, "R_H_min": zeros,
         "E_k": v * v, "E_s": zeros, "dissipated": dissipated,
         "P_max": np.maximum(p_axis, 0.0), "P_min": np.minimum(p_axis, 0.0),
+        "cavity_radius": zeros, "void_volume": zeros, "void_work": zeros,
         "phase": np.full(n, phase, dtype=np.int8),
     }
 
 
+def _floor_block(path, physics, tau_per_t, lost, v_release):
+    """Time series of the rigid departure with a floor (model/cavitation.py): the force
+    ``-U/(X + s_c)``, the axis at the floor while the cavity ``R_c = sqrt(2 s_c)`` is open; the
+    energy lost (viscous and to the void) from the kinetic energy."""
+    x, u, t = path
+    sigma = np.array([cavitation.cavity_fraction(physics.Pi * xi * xi / (6.0 * ui))
+                      for xi, ui in zip(x, u)])
+    v = -u
+    block = _rigid_block(t, x, v, tau_per_t, 2, lost + (v_release**2 - v * v))
+    block["F"] = v / (x * (1.0 + sigma))
+    block["P_min"] = np.where(sigma > 0.0, -physics.Pi, block["P_min"])
+    block["cavity_radius"] = np.sqrt(2.0 * sigma * x)
+    return block
+
+
 _COUPLED_COLUMNS = ("T", "X", "V", "F", "W0", "H_min", "R_H_min", "E_k", "E_s", "dissipated",
-                    "P_max", "P_min")
+                    "P_max", "P_min", "cavity_radius", "void_volume", "void_work")
 
 
 def _concat(blocks):
@@ -191,10 +216,12 @@ def _coupled(physics, accuracy, numerics, x_switch):
     v_switch = float(rigid.velocity(x_switch, x_start, 1.0, stokes))
     t_switch = float(rigid.elapsed_time(x_switch, x_start, 1.0, stokes))
 
-    grid = scene_grid(stokes, x_switch, numerics)
+    grid = scene_grid(stokes, x_switch, numerics, physics.Pi if not physics.classic else math.inf)
     p_init = 3.0 * v_switch / (x_switch + grid.s) ** 2  # rigid pressure; K p = asymptotic W
     time_scale = x_switch / max(v_switch, 1e-3)
     stop_kind, stop_params = rigid.release_event(numerics.release, stokes)
+    if physics.cavitation == "jfo":  # its cavity has a memory: rigid only once the film is full
+        stop_kind = RELAXED_FULL
     code, counters, rows, p_hist, w_hist = stepper.integrate(
         grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, physics.as_array(),
         x_switch, v_switch, p_init, t_switch, 1.0 - v_switch**2, numerics.rtol,
@@ -228,25 +255,39 @@ def _coupled(physics, accuracy, numerics, x_switch):
         result.profile_x = x_c
     if name != "ok":
         result.v_r = result.dimple_depth_x1 = math.nan
-        result.dimple = None
+        result.dimple = result.cavitated = None
         result.series = _concat(blocks)
         result.message = (f"{message} (St={stokes:g}, eps={physics.eps:g}, after {counters[0]} "
                           f"steps at tau={t_c[-1] * tau_per_t:.4g})")
         return result
 
-    # rigid departure (analytic) from the release state
+    # rigid departure from the release state: with the Reynolds floor a scalar ODE until the
+    # cavity closes (model/cavitation.py), then the classic closed form
     t_rel, x_rel, v_rel = t_c[-1], x_c[-1], v_c[-1]
-    ln_x_e = rigid.rest_separation(x_rel, v_rel, stokes)
-    u_end = max(-30.0, min(30.0, -0.99 * stokes * v_rel))
-    if u_end != 0.0:
-        x_tail = x_rel * np.exp(np.linspace(0.0, u_end, 41)[1:])
-        t_tail, v_tail = _rigid_path(x_rel, v_rel, t_rel, stokes, x_tail)
-        diss_tail = cols["dissipated"][-1] + (v_rel**2 - v_tail**2)
-        blocks.append(_rigid_block(t_tail, x_tail, v_tail, tau_per_t, 2, diss_tail))
+    lost = cols["dissipated"][-1] + cols["void_work"][-1]  # energy lost by the release
+    if physics.cavitation == "reynolds" and v_rel < 0.0:
+        x_rel, u_rel, t_rel, path = cavitation.departure(x_rel, -v_rel, t_rel, stokes, physics.Pi)
+        v_rel = -u_rel
+        blocks.append(_floor_block(path, physics, tau_per_t, lost, v_c[-1]))
+        lost = blocks[-1]["dissipated"][-1]
+    if math.isinf(x_rel):  # no floor at all (Pi = 0): no suction, the spheres never stop
+        ln_x_e = math.inf
+    else:
+        ln_x_e = rigid.rest_separation(x_rel, v_rel, stokes)
+        u_end = max(-30.0, min(30.0, -0.99 * stokes * v_rel))
+        if u_end != 0.0:
+            x_tail = x_rel * np.exp(np.linspace(0.0, u_end, 41)[1:])
+            t_tail, v_tail = _rigid_path(x_rel, v_rel, t_rel, stokes, x_tail)
+            blocks.append(_rigid_block(t_tail, x_tail, v_tail, tau_per_t, 2,
+                                       lost + (v_rel**2 - v_tail**2)))
     result.series = _concat(blocks)
     result.tau_release = t_rel * tau_per_t
     result.ln_x_e_x1 = ln_x_e
-    _coupled_observables(result, cols, tau_per_t, ln_x_e, v_rel)
+    _coupled_observables(result, cols, tau_per_t, ln_x_e, v_c[-1])
+    if blocks[-1]["phase"][0] == 2:  # the departure's cavity (with a floor) may be the widest
+        widest = max(float(np.max(b["cavity_radius"])) for b in blocks if b["phase"][0] == 2)
+        result.cavity_radius_max = max(result.cavity_radius_max, widest)
+        result.cavitated = result.cavitated or widest > 0.0
     include_rigid_peaks(result, x_start, x_switch)
     if result.start_strain_energy > START_STRAIN_LIMIT:
         result.status = "start_deformed"
@@ -303,6 +344,12 @@ def _coupled_observables(result, cols, tau_per_t, ln_x_e, v_rel):
     result.dimple = bool(deep.size > 0)
     if deep.size:
         result.tau_dimple = float(tau[deep[0]])
-    total = cols["E_k"] + cols["E_s"] + cols["dissipated"]
+    total = cols["E_k"] + cols["E_s"] + cols["dissipated"] + cols["void_work"]
     result.energy_error = float(np.max(np.abs(total - total[0])))
+    cavity = np.nonzero(cols["cavity_radius"] > 0.0)[0]
+    result.cavitated = bool(cavity.size > 0)
+    result.cavity_radius_max = float(np.max(cols["cavity_radius"]))
+    if cavity.size:
+        result.tau_cavitation_onset = float(tau[cavity[0]])
+    result.void_volume_max = float(np.max(cols["void_volume"]))
     result.start_strain_energy = float(cols["E_s"][0] / cols["E_k"][0])

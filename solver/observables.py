@@ -89,8 +89,17 @@ OBSERVABLES = (
     Observable("tau_dimple", "float", "first time the dimple is deeper than 1e-3 x1", "x0/v0"),
     Observable("escaped", "flag", "rebound carries the spheres back beyond x0 (x_e > x0): no "
                "sticking", "1", "escaped (x_e > x0: no sticking)"),
-    Observable("energy_error", "float", "max energy-closure error of the coupled phase",
+    Observable("energy_error", "float", "max energy-closure error of the coupled phase (void "
+               "work included)",
                "m v0^2 / 2", "energy closure error", master="lin energy"),
+    Observable("cavitated", "flag", "the film cavitated (its pressure reached the floor -Pi)", "1",
+               "cavitated"),
+    Observable("cavity_radius_max", "float", "largest cavity radius (outermost cavitated node)",
+               "sqrt(a x1)", "  largest cavity radius /sqrt(a x1)"),
+    Observable("tau_cavitation_onset", "float", "time the film first cavitates (NaN: never)",
+               "x0/v0", "  tau at cavitation onset"),
+    Observable("void_volume_max", "float", "largest void volume Int_cav (H - H_onset) ds",
+               "2 pi a x1^2", "  largest void volume /(2 pi a x1^2)"),
     Observable("start_strain_energy", "float", "strain energy where the coupled phase starts, "
                "over the kinetic energy", "1"),
     Observable("steps", "count", "accepted time steps of the coupled solve", "1", "steps",
@@ -154,5 +163,8 @@ SERIES = (
     Column("W_absmax", "largest |W| over the radius", "x1"),
     Column("P_max", "largest film pressure over the radius", _P),
     Column("P_min", "lowest film pressure over the radius", _P),
+    Column("cavity_radius", "radius of the outermost cavitated node (0: no cavity)", "sqrt(a x1)"),
+    Column("void_volume", "void volume Int_cav (H - H_onset) ds", "2 pi a x1^2"),
+    Column("void_work", "work done against the cavitation floor so far", "m v0^2/2"),
 )
 SERIES_INDEX = {c.name: k for k, c in enumerate(SERIES)}

@@ -1,11 +1,13 @@
 """The physics of one scene: every dimensionless group, validated, in one object.
 
-A scene is fully described by its dimensionless groups (docs/model.md, "The parameters"). Today
-these are the Stokes number ``St`` and the elasticity parameter ``eps`` of Davis, Serayssol &
-Hinch (1986), the *classic model*; each new piece of physics adds a field here (with its
-metadata in ``GROUPS``), and everything downstream follows from this declaration: validation,
-the flat array the compiled kernels read (``as_array``, indices ``ST``, ``EPS``...), the sweep
-axes and fixed values of a sweep file, the store's coordinates and its cache key.
+A scene is fully described by its dimensionless groups (docs/model.md, "The parameters"): the
+Stokes number ``St`` and the elasticity parameter ``eps`` of Davis, Serayssol & Hinch (1986), the
+*classic model*, and the groups of the physics a scene may switch on: the cavitation number ``Pi``
+with the cavitation model (docs/model.md, "Cavitation"). Each piece of physics adds a field here
+(with its metadata in ``GROUPS``), and everything downstream follows from this declaration:
+validation, the flat array the compiled kernels read (``as_array``, indices ``ST``, ``EPS``,
+``PI``, ``CAVITATION``), the sweep axes and fixed values of a sweep file, the store's coordinates
+and its cache key, the command-line flags.
 
 Values travel to the kernels as arguments (a float array), never as closure constants: a new
 value must not recompile anything.
@@ -18,7 +20,8 @@ from dataclasses import asdict, dataclass, fields, replace
 
 import numpy as np
 
-__all__ = ["Physics", "Group", "GROUPS", "ST", "EPS"]
+__all__ = ["Physics", "Group", "GROUPS", "ST", "EPS", "PI", "CAVITATION", "CAVITATION_MODELS",
+           "DEFAULT_CAVITATION"]
 
 
 @dataclass(frozen=True)
@@ -32,19 +35,27 @@ class Group:
     hi: float
     closed_lo: bool = False
     units: str = "1"
-    default: float | None = None  # value when a sweep file omits the group (None: required)
+    default: float | str | None = None  # value when a sweep file omits the group (None: required)
+    allow_inf: bool = False  # +inf is a valid value (the physics switched off)
+    choices: tuple = ()  # a named choice instead of a number (e.g. a model)
 
-    def check(self, value) -> float:
-        """``value`` as a float, or ValueError naming the group and its valid range."""
+    def check(self, value):
+        """``value`` as a float (or one of ``choices``), or ValueError naming the group and its
+        valid range."""
         label = f"{self.name} ({self.symbol})"
+        if self.choices:
+            if value not in self.choices:
+                raise ValueError(f"{label} must be one of {list(self.choices)}, got {value!r}")
+            return value
         try:
             if isinstance(value, bool):
                 raise TypeError
             v = float(value)
         except (TypeError, ValueError):
             raise ValueError(f"{label} must be a number, got {value!r}") from None
-        if not math.isfinite(v):
-            raise ValueError(f"{label} must be finite, got {value!r}")
+        if math.isnan(v) or (math.isinf(v) and not (self.allow_inf and v > 0)):
+            raise ValueError(f"{label} must be finite{' or inf' if self.allow_inf else ''}, "
+                             f"got {value!r}")
         ok_lo = v >= self.lo if self.closed_lo else v > self.lo
         if not ok_lo or v > self.hi:
             lb = "[" if self.closed_lo else "("
@@ -58,9 +69,19 @@ GROUPS = (
     # eps << 1 is the model's premise; at 0.1 the start x0 is only 2.5 x1
     Group("eps", "elasticity parameter 4 theta mu v0 a^1.5 / x0^2.5", "elasticity parameter",
           0.0, 0.1),
+    # the film cannot pull harder than the liquid allows: P >= -Pi (inf: unlimited tension)
+    Group("Pi", "cavitation number (p_amb - p_cav) x1^2 / (mu a v0)", "cavitation number",
+          0.0, math.inf, closed_lo=True, default=math.inf, allow_inf=True),
+    Group("cavitation", "cavitation model: off, reynolds (Swift-Stieber) or jfo (mass-conserving "
+          "Elrod-Adams); auto: the default model where Pi is finite", "cavitation model",
+          math.nan, math.nan, default="auto", choices=("auto", "off", "reynolds", "jfo")),
 )
 # positions in Physics.as_array(), read by the compiled kernels
-ST, EPS = 0, 1
+ST, EPS, PI, CAVITATION = 0, 1, 2, 3
+# the models' codes in that array (0: the classic film, no floor)
+CAVITATION_MODELS = ("off", "reynolds", "jfo")
+# the model "auto" resolves to where Pi is finite (docs/model.md, "Cavitation": why)
+DEFAULT_CAVITATION = "reynolds"
 
 
 @dataclass(frozen=True)
@@ -73,20 +94,36 @@ class Physics:
         Stokes number ``m v0 / (6 pi mu a^2)``, in (0, 1e4].
     eps : float
         Elasticity parameter ``4 theta mu v0 a^1.5 / x0^2.5 = (x1/x0)^2.5``, in (0, 0.1].
+    Pi : float
+        Cavitation number ``(p_amb - p_cav) x1^2 / (mu a v0)``: the film pressure cannot fall below
+        ``-Pi`` (gauge, in ``mu a v0 / x1^2``). In [0, inf]; inf (the default) is the classic film,
+        which carries any tension.
+    cavitation : {"auto", "off", "reynolds", "jfo"}
+        The cavitation model. "auto" (the default) becomes ``DEFAULT_CAVITATION`` where ``Pi`` is
+        finite and "off" where it is inf; "off" ignores ``Pi``. A finite ``Pi`` is needed for a
+        model to act: with ``Pi = inf`` the model is "off".
 
     Raises
     ------
     ValueError
-        A value that is not a finite number or lies outside its group's range; the message
-        names the group.
+        A value that is not a valid number (or choice) or lies outside its group's range; the
+        message names the group.
     """
 
     St: float
     eps: float
+    Pi: float = math.inf
+    cavitation: str = "auto"
 
     def __post_init__(self):
         for group in GROUPS:
             object.__setattr__(self, group.name, group.check(getattr(self, group.name)))
+        model = self.cavitation
+        if math.isinf(self.Pi):
+            model = "off"
+        elif model == "auto":
+            model = DEFAULT_CAVITATION
+        object.__setattr__(self, "cavitation", model)
 
     # ---- the declaration, for code that iterates over the groups ----------------------------
     @staticmethod
@@ -108,7 +145,7 @@ class Physics:
         if unknown:
             raise ValueError(f"unknown physics field(s) {sorted(unknown)}; valid: "
                              f"{list(cls.names())}")
-        missing = [n for n in cls.names() if n not in values]
+        missing = [n for n in cls.names() if n not in values and cls.group(n).default is None]
         if missing:
             raise ValueError(f"missing physics field(s) {missing}")
         return cls(**values)
@@ -117,8 +154,10 @@ class Physics:
         return asdict(self)
 
     def as_array(self) -> np.ndarray:
-        """The groups as a flat float array in ``names()`` order (what the kernels read)."""
-        return np.array([getattr(self, n) for n in self.names()], dtype=float)
+        """The groups as a flat float array in ``names()`` order (what the kernels read); a
+        choice is its index (``CAVITATION_MODELS``)."""
+        return np.array([self.St, self.eps, self.Pi, CAVITATION_MODELS.index(self.cavitation)],
+                        dtype=float)
 
     def replace(self, **changes) -> "Physics":
         return replace(self, **changes)
@@ -126,10 +165,10 @@ class Physics:
     # ---- what the groups imply ---------------------------------------------------------------
     @property
     def classic(self) -> bool:
-        """True when no physics beyond Davis, Serayssol & Hinch (1986) is switched on, so the
-        analytic shortcuts of the classic model (rigid phases, hand-over, master curve) are
-        exact. Always true today: St and eps are the classic model's only groups."""
-        return True
+        """True when no physics beyond Davis, Serayssol & Hinch (1986) is switched on, so every
+        analytic shortcut of the classic model (rigid phases, hand-over, release, master curve)
+        is exact."""
+        return self.cavitation == "off"
 
     @property
     def x_start(self) -> float:

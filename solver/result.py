@@ -64,7 +64,11 @@ class Collision:
     dimple: bool | None = False  # None when the scene failed
     dimple_depth_x1: float = 0.0  # largest H(0) - min_R H
     tau_dimple: float = math.nan  # first time the dimple is deeper than DIMPLE_DEPTH
-    energy_error: float = math.nan  # max |E_k + E_s + dissipated - const| in the coupled phase
+    energy_error: float = math.nan  # max |E_k + E_s + dissipated + void work - const|, coupled phase
+    cavitated: bool | None = False  # the film reached the floor -Pi (None when the scene failed)
+    cavity_radius_max: float = 0.0  # largest cavity radius (sqrt(a x1))
+    tau_cavitation_onset: float = math.nan  # first time a cell cavitates
+    void_volume_max: float = 0.0  # largest Int_cav (H - H_onset) ds
     start_strain_energy: float = 0.0  # E_s / E_k where the coupled phase starts
     steps: int = 0
     rejected_steps: int = 0
@@ -88,6 +92,15 @@ class Collision:
     @property
     def eps(self) -> float:
         return self.physics.eps
+
+    @property
+    def Pi(self) -> float:
+        return self.physics.Pi
+
+    @property
+    def cavitation(self) -> str:
+        """The cavitation model used ("off": the classic film)."""
+        return self.physics.cavitation
 
     @property
     def x0_over_x1(self) -> float:

@@ -53,7 +53,7 @@ def test_jacobian_matches_central_differences(seed):
     gap(grid.s, grid.influence, x, p, w, h)
     jac = np.empty((n + 2, n + 2))
     jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, phys, bh, p, h,
-             jac, np.empty((n, 3)))
+             np.zeros(n - 1, dtype=bool), jac, np.empty((n, 3)))
     fd = np.empty_like(jac)
     for k in range(n + 2):
         # step 3e-4 of each unknown's scale (floor: 1e-3 of the largest pressure, for the tiny

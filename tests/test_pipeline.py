@@ -125,7 +125,8 @@ def test_paper_sweep_file_meets_the_issue():
     assert len(St) >= 60 and St[0] <= 0.5 and St[-1] >= 100.0
     assert np.allclose(np.diff(np.log(St)), np.log(St[1] / St[0]))  # log-spaced
     assert {1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8} <= set(eps)
-    assert s.axis_names == ("St", "eps") and s.fixed == {}
+    # the groups with defaults are fixed at them: the classic film (Pi = inf)
+    assert s.axis_names == ("St", "eps") and s.fixed == {"Pi": math.inf, "cavitation": "auto"}
     assert s.accuracy == "standard" and str(s.store) == "results/paper.zarr"
     q = load_sweep(REPO / "sweeps" / "quick.toml")
     assert q.n_scenes <= 30
@@ -291,7 +292,8 @@ def test_store_schema_and_attrs(tmp_path):
 
     assert a["solver_version"] == SOLVER_VERSION and a["accuracy"] == "fast"
     assert a["cache_key"] == sweep.cache_key() and a["numerics"] == sweep.numerics()
-    assert a["axes"] == ["St", "eps"] and a["fixed_physics"] == {} and a["store_schema"] == 3
+    assert a["axes"] == ["St", "eps"] and a["store_schema"] == 3
+    assert a["fixed_physics"] == {"Pi": "inf", "cavitation": "auto"}  # JSON holds inf as "inf"
     assert a["sweep_file"] == text
     assert {"python", "numpy", "numba", "dask", "xarray", "zarr"} <= set(a["package_versions"])
     assert a["created"].startswith("20")
@@ -597,12 +599,13 @@ def test_a_fixed_eps_and_an_St_axis_run_end_to_end(tmp_path, capsys):
     text = physics_sweep_text("St = [1.0, 3.0, 10.0, 30.0]", "eps = 1e-2",
                               store=str(tmp_path / "one.zarr"))
     sweep = parse_sweep(text)
-    assert sweep.axis_names == ("St",) and sweep.fixed == {"eps": 1e-2}
+    assert sweep.axis_names == ("St",)
+    assert sweep.fixed == {"eps": 1e-2, "Pi": math.inf, "cavitation": "auto"}
     assert sweep.n_scenes == 4
     summary = run(sweep)
     assert summary.done == 4 and sorted(CALLS) == [(s, 1e-2) for s in (1.0, 3.0, 10.0, 30.0)]
     ds = open_results(sweep.store).load()
-    assert ds.status.dims == ("St",) and ds.attrs["fixed_physics"] == {"eps": 1e-2}
+    assert ds.status.dims == ("St",) and ds.attrs["fixed_physics"] == {"eps": 1e-2, "Pi": "inf", "cavitation": "auto"}
     assert ds.attrs["axes"] == ["St"]
     assert ds.status.encoding["chunks"] == (4,)  # one axis: one chunk
     (row,) = critical_stokes(ds)  # the fixed eps is a plane one row high
@@ -626,7 +629,10 @@ def test_axes_in_either_order_give_the_same_sweep():
 
 
 @pytest.mark.parametrize("grid, physics, words", [
-    ("St = [1.0]\nPi = [0.1]", "eps = 1e-2", ["unknown physics field", "Pi", "valid", "'St'"]),
+    ("St = [1.0]\nbeta = [0.1]", "eps = 1e-2", ["unknown physics field", "beta", "valid", "'St'"]),
+    ("St = [1.0]\ncavitation = ['off']", "eps = 1e-2", ["cavitation", "model", "[physics]"]),
+    ("St = [1.0]", "eps = 1e-2\ncavitation = 'bubbly'", ["cavitation", "one of"]),
+    ("St = [1.0]\nPi = [-1.0]", "eps = 1e-2", ["Pi", "valid range"]),
     ("St = [1.0]", "eps = 1e-2\nbogus = 1", ["[physics]", "bogus", "valid"]),
     ("St = [1.0]\neps = [1e-2]", "eps = 1e-2", ["eps", "both"]),
     ("St = [1.0]", "", ["eps", "neither"]),
@@ -684,7 +690,7 @@ def test_journal_lines_hold_the_physics_and_replay_matches_every_axis(tmp_path):
         st._dirty.clear()  # killed before the merge
         st._close_journal()
     lines = [json.loads(line) for line in Path(str(sweep.store) + ".journal").read_text().splitlines()]
-    assert [list(r["physics"]) for r in lines] == [["St", "eps"]] * 3
+    assert [list(r["physics"]) for r in lines] == [["St", "eps", "Pi", "cavitation"]] * 3
     assert {(r["physics"]["St"], r["physics"]["eps"]) for r in lines} == \
         {(1.0, 1e-3), (1.0, 1e-2), (3.0, 1e-3)}
     CALLS.clear()

@@ -136,12 +136,13 @@ def _figure(figsize=(6.0, 4.2)):
 
 def _suffix(extra: dict) -> str:
     """File-name suffix of the plane at ``extra`` (values of the store's other axes)."""
-    return "".join(f"_{k}={v:g}" for k, v in extra.items())
+    return "".join(f"_{k}={v:g}" if isinstance(v, float) else f"_{k}={v}" for k, v in extra.items())
 
 
 def _footer(fig, ds, extra: dict | None = None) -> None:
     a = ds.attrs
-    where = "".join(f", {k} = {v:g}" for k, v in (extra or {}).items())
+    where = "".join(f", {k} = {v:g}" if isinstance(v, float) else f", {k} = {v}"
+                    for k, v in (extra or {}).items())
     fig.get_layout_engine().set(rect=(0.0, 0.03, 1.0, 0.97))  # keep a strip for the footer
     fig.text(0.995, 0.004, f"sweep {a.get('sweep_name', '?')}, solver {a.get('solver_version', '?')}"
              f", accuracy {a.get('accuracy', '?')}{where}", ha="right", va="bottom", fontsize=6,

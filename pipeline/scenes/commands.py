@@ -99,6 +99,8 @@ def _g(value, spec=".4g"):
         return "-"
     if isinstance(value, bool):
         return "yes" if value else "no"
+    if isinstance(value, str):
+        return value
     return format(value, spec)
 
 

@@ -16,6 +16,8 @@ import math
 
 import numpy as np
 
+from .config import physics_from_json
+
 __all__ = ["valid", "critical_stokes", "critical_stokes_csv", "planes", "extra_axes",
            "PlaneError", "critical_stokes_plane", "EXPERIMENT_ST_C", "EXPERIMENT_REFERENCE", "PLANE"]
 
@@ -56,7 +58,7 @@ def planes(ds):
     """
     import itertools
 
-    fixed = dict(ds.attrs.get("fixed_physics", {}))
+    fixed = physics_from_json(dict(ds.attrs.get("fixed_physics", {})))
     for name in PLANE:
         if name not in ds["status"].dims:
             if name not in fixed:

@@ -37,7 +37,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Sweep", "load_sweep", "parse_sweep", "cache_key", "canonical_json", "ConfigError"]
+__all__ = ["Sweep", "load_sweep", "parse_sweep", "cache_key", "canonical_json", "ConfigError",
+           "physics_json", "physics_from_json"]
 
 _TOP_KEYS = {"name", "store", "grid", "physics", "numerics"}
 _RANGE_KEYS = {"start", "stop", "num"}
@@ -53,12 +54,24 @@ def canonical_json(obj) -> str:
     return json.dumps(obj, sort_keys=True, separators=(",", ":"), allow_nan=False)
 
 
+def physics_json(values: dict) -> dict:
+    """Physics values in a form JSON holds exactly: an infinite value (``Pi = inf``, the classic
+    film) as the string "inf" (store attrs, cache keys)."""
+    return {k: ("inf" if isinstance(v, float) and math.isinf(v) else v) for k, v in values.items()}
+
+
+def physics_from_json(values: dict) -> dict:
+    """The inverse of :func:`physics_json`."""
+    return {k: (math.inf if v == "inf" else v) for k, v in values.items()}
+
+
 def cache_key(solver_version: str, numerics: dict, fixed_physics: dict | None = None,
               axes=()) -> str:
     """sha256 (hex) of the canonical JSON of the solver version, the resolved numerics, the fixed
     physics and the axis names: stores computed with other physics never share a key."""
     payload = canonical_json({"solver_version": solver_version, "numerics": numerics,
-                              "fixed_physics": dict(fixed_physics or {}), "axes": list(axes)})
+                              "fixed_physics": physics_json(dict(fixed_physics or {})),
+                              "axes": list(axes)})
     return hashlib.sha256(payload.encode()).hexdigest()
 
 
@@ -219,6 +232,10 @@ def _physics(where: str, doc: dict) -> tuple[dict, dict]:
     if missing:
         raise ConfigError(f"{where}: {missing} neither in [grid] nor in [physics]; give each "
                           "field a grid axis or a fixed value")
+    choice_axes = [n for n in names if n in grid and Physics.group(n).choices]
+    if choice_axes:
+        raise ConfigError(f"{where}: {choice_axes} name a model, not a number: fix it in "
+                          "[physics] (one store per model)")
     n = 1
     for name in names:  # size first: a typo (num = 1e9) must not allocate gigabytes
         if name in grid:
@@ -236,7 +253,7 @@ def _physics(where: str, doc: dict) -> tuple[dict, dict]:
             except ValueError as exc:
                 raise ConfigError(f"{where}: physics.{exc}") from None
         else:
-            fixed[name] = float(Physics.group(name).default)
+            fixed[name] = Physics.group(name).default
     return axes, fixed
 
 
@@ -287,6 +304,8 @@ def _axis(where: str, name: str, spec) -> tuple:
 
 
 def _number(where, name, v) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-        raise ConfigError(f"{where}: grid.{name} must be a finite number, got {v!r}")
+    """A number of a grid axis (its group decides whether inf is allowed: Pi = inf is the
+    classic film)."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or math.isnan(v):
+        raise ConfigError(f"{where}: grid.{name} must be a number, got {v!r}")
     return float(v)

@@ -189,7 +189,8 @@ class _Warm:
 
 def format_physics(physics: dict) -> str:
     """``St=20 eps=1e-08``: a scene's physics in one short line."""
-    return " ".join(f"{k}={v:.6g}" for k, v in physics.items())
+    return " ".join(f"{k}={v:.6g}" if isinstance(v, float) else f"{k}={v}"
+                    for k, v in physics.items())
 
 
 def _count(summary: Summary, st, cells) -> None:

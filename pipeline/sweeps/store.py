@@ -33,6 +33,7 @@ import numpy as np
 from solver.observables import MODEL_CODES, STATUS_CODES
 from solver.physics import Physics
 
+from .config import physics_from_json, physics_json
 from .journal import _journal_path, _read_journal, pending_journal
 from .layout import (COUNTS, DIAGNOSTIC, FLAGS, FLOATS, SCALING, STORE_SCHEMA, VARIABLES, _encoding,
                      _fill, _now, _package_versions, empty_dataset, zarr_warnings)
@@ -240,7 +241,7 @@ class SweepStore:
             "title": "ehd-collision sweep: elastohydrodynamic collision of two elastic spheres",
             "store_schema": STORE_SCHEMA,
             "axes": list(sweep.axis_names),
-            "fixed_physics": dict(sweep.fixed),
+            "fixed_physics": physics_json(sweep.fixed),
             "solver_version": sweep.solver_version(),
             "cache_key": self.key,
             "accuracy": sweep.accuracy,
@@ -312,7 +313,7 @@ class SweepStore:
         if axes != list(sweep.axis_names):
             raise StoreMismatch(f"the store's axes are {axes}, this sweep's are "
                                 f"{list(sweep.axis_names)}; results never mix: {fix}")
-        old = dict(attrs.get("fixed_physics", {}))
+        old = physics_from_json(dict(attrs.get("fixed_physics", {})))
         diffs = [f"{k} = {old.get(k, 'unset')!r} in the store, {sweep.fixed.get(k, 'unset')!r} "
                  "in this sweep" for k in Physics.names() if old.get(k) != sweep.fixed.get(k)]
         diffs += [f"{k} = {old[k]!r} in the store, unknown to this solver"

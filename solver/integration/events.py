@@ -8,19 +8,27 @@ coupled phase: today the classic model's release (solver/model/rigid.py, ``relea
 
 from .._jit import jit
 
-__all__ = ["RELAXED", "reached"]
+__all__ = ["RELAXED", "RELAXED_FULL", "reached"]
 
 # The deformation has relaxed and the remaining motion can only relax it further: from here the
 # rigid departure is exact (docs/model.md, "Rigid solution"). params = (release, V_peak):
 # stop once X > 0, max|W| < release X, and the spheres separate (V < 0) or are past the rigid
 # deformation peak (V < V_peak).
 RELAXED = 1
+# The same, and no cavity left: for a film whose cavity has a memory (JFO), the rigid departure is
+# exact only once the film is full again.
+RELAXED_FULL = 2
 
 
 @jit
-def reached(kind, params, steps, x, v, w_absmax):
+def reached(kind, params, steps, x, v, w_absmax, cavity_radius):
     """True when the event ``kind`` with ``params`` has happened at the accepted state
-    (``steps`` accepted steps so far, separation ``x``, velocity ``v``, largest ``|W|``)."""
+    (``steps`` accepted steps so far, separation ``x``, velocity ``v``, largest ``|W|``, radius of
+    the cavity, 0 without)."""
+    relaxed = (steps > 0 and x > 0.0 and w_absmax < params[0] * x
+               and (v < 0.0 or v < params[1]))
     if kind == RELAXED:
-        return steps > 0 and x > 0.0 and w_absmax < params[0] * x and (v < 0.0 or v < params[1])
+        return relaxed
+    if kind == RELAXED_FULL:
+        return relaxed and cavity_radius == 0.0
     return False

@@ -14,6 +14,11 @@ model's terms come from model/film.py; this module knows nothing of the physics 
   collapses the step when the pressure passes through zero), ``X`` and ``V``; steps grow at most
   2x (BDF2 zero-stability needs < 2.41x) and are kept when the proposed growth is under 1.2x, so
   the LU can be reused.
+- Cavitation (a pressure floor, model/film.py): the set of cavitated cells is decided from the
+  film rows at each Newton iterate; a change refreshes the Jacobian, and a step converges only
+  with a settled set. No BDF restart at a change: the error test rejects and shrinks the step
+  across the switching kink, which keeps the integration second order (a restart to first order
+  at every change made the whole integration first order in an independent implementation).
 - End: a terminal event passed in by the caller (events.py), evaluated after each accepted step;
   for the classic model the release of model/rigid.py, from where the motion is rigid and exact.
 """
@@ -21,7 +26,9 @@ model's terms come from model/film.py; this module knows nothing of the physics 
 import numpy as np
 
 from .._jit import jit
-from ..model.film import energy_rates, face_fluxes, film_force, gap, jacobian, residual
+from ..model.film import (constrain, energy_rates, face_fluxes, film_force, gap, jacobian,
+                          residual, update_cavity, void_work)
+from ..physics import CAVITATION
 from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
 from .events import reached
 from .linalg import lu_factor, lu_solve, matvec
@@ -37,6 +44,7 @@ GAP_FLOOR = 1e-2  # x1 units: below this the gap error counts as absolute
 PRESSURE_FLOOR = 0.05  # fraction of max|P| below which the pressure error counts as absolute
 NEWTON_KAPPA = 0.05  # Newton stops when its predicted remaining error is this fraction of tol
 MAX_NEWTON = 7
+MAX_SET_CHANGES = 4  # changes of the cavitated cells within one step attempt before it halves
 SAFETY = 0.9
 
 # columns of the series array (solver/observables.py: SERIES)
@@ -46,6 +54,8 @@ _W0, _H_MIN, _R_H_MIN = SERIES_INDEX["W0"], SERIES_INDEX["H_min"], SERIES_INDEX[
 _E_K, _E_S, _DISS = SERIES_INDEX["E_k"], SERIES_INDEX["E_s"], SERIES_INDEX["dissipated"]
 _H0, _W_ABSMAX = SERIES_INDEX["H0"], SERIES_INDEX["W_absmax"]
 _P_MAX, _P_MIN = SERIES_INDEX["P_max"], SERIES_INDEX["P_min"]
+_R_CAV, _V_VOID = SERIES_INDEX["cavity_radius"], SERIES_INDEX["void_volume"]
+_W_VOID = SERIES_INDEX["void_work"]
 
 
 @jit
@@ -56,12 +66,13 @@ def _grow(a, rows):
 
 
 @jit
-def _norm(dp, dx, dv, dh, p, x, v, h, rtol):
-    """Max-norm of a change, each component relative to ``rtol`` times its own scale."""
+def _norm(dp, dx, dv, dh, p, x, v, h, rtol, p_abs):
+    """Max-norm of a change, each component relative to ``rtol`` times its own scale; pressures
+    below ``PRESSURE_FLOOR`` of the largest one (plus ``p_abs``) count as absolute."""
     pmax = 0.0
     for i in range(p.size):
         pmax = max(pmax, abs(p[i]))
-    p_floor = PRESSURE_FLOOR * pmax + 1e-12
+    p_floor = PRESSURE_FLOOR * pmax + p_abs
     e = abs(dx) / (1.0 + abs(x))
     e = max(e, abs(dv) / (0.1 + abs(v)))
     for i in range(h.size):
@@ -120,6 +131,21 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
     piv = np.empty(m, dtype=np.int32)
     lu_valid = False
     bh_lu = 1.0
+    floor = phys[CAVITATION] != 0.0  # a cavitation model is on
+    # Absolute part of the pressure error scale. With a floor the film carries almost no
+    # pressure once it has cavitated (|P| ~ Pi over the whole rebound), and a scale relative to
+    # the instantaneous pressure made the steps collapse to 1e-9 where the last full cells at the
+    # axis drained: pressures far below the collision's peak move neither the gap nor the force
+    # (both in the norm on their own), so they count as absolute below PRESSURE_FLOOR of the
+    # largest pressure seen so far, from the film's first cavity on. The classic film (and a
+    # film that never cavitates) keeps its instantaneous scale.
+    p_abs = 1e-12
+    p_seen = 0.0
+    active = np.zeros(n - 1, dtype=np.bool_)  # cavitated cells of the current iterate
+    active_lu = np.zeros(n - 1, dtype=np.bool_)  # ... of the factorised Jacobian
+    active0 = np.zeros(n - 1, dtype=np.bool_)  # ... of the last accepted state
+    h_onset = np.zeros(n - 1)  # gap where each cell cavitated (void volume)
+    worked = 0.0  # void work so far
 
     rows = 256
     series = np.empty((rows, N_SERIES))
@@ -172,14 +198,27 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
         row[_W_ABSMAX] = wmax
         row[_P_MAX] = pmax
         row[_P_MIN] = pmin
+        r_cav = 0.0
+        v_void = 0.0
+        for i in range(n - 1):
+            if active0[i]:
+                r_cav = np.sqrt(2.0 * s[i])
+                v_void += area[i] * (h[i] - h_onset[i])
+        row[_R_CAV] = r_cav
+        row[_V_VOID] = v_void
+        row[_W_VOID] = worked
         if save_profiles:
             p_hist[n_rows] = y0[:n]
             w_hist[n_rows] = w
         n_rows += 1
 
+        if floor:
+            p_seen = max(p_seen, pmax, -pmin)
+            if r_cav > 0.0:
+                p_abs = max(p_abs, PRESSURE_FLOOR * p_seen)
         if status != RUNNING:
             break
-        if reached(stop_kind, stop_params, counters[0], x, v, wmax):
+        if reached(stop_kind, stop_params, counters[0], x, v, wmax, r_cav):
             status = OK
             break
 
@@ -228,7 +267,9 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
             fresh = False
             if (not lu_valid) or abs(bh / bh_lu - 1.0) > 0.3:
                 gap(s, influence, y[n], y[:n], w, h)
-                jacobian(s, s_face, area, weight, influence, phys, bh, y[:n], h, jac, dres_dh)
+                jacobian(s, s_face, area, weight, influence, phys, bh, y[:n], h, active, jac,
+                         dres_dh)
+                active_lu[:] = active
                 counters[4] += 1
                 counters[3] += 1
                 lu_valid = lu_factor(jac, piv)
@@ -239,11 +280,19 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                     break
 
             # Newton: the gap update of an iterate is the next iterate's gap minus this one's,
-            # so each iteration costs one K-product (in gap) and one LU solve
+            # so each iteration costs one K-product (in gap) and one LU solve. With a floor, the
+            # cavitated cells are decided at the predictor and held while Newton converges; a
+            # converged iterate whose cells would change (a full cell below the floor, a
+            # cavitated one drawing liquid in) goes on with the new set and a fresh Jacobian.
             converged = False
+            pending = False  # converged, if the cavity of the iterate is settled
             norm_prev = 0.0
+            first = True
+            set_changes = 0
             gap(s, influence, y[n], y[:n], w, h)
-            for it in range(MAX_NEWTON):
+            it = 0
+            while it < MAX_NEWTON or (pending and it == MAX_NEWTON):
+                it += 1
                 bad = False
                 for i in range(n):
                     if not (h[i] > 0.0) or not np.isfinite(h[i]):
@@ -252,6 +301,34 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                     break
                 residual(s, s_face, area, weight, phys, bh, h_hist, x_hist, v_hist, y[n], y[n + 1],
                          y[:n], h, q, res)
+                if floor:
+                    if it == 1 or pending:
+                        update_cavity(y[:n], res, phys, active)
+                    same = True
+                    for i in range(n - 1):
+                        if active[i] != active_lu[i]:
+                            same = False
+                    if pending and same:
+                        converged = True
+                        break
+                    pending = False
+                    if not same:
+                        set_changes += 1
+                        if set_changes > MAX_SET_CHANGES:
+                            break
+                        jacobian(s, s_face, area, weight, influence, phys, bh, y[:n], h, active,
+                                 jac, dres_dh)
+                        active_lu[:] = active
+                        counters[4] += 1
+                        counters[3] += 1
+                        lu_valid = lu_factor(jac, piv)
+                        bh_lu = bh
+                        fresh = True
+                        first = True
+                        it = 1
+                        if not lu_valid:
+                            break
+                    constrain(y[:n], res, active, phys)
                 for k in range(m):
                     res[k] = -res[k]
                 lu_solve(jac, piv, res)
@@ -263,21 +340,27 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                 gap(s, influence, y[n], y[:n], w, h)
                 for i in range(n):
                     dh[i] = h[i] - dh[i]
-                norm = _norm(res[:n], res[n], res[n + 1], dh, y[:n], y[n], y[n + 1], h, rtol)
+                norm = _norm(res[:n], res[n], res[n + 1], dh, y[:n], y[n], y[n + 1], h, rtol, p_abs)
                 if not np.isfinite(norm):
                     break
-                if it == 0:
-                    if norm < 1e-3 * NEWTON_KAPPA:
-                        converged = True
-                        break
+                done = False
+                if first:
+                    done = norm < 1e-3 * NEWTON_KAPPA
+                    first = False
                 else:
                     rate = norm / norm_prev
                     if rate >= 1.0:
                         break
-                    if rate / (1.0 - rate) * norm < NEWTON_KAPPA:
+                    done = rate / (1.0 - rate) * norm < NEWTON_KAPPA
+                if done:
+                    if not floor:
                         converged = True
                         break
+                    pending = True
                 norm_prev = norm
+            if floor and not lu_valid:
+                status = NONFINITE
+                break
             if not converged:
                 if fresh:
                     dt *= 0.5
@@ -300,7 +383,16 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                 matvec(influence, res[:n], kdp)
                 for i in range(n):
                     dh[i] = res[n] + kdp[i]
-                err = _norm(res[:n], res[n], res[n + 1], dh, y[:n], y[n], y[n + 1], h, 1.0) / rtol
+                open_cavity = r_cav > 0.0
+                for i in range(n - 1):
+                    open_cavity = open_cavity or active[i]
+                if floor and open_cavity:
+                    # while a cavity is open the pressure is not smooth in time wherever its edge
+                    # crosses a node (the cells there and their neighbours); the gap, X and V
+                    # errors control the step (measured: every rejection came from these kinks)
+                    for i in range(n):
+                        res[i] = 0.0
+                err = _norm(res[:n], res[n], res[n + 1], dh, y[:n], y[n], y[n + 1], h, 1.0, p_abs) / rtol
             else:
                 err = 0.0
             if not np.isfinite(err):
@@ -319,6 +411,12 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
             continue
 
         # ---- shift history -------------------------------------------------------------------
+        if floor:
+            worked += void_work(area, h, h0, active, phys)
+            for i in range(n - 1):
+                if active[i] and not active0[i]:
+                    h_onset[i] = h0[i]
+            active0[:] = active
         y2[:] = y1
         y1[:] = y0
         y0[:] = y

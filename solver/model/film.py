@@ -14,11 +14,13 @@ integrated over finite volumes (integration/grid.py). The terms, one function ea
   exact for the rigid pressure ``3V/H^2`` on any grid, so the stretched far field costs no accuracy;
 - ``far_field_row``: the outer boundary node keeps ``P H^2`` equal to its neighbour's (rigid far
   field ``P = 3V/H^2``); the pressure beyond it is the tail ``P_L (R_L/R)^4``;
-- ``cell_constraint``: a bound on the pressure of a cell (none in the classic model);
+- ``cavitated`` and ``cell_constraint``: the pressure floor ``P >= -Pi`` of the Reynolds
+  (Swift-Stieber) cavitation condition, a complementarity problem decided cell by cell (none in
+  the classic film; docs/model.md, "Cavitation");
 - ``deflection`` and ``gap``: the surface load that deflects the solids, ``W = K P``;
 - ``film_force``: the load that moves them, ``Int P R dR = weight @ P``;
-- ``face_dissipation``, ``far_field_dissipation``, ``strain_energy``: the energy terms
-  (docs/model.md, "Energy").
+- ``face_dissipation``, ``far_field_dissipation``, ``strain_energy``, ``void_work``: the energy
+  terms (docs/model.md, "Energy").
 
 The unknowns of a step are ``y = (P_0..P_{N-1}, X, V)``; rows are scaled to gap units (``bh/area``
 for the cells, ``bh`` for the motion), ``bh`` the implicit BDF coefficient times the step. The
@@ -27,7 +29,7 @@ physics array ``phys`` (solver/physics.py, ``Physics.as_array``) carries the dim
 
 from .._jit import jit
 from ..integration.linalg import matvec
-from ..physics import ST
+from ..physics import CAVITATION, PI, ST
 
 
 # ---- the terms ------------------------------------------------------------------------------------
@@ -85,11 +87,37 @@ def far_field_dissipation(x, s_last, p_last, h_last):
 
 
 @jit
+def cavitated(p, r_film, was_cavitated, phys):
+    """Whether a cell is in the cavity under the Reynolds (Swift-Stieber) condition, the
+    complementarity ``P + Pi >= 0``, ``r >= 0``, ``(P + Pi) r = 0`` (``r`` the cell's film-equation
+    residual: positive where the gap opens faster than the flux fills it). Decided as a
+    primal-dual active set: a full cell cavitates when its pressure falls below the floor, a
+    cavitated cell refills when its film equation would draw liquid in (``r < 0``); otherwise a
+    cell keeps its state. The classic film never cavitates."""
+    if phys[CAVITATION] == 0.0:
+        return False
+    if was_cavitated:
+        return r_film >= 0.0
+    return p + phys[PI] < 0.0
+
+
+@jit
 def cell_constraint(p, phys):
-    """Whether a bound on the pressure replaces the film equation of a cell (an active
-    constraint), with that row's residual and its derivative in ``P``. The classic film carries
-    any pressure: never active. (A cavitation floor ``P >= -Pi`` is the first user.)"""
-    return False, 0.0, 0.0
+    """The row that replaces the film equation of a cavitated cell, ``P + Pi = 0``, and its
+    derivative in ``P``."""
+    return p + phys[PI], 1.0
+
+
+@jit
+def void_work(area, h_new, h_old, active, phys):
+    """Work done against the floor while the cavities grow, ``(2/(3 St)) Pi Int_cav dH ds``,
+    between two states (relative to the initial kinetic energy; docs/model.md, "Energy"): the
+    energy that goes into creating the void."""
+    total = 0.0
+    for i in range(active.size):
+        if active[i]:
+            total += area[i] * (h_new[i] - h_old[i])
+    return 2.0 * phys[PI] * total / (3.0 * phys[ST])
 
 
 @jit
@@ -140,16 +168,13 @@ def face_fluxes(s, s_face, p, h, phys, q_out):
 
 @jit
 def residual(s, s_face, area, weight, phys, bh, h_hist, x_hist, v_hist, x, v, p, h, q, res):
-    """Scaled residual of one implicit step: ``H - H_hist = bh dq/ds`` per cell (or its active
-    pressure constraint), the far-field boundary row, ``X - X_hist = -bh V`` and
-    ``V - V_hist = -bh F/(3 St)``. ``q`` receives the face fluxes."""
+    """Scaled residual of one implicit step with the film equation in every cell:
+    ``H - H_hist = bh dq/ds``, the far-field boundary row, ``X - X_hist = -bh V`` and
+    ``V - V_hist = -bh F/(3 St)``. ``q`` receives the face fluxes. ``constrain`` then replaces
+    the rows of cavitated cells."""
     n = s.size
     face_fluxes(s, s_face, p, h, phys, q)
     for i in range(n - 1):
-        active, r, _ = cell_constraint(p[i], phys)
-        if active:
-            res[i] = r
-            continue
         dq = q[i] - (q[i - 1] if i > 0 else 0.0)
         res[i] = h[i] - h_hist[i] - bh / area[i] * dq
     res[n - 1] = far_field_row(p[n - 2], p[n - 1], h[n - 2], h[n - 1])[0]
@@ -158,12 +183,34 @@ def residual(s, s_face, area, weight, phys, bh, h_hist, x_hist, v_hist, x, v, p,
 
 
 @jit
-def jacobian(s, s_face, area, weight, influence, phys, bh, p, h, jac, dres_dh):
+def update_cavity(p, res, phys, active):
+    """Update from the film rows ``res`` (before ``constrain``) which cells are cavitated, in
+    ``active``; returns whether that changed."""
+    changed = False
+    for i in range(active.size):
+        a = cavitated(p[i], res[i], active[i], phys)
+        if a != active[i]:
+            active[i] = a
+            changed = True
+    return changed
+
+
+@jit
+def constrain(p, res, active, phys):
+    """Replace the film rows of the cavitated cells by their constraint rows."""
+    for i in range(active.size):
+        if active[i]:
+            res[i] = cell_constraint(p[i], phys)[0]
+
+
+@jit
+def jacobian(s, s_face, area, weight, influence, phys, bh, p, h, active, jac, dres_dh):
     """Jacobian of ``residual`` with respect to ``(P, X, V)`` into ``jac`` (N+2, N+2), from the
     terms' partial derivatives.
 
     The cell rows depend on the gap at three nodes, and the gap on every pressure through ``K``:
-    ``J = (dres/dH) K + dres/dP``. ``dres_dh`` (N, 3) is work space (columns i-1, i, i+1)."""
+    ``J = (dres/dH) K + dres/dP``; the rows of cavitated cells (``active``, N-1 entries) are their
+    constraint's. ``dres_dh`` (N, 3) is work space (columns i-1, i, i+1)."""
     n = s.size
     jac[:, :] = 0.0
     dres_dh[:, :] = 0.0
@@ -190,11 +237,10 @@ def jacobian(s, s_face, area, weight, influence, phys, bh, p, h, jac, dres_dh):
     dres_dh[n - 1, 0] = dr_dhi
     dres_dh[n - 1, 1] = dr_dho
     for i in range(n - 1):  # an active constraint replaces the whole row
-        active, _, dr_dp = cell_constraint(p[i], phys)
-        if active:
+        if active[i]:
             jac[i, :] = 0.0
             dres_dh[i, :] = 0.0
-            jac[i, i] = dr_dp
+            jac[i, i] = cell_constraint(p[i], phys)[1]
     # chain rule through H = X + s + K P
     for i in range(n):
         lo = i - 1 if i > 0 else 0
