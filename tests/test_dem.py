@@ -119,3 +119,25 @@ def test_export_dem_from_a_scene_file(tmp_path, capsys):
     rows = read_csv(tmp_path / "restitution.csv")
     assert len(rows) == 5 and rows[0]["St"] < rows[-1]["St"]
     assert main(["export-dem", str(tmp_path / "nothing.zarr")]) == 2
+
+
+def test_export_dem_from_a_sweep_store(tmp_path, capsys):
+    # a real (fast) sweep: e_wet goes into the store from the registry and out to the CSV
+    from pipeline import open_results
+    from pipeline.sweeps.config import parse_sweep
+    from pipeline.sweeps.run import run_sweep
+    from solver import collide
+
+    text = ('name = "dem"\nstore = "x.zarr"\n[grid]\nSt = [6.0, 10.0, 15.0, 30.0, 60.0]\n'
+            'eps = [0.01]\n[numerics]\naccuracy = "fast"\n')
+    sweep = parse_sweep(text).with_store(tmp_path / "s.zarr")
+    run_sweep(sweep, runner="serial", progress=None)
+    ds = open_results(sweep.store)
+    assert float(ds.e_wet.sel(St=30.0, eps=0.01)) == collide(30.0, 0.01, accuracy="fast").e_wet
+    assert main(["export-dem", str(sweep.store), "--out", str(tmp_path / "out")]) == 0
+    rows = read_csv(tmp_path / "out" / "restitution.csv")
+    assert [r["St"] for r in rows] == [6.0, 10.0, 15.0, 30.0, 60.0]
+    assert rows[0]["sticks"] and rows[0]["St_exp"] == 6.0 and rows[0]["St_yade"] == 54.0
+    doc = json.loads((tmp_path / "out" / "restitution.json").read_text())
+    assert set(doc["groups"]) == {"eps=0.01"}
+    assert doc["groups"]["eps=0.01"]["liggghts"]["MaximumRestitution"] <= 1.0
