@@ -29,6 +29,26 @@ def threshold(st, e):
     return math.exp(x1 - y1 * (x2 - x1) / (y2 - y1))
 
 
+def fits_table(st, curves) -> str:
+    """The DEM laws fitted to each curve (our St), and LIGGGHTS' replica before and after
+    calibration (pipeline/dem)."""
+    from pipeline.dem import fits, liggghts
+
+    lines = ["| eps | exp: e_max, C (max error) | threshold: e_max, St_c (max error) | LIGGGHTS "
+             "as fitted: max error | calibrated MaximumRestitution, CriticalStokes (max error) |",
+             "|---|---|---|---|---|"]
+    for k, e in curves.items():
+        fe, ft = fits.fit_exponential(st, e), fits.fit_threshold(st, e)
+        up = e > 0
+        plain = np.array([liggghts.replica_restitution(s, fe.e_max, fe.c) for s in st[up]])
+        em, c, err, _ = liggghts.calibrate(st, e, fe.e_max, fe.c)
+        lines.append(f"| {k} | {fe.e_max:.3f}, {fe.c:.2f} ({fe.max_error:.3f}) | {ft.e_max:.3f}, "
+                     f"{ft.c:.2f} ({ft.max_error:.3f}) | {np.max(np.abs(plain - e[up])):.3f} | "
+                     f"{em:.3f}, {c:.2f} ({err:.3f}) |")
+    return ("Fits over St = " + f"{st[0]:.3g}-{st[-1]:.3g}" + " (rebounding rows):\n\n"
+            + "\n".join(lines) + "\n")
+
+
 def main():
     data = json.loads((HERE / "e_wet_curves.json").read_text())
     st = np.array(data["St"])
@@ -51,7 +71,7 @@ def main():
             d = [np.max(np.abs(e[m] - legendre(st[m], r))) for r in DENSITY_RATIOS]
             cells.append(f"{min(d):.3f}-{max(d):.3f}")
         lines.append(f"| {k} | {threshold(st, e):.1f} | {cells[0]} | {cells[1]} | {e[-1]:.3f} |")
-    text = "\n".join(lines) + "\n"
+    text = "\n".join(lines) + "\n\n" + fits_table(st, curves)
     (HERE / "wet_restitution.md").write_text(
         "# Wet restitution against experiments\n\n"
         "Model: `e_wet` at x0, standard accuracy (benchmarks/e_wet_curves.py). Experiments: "
