@@ -122,5 +122,7 @@ def snippet(types: list[str], e_max, c, mu, youngs, poisson, v_char) -> str:
         f"fix m5 all property/global CriticalStokes peratomtypepair {n} {matrix(c)}",
         f"fix m6 all property/global MaximumRestitution peratomtypepair {n} {matrix(e_max)}",
         "# also required by tangential history: coefficientFriction peratomtypepair (not set here)",
+        "# walls: the same model and keywords in fix wall/gran (... model hooke tangential history"
+        " viscous on ...)",
     ]
     return "\n".join(lines) + "\n"
