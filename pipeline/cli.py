@@ -121,7 +121,7 @@ def cmd_run(args) -> int:
     check_output_paths(args.save, args.plot)
     physics = physics_from_args(args)
     try:
-        result = collide(physics, accuracy=args.accuracy,
+        result = collide(physics, accuracy=args.accuracy, x_ref_x0=args.x_ref,
                          save_profiles=bool(args.save or args.plot), **_numerics_overrides(args))
     except ValueError as exc:
         raise UsageError(str(exc)) from None
@@ -175,6 +175,9 @@ def _build_run(sub) -> None:
     _add_physics_flags(p)
     _add_numerics_flags(p)
     p.add_argument("--json", action="store_true", help="print exactly one JSON object")
+    p.add_argument("--x-ref", type=float, default=1.0, metavar="X_REF_X0",
+                   help="where e_wet is seen, over x0 (>= 1; the impact Stokes number there is "
+                        "St + ln(x_ref/x0)); default 1")
     p.add_argument("--save", metavar="FILE", default=None,
                    help="write time series and profiles (.nc or .zarr)")
     p.add_argument("--plot", metavar="DIR", default=None,
@@ -198,7 +201,7 @@ def _build_info(sub) -> None:
 # name -> builder(subparsers) of the commands defined here
 COMMANDS = {"run": _build_run, "info": _build_info}
 # modules that add their own subcommands through ``register(subparsers)``
-COMMAND_MODULES = ("pipeline.sweeps.commands", "pipeline.scenes.commands")
+COMMAND_MODULES = ("pipeline.sweeps.commands", "pipeline.scenes.commands", "pipeline.dem.commands")
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -94,7 +94,8 @@ def scene_grid(stokes, x_switch, numerics: Numerics, pi=math.inf):
     return scaled_grid(ref, inner)
 
 
-def collide(physics, eps=None, *, accuracy: str = "standard", **overrides) -> Collision:
+def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 1.0,
+            **overrides) -> Collision:
     """Solve one head-on collision of two elastic spheres through a viscous film.
 
     Parameters
@@ -107,6 +108,10 @@ def collide(physics, eps=None, *, accuracy: str = "standard", **overrides) -> Co
         Stokes number: ``collide(5.0, 0.01)`` is ``collide(Physics(St=5.0, eps=0.01))``.
     accuracy : {"fast", "standard", "fine"}
         Preset of numerical settings (settings.PRESETS).
+    x_ref_x0 : float
+        Where the wet restitution ``e_wet`` is seen, over ``x0`` (``>= 1``; default the start
+        ``x0``). A reporting option, not physics: the impact Stokes number there is
+        ``St_ref = St + ln(x_ref/x0)`` (``Collision.St_ref``, rigid.impact_stokes).
     **overrides
         Any field of ``settings.Numerics`` (e.g. ``switch=0.005``, ``n_inner=64``).
 
@@ -120,6 +125,9 @@ def collide(physics, eps=None, *, accuracy: str = "standard", **overrides) -> Co
     elif eps is not None:
         raise TypeError("collide(physics, ...): eps is part of the Physics; do not pass it twice")
     numerics = resolve(accuracy, **overrides)
+    if not (math.isfinite(x_ref_x0) and x_ref_x0 >= 1.0):
+        raise ValueError(f"x_ref_x0 = {x_ref_x0!r}: the reference separation must be finite and "
+                         "at least the start x0 (x_ref_x0 >= 1)")
     if physics.cavitation == "jfo":
         raise ValueError("cavitation model 'jfo' (mass-conserving) is not built yet; use "
                          "'reynolds' (docs/model.md, \"Cavitation\")")
@@ -128,7 +136,8 @@ def collide(physics, eps=None, *, accuracy: str = "standard", **overrides) -> Co
     if x_switch is None:
         result = _rigid_only(physics, accuracy, numerics)
     else:
-        result = _coupled(physics, accuracy, numerics, x_switch)
+        result = _coupled(physics, accuracy, numerics, x_switch, x_ref_x0)
+    result.x_ref_x0 = x_ref_x0
     result.wall_s = time.perf_counter() - wall
     return result
 
@@ -190,7 +199,7 @@ def _rigid_only(physics, accuracy, numerics):
     result = Collision(
         physics=physics, accuracy=accuracy, numerics=numerics, model="rigid", status="ok",
         message="deformation stays below the hand-over threshold: rigid solution (exact)",
-        v_r=0.0, h_m_x1=math.exp(ln_x_stop), h_m_approach_x1=math.exp(ln_x_stop),
+        v_r=0.0, e_wet=0.0, h_m_x1=math.exp(ln_x_stop), h_m_approach_x1=math.exp(ln_x_stop),
         ln_x_e_x1=ln_x_stop, tau_v_zero=math.inf, tau_max_rebound=math.nan,
         x_min_x1=math.exp(ln_x_stop), energy_error=0.0, p_min=0.0, series=series)
     include_rigid_peaks(result, x_start, 0.0)
@@ -211,7 +220,7 @@ def include_rigid_peaks(result, x_start, x_switch):
                 setattr(result, t_name, head["t_" + t_name[4:]] * tau_per_t)
 
 
-def _coupled(physics, accuracy, numerics, x_switch):
+def _coupled(physics, accuracy, numerics, x_switch, x_ref_x0=1.0):
     stokes, x_start, tau_per_t = physics.St, physics.x_start, physics.tau_per_t
     v_switch = float(rigid.velocity(x_switch, x_start, 1.0, stokes))
     t_switch = float(rigid.elapsed_time(x_switch, x_start, 1.0, stokes))
@@ -283,6 +292,7 @@ def _coupled(physics, accuracy, numerics, x_switch):
     result.series = _concat(blocks)
     result.tau_release = t_rel * tau_per_t
     result.ln_x_e_x1 = ln_x_e
+    result.e_wet = _wet_restitution(physics, x_c, v_c, x_ref_x0 * x_start)
     _coupled_observables(result, cols, tau_per_t, ln_x_e, v_c[-1])
     if blocks[-1]["phase"][0] == 2:  # the departure's cavity (with a floor) may be the widest
         widest = max(float(np.max(b["cavity_radius"])) for b in blocks if b["phase"][0] == 2)
@@ -294,6 +304,21 @@ def _coupled(physics, accuracy, numerics, x_switch):
         result.message = failure_message("start_deformed", ratio=result.start_strain_energy,
                                          limit=START_STRAIN_LIMIT)
     return result
+
+
+def _wet_restitution(physics, x_c, v_c, x_ref):
+    """``e_wet`` at ``x_ref`` from the coupled phase's end: the rigid departure (rigid.restitution)
+    from the release state; when the release lies beyond ``x_ref`` (the deformation relaxed only
+    after the spheres passed it), from the last row inside ``x_ref`` on the way out, so the
+    departure crosses ``x_ref`` on the rigid path of a state whose deformation is ``O(release)``."""
+    j = len(x_c) - 1
+    if x_c[j] > x_ref and v_c[j] < 0.0:
+        inside = np.nonzero((x_c <= x_ref) & (v_c < 0.0))[0]
+        if inside.size:
+            j = int(inside[-1])
+    if physics.cavitation == "reynolds":
+        return cavitation.restitution(x_c[j], v_c[j], physics, x_ref)
+    return rigid.restitution(x_c[j], v_c[j], physics, x_ref)
 
 
 def _coupled_observables(result, cols, tau_per_t, ln_x_e, v_rel):

@@ -88,8 +88,12 @@ class MasterCurve:
         value = float(spline(math.log(s_value)))
         return math.exp(value) if _CARRIED[name][0] == "log" else value
 
-    def collide(self, physics, eps=None) -> Collision:
+    def collide(self, physics, eps=None, *, x_ref_x0: float = 1.0) -> Collision:
         """A scene from the master curve; classic scenes off the curve are solved directly.
+
+        ``x_ref_x0`` is where ``e_wet`` is seen (``solver.collide``); on the curve ``e_wet`` is
+        computed from the interpolated ``ln_x_e_x1`` (rigid.restitution_from_rest), which fixes the
+        whole rigid departure.
 
         Raises
         ------
@@ -106,14 +110,14 @@ class MasterCurve:
         x_switch = rigid.handover_separation(x_start, stokes, numerics.switch)
         if x_switch is None or x_switch >= x_start:
             return collide(physics, accuracy=self.accuracy, save_profiles=False,
-                           **dict(self.overrides))
+                           x_ref_x0=x_ref_x0, **dict(self.overrides))
         wall = time.perf_counter()
         v_s = float(rigid.velocity(x_switch, x_start, 1.0, stokes))
         t_s = float(rigid.elapsed_time(x_switch, x_start, 1.0, stokes))
         s_value = stokes * v_s
         if not self.s[0] <= s_value <= self.s[-1]:
             return collide(physics, accuracy=self.accuracy, save_profiles=False,
-                           **dict(self.overrides))
+                           x_ref_x0=x_ref_x0, **dict(self.overrides))
         lam = v_s**0.4
         tau_per_t = physics.tau_per_t
         # docs/model.md, "Similarity": how each quantity of the master scene scales to this one
@@ -139,6 +143,9 @@ class MasterCurve:
             status="ok", message=f"master curve at S = St V_switch = {s_value:.6g}",
             tau_handover=t_s * tau_per_t, **values)
         result.dimple = bool(result.dimple_depth_x1 > DIMPLE_DEPTH)
+        result.x_ref_x0 = x_ref_x0
+        result.e_wet = rigid.restitution_from_rest(values["ln_x_e_x1"], physics,
+                                                   x_ref_x0 * x_start)
         include_rigid_peaks(result, x_start, x_switch)
         result.wall_s = time.perf_counter() - wall
         return result

@@ -50,6 +50,9 @@ _P = "mu a v0 / x1^2"
 OBSERVABLES = (
     Observable("v_r", "float", "maximum rebound (separation) velocity max(-v)/v0, 0 without "
                "rebound", "v0", "rebound velocity v_r/v0", master="lin velocity"),
+    Observable("e_wet", "float", "wet coefficient of restitution: separation speed where the "
+               "spheres pass back out through x_ref (default x0) over the approach speed there; "
+               "0 when they stick", "v0/v0", "wet restitution e_wet (at x_ref)"),
     Observable("h_m_x1", "float", "closest approach of the deformed surfaces, whole collision",
                "x1", "closest approach h_m/x1", master="log length"),
     Observable("h_m_x0", "float", "closest approach of the deformed surfaces, whole collision",

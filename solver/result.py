@@ -21,9 +21,10 @@ from .settings import Numerics
 __all__ = ["Collision", "JSON_KEYS", "SOLVER_VERSION"]
 
 # Bump with any change that can alter numbers: stamped into every result and store.
-SOLVER_VERSION = "1.3.0"
+SOLVER_VERSION = "1.4.0"
 
-JSON_KEYS = (*Physics.names(), *LABELS, *(o.name for o in OBSERVABLES), "solver_version")
+JSON_KEYS = (*Physics.names(), *LABELS, *(o.name for o in OBSERVABLES), "x_ref_x0",
+             "solver_version")
 
 SCALING = ("lengths along the axis / x1 (x1 = (4 theta mu a^1.5 v0)^0.4), radius / sqrt(a x1), "
            "tau = v0 t / x0, pressure / (mu a v0 / x1^2), velocity / v0, force / "
@@ -49,6 +50,7 @@ class Collision:
     status: str  # "ok" or a failure code (observables.STATUS)
     message: str
     v_r: float = 0.0  # max rebound speed / v0
+    e_wet: float = math.nan  # wet restitution at x_ref (rigid.restitution; 0: the spheres stick)
     h_m_x1: float = math.nan  # closest approach of the deformed surfaces, whole collision
     h_m_approach_x1: float = math.nan  # closest approach until v first reaches 0
     ln_x_e_x1: float = math.nan  # log of the equilibrium separation (finite even when x_e overflows)
@@ -77,6 +79,7 @@ class Collision:
     wall_s: float = 0.0
     tau_handover: float = math.nan  # rigid -> coupled
     tau_release: float = math.nan  # coupled -> rigid
+    x_ref_x0: float = 1.0  # where e_wet is seen, over x0 (a reporting option, >= 1)
     series: dict = field(default_factory=dict, repr=False)  # time series (SERIES, tau, phase)
     radius: np.ndarray | None = field(default=None, repr=False)  # (N,) grid radii R
     profile_tau: np.ndarray | None = field(default=None, repr=False)  # (rows,)
@@ -105,6 +108,11 @@ class Collision:
     @property
     def x0_over_x1(self) -> float:
         return self.physics.x_start
+
+    @property
+    def St_ref(self) -> float:
+        """The impact Stokes number at x_ref, ``St + ln(x_ref/x0)`` (rigid.impact_stokes)."""
+        return self.physics.St + math.log(self.x_ref_x0)
 
     # ---- derived quantities ---------------------------------------------------------------------
     @property

@@ -292,7 +292,7 @@ def test_store_schema_and_attrs(tmp_path):
 
     assert a["solver_version"] == SOLVER_VERSION and a["accuracy"] == "fast"
     assert a["cache_key"] == sweep.cache_key() and a["numerics"] == sweep.numerics()
-    assert a["axes"] == ["St", "eps"] and a["store_schema"] == 3
+    assert a["axes"] == ["St", "eps"] and a["store_schema"] == 4
     assert a["fixed_physics"] == {"Pi": "inf", "cavitation": "auto"}  # JSON holds inf as "inf"
     assert a["sweep_file"] == text
     assert {"python", "numpy", "numba", "dask", "xarray", "zarr"} <= set(a["package_versions"])

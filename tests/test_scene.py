@@ -7,6 +7,7 @@ import pytest
 
 from pipeline.cli import main
 from pipeline.scenes.materials import MaterialError, load_table
+from pipeline.scenes import checks
 from pipeline.scenes.checks import THRESHOLDS, premise_checks
 from pipeline.scenes.run import RESULT_KEYS, check_solvable, run_scene
 from pipeline.scenes.scene import SceneError
@@ -129,8 +130,23 @@ def names(checks):
 
 
 def test_clean_scene_passes_every_check(table):
-    r = run_scene(scene_from_dict(sandstone(), table), accuracy="fast")
+    # smooth grains (roughness 0): natural sand's 0.5 um fires the roughness check (test below)
+    smooth = {"material": "sandstone", "radius": "50 um", "roughness": "0 m"}
+    r = run_scene(scene_from_dict(sandstone(body1=smooth, body2=smooth), table), accuracy="fast")
     assert r.warnings == []
+
+
+def test_roughness_check_fires_on_sand_and_not_on_polished_steel_in_glycerol(table):
+    sand = run_scene(scene_from_dict(sandstone(), table), accuracy="fast")
+    # 0.71 um combined rms against h_m ~ 0.9 nm: ~800 times the 1/3 threshold
+    assert names(sand.warnings) == {"roughness"} and sand.warnings[0].value > 100
+    assert "contact mechanics" in sand.warnings[0].message
+    # a 6 mm polished chrome-steel ball on glass in glycerol at 1 m/s: h_m ~ 2.4 um, sigma 25 nm
+    steel = {"v0": "1 m/s", "body1": {"material": "chrome_steel", "radius": "3 mm"},
+             "body2": {"material": "glass", "wall": True}, "fluid": {"name": "glycerol"}}
+    r = run_scene(scene_from_dict(steel, table), accuracy="fast")
+    assert "roughness" not in names(r.warnings)
+    assert checks.combined_roughness(r.scene) == pytest.approx(math.hypot(25e-9, 1e-9))
 
 
 def test_eps_check(table):
@@ -293,7 +309,9 @@ name = "water"
 def test_cli_json_is_one_object_with_documented_keys(tmp_path, capsys):
     assert main(["scene", write(tmp_path, SCENE), "--json", "--accuracy", "fast"]) == 0
     d = json.loads(capsys.readouterr().out)
-    assert tuple(d) == RESULT_KEYS and d["model"] == "ehd" and d["warnings"] == []
+    # natural sand's roughness is the one warning (test_roughness_check_fires_on_sand...)
+    assert tuple(d) == RESULT_KEYS and d["model"] == "ehd"
+    assert [w["check"] for w in d["warnings"]] == ["roughness"]
 
 
 def test_cli_flags_override_the_file_and_build_a_scene_alone(tmp_path, capsys):

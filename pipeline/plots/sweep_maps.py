@@ -1,7 +1,10 @@
 """Figures of a sweep store (a pure function of the store: nothing is computed, same store -> same
 bytes).
 
-- Figure 12: maximum rebound velocity ``v_r/v0`` against St, one curve per eps;
+- Figure 12: maximum rebound velocity ``v_r/v0`` against St, one curve per eps; next to it
+  (12b) the wet restitution ``e_wet`` (what DEM codes and experiments call e) the same way, and
+  ``e_wet`` over the experimental curve of sphere-wall collisions in liquids
+  (``draw_experiments``);
 - Figure 13: closest approach ``h_m/x1`` against St; Figure 14: equilibrium separation ``x_e/x1``
   against St (drawn from ``ln_x_e_x1``: ``x_e`` can overflow a float at large St), with each
   eps's start separation ``x0/x1 = eps^-0.4`` for reference (``x_e > x0``: the spheres escape);
@@ -33,9 +36,9 @@ from ..sweeps.analysis import (EXPERIMENT_REFERENCE, EXPERIMENT_ST_C, critical_s
 
 __all__ = ["render_all", "update_figures", "fingerprint", "FIGURES"]
 
-FIGURES = ("fig12_rebound_velocity", "fig13_closest_approach", "fig14_equilibrium_separation",
-           "map_rebound_velocity", "map_closest_approach", "map_equilibrium_separation",
-           "stick_or_rebound")
+FIGURES = ("fig12_rebound_velocity", "fig12b_wet_restitution", "fig13_closest_approach",
+           "fig14_equilibrium_separation", "map_rebound_velocity", "map_closest_approach",
+           "map_equilibrium_separation", "stick_or_rebound", "wet_restitution_experiments")
 CSV_NAME = "critical_stokes.csv"
 STAMP_NAME = ".sweep-figures.sha256"  # fingerprint of what the figures in a folder were drawn from
 FORMATS = ("png", "pdf")
@@ -66,8 +69,8 @@ def render_all(ds, out) -> list:
     out.mkdir(parents=True, exist_ok=True)
     ds = ds.load()
     paths = []
-    draws = dict(zip(FIGURES, (_fig12, _fig13, _fig14, _map_vr, _map_hm, _map_xe,
-                               _stick_or_rebound)))
+    draws = dict(zip(FIGURES, (_fig12, _fig12b, _fig13, _fig14, _map_vr, _map_hm, _map_xe,
+                               _stick_or_rebound, _experiments)))
     # the default style, not the user's matplotlibrc: the figures depend on the store only
     with matplotlib.style.context("default"), matplotlib.rc_context(_RC):
         for extra, plane in planes(ds):
@@ -212,6 +215,64 @@ def _fig12(ds):
     _curves(ds, _field(ds, "v_r"), ax, r"maximum rebound velocity $v_r / v_0$",
             title="Fig. 12: rebound velocity")
     ax.set_ylim(bottom=0.0)
+    return fig
+
+
+def _fig12b(ds):
+    fig = _figure()
+    ax = fig.add_subplot()
+    _curves(ds, _field(ds, "e_wet"), ax, r"wet restitution $e_{wet}$ (at $x_0$)",
+            title="Fig. 12b: wet coefficient of restitution")
+    ax.set_ylim(0.0, 1.0)
+    return fig
+
+
+# Experiments (sphere on a wall in liquids): e/e_dry = exp(-35/St_L) with Legendre's
+# St_L = St (1 + rho_f/(2 rho_p)) (Legendre et al. 2006); no rebound below St ~ 10 (Joseph et al.
+# 2001; Gondret et al. 2002); e near the dry value above St ~ 500 (Joseph et al. 2001).
+EXPERIMENT_CURVE = ("Legendre, Zenit, Daniel & Guiraud, Chem. Eng. Sci. 61 (2006): "
+                    "e/e_dry = exp(-35/St_L)")
+LEGENDRE_C = 35.0
+# density ratios rho_f/rho_p spanning the experiments' solids in liquids (steel in glycerol-water
+# ~0.15, glass in water ~0.4): the experimental curve in our St moves by this much
+DENSITY_RATIOS = (0.15, 0.4)
+
+
+def legendre(stokes, density_ratio):
+    """The experimental curve ``exp(-35/St_L)`` at our (= the experimenters') St."""
+    return np.exp(-LEGENDRE_C / (np.asarray(stokes, float) * (1.0 + 0.5 * density_ratio)))
+
+
+def draw_experiments(ax, stokes, curves: dict):
+    """Model ``e_wet(St)`` (``curves``: label -> values on ``stokes``) over the experiments."""
+    st = np.geomspace(1.0, 3000.0, 400)
+    lo, hi = (legendre(st, r) for r in DENSITY_RATIOS)
+    ax.fill_between(st, lo, hi, color="0.8", lw=0,
+                    label=r"experiments: $e/e_{dry} = e^{-35/St_L}$ (Legendre et al. 2006), "
+                          r"$\rho_f/\rho_p$ = " + f"{DENSITY_RATIOS[0]:g}-{DENSITY_RATIOS[1]:g}")
+    ax.axvline(10.0, color="0.3", ls="--", lw=0.9,
+               label="no rebound below St ~ 10 (Joseph et al. 2001; Gondret et al. 2002)")
+    ax.axvspan(500.0, 3000.0, color="0.93", lw=0, label="e near e_dry (St > 500, Joseph et al.)")
+    colors = _eps_colors(len(curves))
+    for (label, y), color in zip(curves.items(), colors):
+        ax.plot(stokes, y, color=color, lw=1.4, marker="o", ms=2.0, label=label)
+    ax.set_xscale("log")
+    ax.set_xlim(1.0, 3000.0)
+    ax.set_ylim(0.0, 1.05)
+    ax.set_xlabel(r"Stokes number $St = m v_0/(6\pi\mu a^2) = \rho_p d v_0 / (9 \mu)$ (sphere on a wall)")
+    ax.set_ylabel(r"$e_{wet}$ (model, $e_{dry} = 1$) and $e/e_{dry}$ (experiments)")
+    ax.grid(True, which="major", lw=0.4, alpha=0.5)
+    ax.legend(loc="upper left", frameon=False, fontsize=6.5)
+
+
+def _experiments(ds):
+    fig = _figure()
+    ax = fig.add_subplot()
+    eps = ds["eps"].values
+    e = _field(ds, "e_wet")
+    curves = {"model " + _eps_label(eps[i]): e[i] for i in range(eps.size - 1, -1, -1)}
+    draw_experiments(ax, ds["St"].values, curves)
+    ax.set_title("Wet restitution: model against experiments")
     return fig
 
 

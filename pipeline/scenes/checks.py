@@ -17,7 +17,8 @@ from solver.model import rigid
 from .scene import Scene
 from .units import format_quantity
 
-__all__ = ["Check", "premise_checks", "outcome_checks", "THRESHOLDS", "model_reason"]
+__all__ = ["Check", "premise_checks", "outcome_checks", "THRESHOLDS", "model_reason",
+           "roughness_check", "combined_roughness"]
 
 # Thresholds of the validity checks (each check warns when its number exceeds the threshold).
 THRESHOLDS = {
@@ -35,6 +36,11 @@ THRESHOLDS = {
     # (v0/c)^(1/5). At 0.25 (v0/c = 1e-3) Hunter's estimate of the energy radiated as elastic
     # waves, 1.04 (v0/c)^(3/5), is already 2% of the impact energy.
     "wave_parameter": 0.25,
+    # Smooth surfaces: the combined rms roughness sigma = sqrt(s1^2 + s2^2) against the closest
+    # approach h_m the smooth model predicts. Summits of a Gaussian surface stand about 3 sigma
+    # above its mean plane, so from sigma/h_m = 1/3 on the asperities touch before the film
+    # reaches h_m: contact mechanics, not the film, decides the collision.
+    "roughness": 1.0 / 3.0,
 }
 
 
@@ -86,7 +92,7 @@ def premise_checks(scene: Scene) -> list[Check]:
 
 
 def outcome_checks(scene: Scene, c, p_max: float, p_min: float) -> tuple[list[Check], list[str]]:
-    """Checks that need the solution: yield, cavitation, gas mean free path. Returns
+    """Checks that need the solution: yield, cavitation, roughness, gas mean free path. Returns
     ``(warnings, notes)``; ``p_max``, ``p_min`` in Pa (gauge, relative to ambient)."""
     out, notes = [], []
     for body in (scene.body1, scene.body2):
@@ -112,6 +118,9 @@ def outcome_checks(scene: Scene, c, p_max: float, p_min: float) -> tuple[list[Ch
     elif p_min < 0.0 and scene.fluid.vapour_pressure is not None:
         notes.append("cavitation not checked: give fluid.ambient_pressure to check the film "
                      f"tension ({p_min:.3g} Pa) against the vapour pressure")
+    rough = roughness_check(scene, c)
+    if rough is not None:
+        out.append(rough)
     lam = scene.fluid.mean_free_path
     if lam is not None and math.isfinite(c.h_m_x1):
         h_m = c.h_m_x1 * scene.x1
@@ -121,6 +130,33 @@ def outcome_checks(scene: Scene, c, p_max: float, p_min: float) -> tuple[list[Ch
                 f"path {format_quantity(lam, 'm')} (Knudsen number {lam / h_m:.3g}): continuum lubrication "
                 "is not valid")))
     return out, notes
+
+
+def combined_roughness(scene: Scene) -> float | None:
+    """``sqrt(s1^2 + s2^2)`` of the bodies' rms roughness [m]; None when neither gives one (a body
+    without a value counts as smooth)."""
+    values = [b.solid.roughness for b in (scene.body1, scene.body2)]
+    if all(v is None for v in values):
+        return None
+    return math.sqrt(sum(v * v for v in values if v is not None))
+
+
+def roughness_check(scene: Scene, c) -> Check | None:
+    """The roughness warning, or None: fires when the combined rms roughness is not small against
+    the smooth model's closest approach ``h_m`` (``THRESHOLDS["roughness"]``)."""
+    sigma = combined_roughness(scene)
+    if sigma is None or not math.isfinite(c.h_m_x1):
+        return None
+    h_m = c.h_m_x1 * scene.x1
+    ratio = sigma / h_m
+    t = THRESHOLDS["roughness"]
+    if ratio <= t:
+        return None
+    return Check("roughness", ratio, t, (
+        f"rms roughness {format_quantity(sigma, 'm')} is {ratio:.3g} times the closest approach "
+        f"{format_quantity(h_m, 'm')} of the smooth model (> {t:.3g}): the asperities touch "
+        "before the film gets that thin, so contact mechanics, not the film, decides this "
+        "collision (its restitution included)"))
 
 
 def _fmt_log(log_value: float) -> str:

@@ -136,6 +136,9 @@ def format_report(d: dict) -> str:
     ]
     results = [
         ("max rebound speed", f"{_q(d['rebound_speed_m_per_s'], 'm/s')} (v_r = {_g(d['v_r'])} v0)"),
+        ("wet restitution e_wet", "0: the spheres stick (they never leave the lubrication "
+         "region)" if d["e_wet"] == 0.0 else f"{_g(d['e_wet'])} (leaving the lubrication region "
+         f"at x0 with {_q(d['departure_speed_m_per_s'], 'm/s')})"),
         ("closest approach", f"{_g(d['closest_approach_nm'])} nm "
                              f"(h_m/x1 = {_g(d['dimensionless']['h_m_x1'])})"),
         ("  during approach", f"{_g(d['closest_approach_on_approach_nm'])} nm"),

@@ -40,6 +40,8 @@ SOLID_FIELDS = {
     "poisson_ratio": (FieldSpec("", "0.22", -1.0, 0.5, hi_open=False), True),
     "density": (FieldSpec("[mass] / [length] ** 3", "2500 kg/m^3", si_unit="kg/m^3"), True),
     "yield_strength": (FieldSpec("[pressure]", "250 MPa", si_unit="Pa"), False),
+    # rms surface roughness (checks.roughness_check: contact mechanics instead of the film)
+    "roughness": (FieldSpec("[length]", "0.1 um", lo_open=False, si_unit="m"), False),
 }
 FLUID_FIELDS = {
     "viscosity": (FieldSpec("[pressure] * [time]", "1 mPa s", si_unit="Pa*s"), True),
@@ -59,6 +61,7 @@ class Solid:
     poisson_ratio: float
     density: float | None  # kg/m^3 (None only for a wall given without one)
     yield_strength: float | None = None  # Pa, None = not known / not applicable
+    roughness: float | None = None  # m, rms surface roughness; None = not known
     source: str = ""
     description: str = ""
 

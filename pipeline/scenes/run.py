@@ -21,7 +21,7 @@ RESULT_KEYS = (
     "title", "inputs", "reduced_radius_m", "reduced_mass_kg", "theta_per_Pa", "effective_modulus_Pa",
     "x0_m", "x0_over_a", "x1_m", *Physics.names(), "Re", "Re_x0_over_a", "sound_speed_m_per_s",
     "wave_parameter", "model", "model_reason", "status", "message", "v_r",
-    "rebound_speed_m_per_s", "closest_approach_nm", "closest_approach_on_approach_nm",
+    "rebound_speed_m_per_s", "e_wet", "departure_speed_m_per_s", "closest_approach_nm", "closest_approach_on_approach_nm",
     "equilibrium_separation_m", "log10_equilibrium_separation_m", "escaped", "time_to_stop_s",
     "time_of_max_rebound_s", "peak_force_N", "peak_pressure_Pa", "min_pressure_Pa",
     "max_central_deformation_nm", "min_separation_nm", "dimple", "dimple_depth_nm",
@@ -61,6 +61,10 @@ class SceneResult:
             "model": c.model, "model_reason": model_reason(s, c),
             "status": c.status, "message": c.message,
             "v_r": num(c.v_r), "rebound_speed_m_per_s": num(c.v_r * s.v0),
+            # the speed leaving the lubrication region at x_ref (default x0): e_wet times the
+            # approach speed there, St_ref/St v0 (rigid.impact_stokes)
+            "e_wet": num(c.e_wet),
+            "departure_speed_m_per_s": num(c.e_wet * c.St_ref / c.St * s.v0),
             "closest_approach_nm": num(c.h_m_x1 * x1 * 1e9),
             "closest_approach_on_approach_nm": num(c.h_m_approach_x1 * x1 * 1e9),
             "equilibrium_separation_m": num(math.exp(ln_xe_m)) if ln_xe_m < 700 else None,

@@ -175,6 +175,7 @@ class Scene:
                     "mass_kg": None if b.wall else b.mass,
                     "youngs_modulus_Pa": s.youngs_modulus, "poisson_ratio": s.poisson_ratio,
                     "density_kg_per_m3": s.density, "yield_strength_Pa": s.yield_strength,
+                    "roughness_m": s.roughness,
                     "source": s.source}
         f = self.fluid
         return {"body1": body(self.body1), "body2": body(self.body2),

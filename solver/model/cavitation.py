@@ -28,7 +28,7 @@ import math
 import numpy as np
 from scipy import integrate, optimize
 
-__all__ = ["cavity_fraction", "separation_force", "departure"]
+__all__ = ["cavity_fraction", "separation_force", "departure", "speed_at", "restitution"]
 
 _SERIES_FROM = 10.0  # sigma above which f is summed as a series (the closed form cancels)
 
@@ -106,3 +106,42 @@ def departure(x_from, u_from, t_from, stokes, pi, samples=40):
     grid = np.linspace(ln0, ln_c, samples)
     u, t = sol.sol(grid)
     return math.exp(ln_c), u_c, t_c, np.vstack([np.exp(grid), u, t])
+
+
+def speed_at(x_from, u_from, stokes, pi, x_target):
+    """Separation speed of the rigid departure with a floor from ``(x_from, u_from > 0)`` when it
+    passes ``x_target >= x_from`` (0 if it comes to rest before): the ODE while the cavity is open
+    (module docstring), the classic ``U = U_c - ln(x/X_c)/St`` after it closes."""
+    if x_target <= x_from:
+        return u_from
+    if pi <= 0.0:
+        return u_from  # no suction at all
+    if 3.0 * u_from > pi * x_from * x_from:  # a cavity is open: integrate while it is
+        def rhs(lnx, y):
+            x = math.exp(lnx)
+            return [-1.0 / (stokes * (1.0 + cavity_fraction(pi * x * x / (6.0 * y[0]))))]
+
+        def closes(lnx, y):
+            return pi * math.exp(2.0 * lnx) - 3.0 * y[0]
+
+        closes.terminal = True
+        closes.direction = 1.0
+        sol = integrate.solve_ivp(rhs, (math.log(x_from), math.log(x_target)), [u_from],
+                                  events=closes, rtol=1e-10, atol=1e-14)
+        if not sol.t_events[0].size:  # still open at x_target
+            return float(sol.y[0, -1])
+        x_from, u_from = math.exp(float(sol.t_events[0][0])), float(sol.y_events[0][0][0])
+    return max(0.0, u_from - math.log(x_target / x_from) / stokes)
+
+
+def restitution(x_from, v_from, physics, x_ref):
+    """``e_wet`` at ``x_ref`` (``>= x0``) with the Reynolds floor: the departure speed there
+    (``speed_at``) over the approach speed there, ``1 + ln(x_ref/x0)/St`` (the approach is in
+    compression, where the floor never acts: the classic rigid approach, rigid.impact_stokes).
+    A state still approaching (``v_from >= 0``) creeps to rest: 0."""
+    from .rigid import impact_stokes
+
+    if v_from >= 0.0:
+        return 0.0
+    speed = speed_at(x_from, -v_from, physics.St, physics.Pi, x_ref)
+    return speed / (impact_stokes(physics.St, physics.x_start, x_ref) / physics.St)

@@ -32,6 +32,12 @@ __all__ = [
     "velocity",
     "elapsed_time",
     "rest_separation",
+    "departure_speed",
+    "departure_speed_from_rest",
+    "restitution",
+    "restitution_from_rest",
+    "impact_stokes",
+    "stokes_at_start",
     "handover_separation",
     "deformation_ratio",
     "exact_for",
@@ -79,6 +85,67 @@ def elapsed_time(x, x_from, v_from, stokes):
 def rest_separation(x_from, v_from, stokes):
     """Where rigid motion from ``(X1, V1)`` ends: ``ln X_e = ln X1 - St V1`` (returns the log)."""
     return math.log(x_from) - stokes * v_from
+
+
+def departure_speed_from_rest(ln_x_e, stokes, x_ref):
+    """Separation speed ``-V`` (units v0) at which rigid motion that would come to rest at
+    ``x_e`` (``ln_x_e``; ``x_e > X`` for a departure) passes ``x_ref`` outwards:
+    ``ln(x_e / x_ref) / St`` (from ``V = ln(X / x_e) / St``), 0 when it never gets there
+    (``x_e <= x_ref``: the spheres stick)."""
+    return max(0.0, (ln_x_e - math.log(x_ref)) / stokes)
+
+
+def departure_speed(x_from, v_from, stokes, x_ref):
+    """Separation speed ``-V`` (units v0) with which rigid motion from ``(X1, V1)`` passes
+    ``x_ref`` outwards: ``-V1 - ln(x_ref / X1) / St``, 0 when it never gets there (it comes to
+    rest at ``x_e = X1 exp(-St V1) <= x_ref``, which includes ``V1 >= 0``)."""
+    return departure_speed_from_rest(rest_separation(x_from, v_from, stokes), stokes, x_ref)
+
+
+def impact_stokes(stokes, x_start, x_ref):
+    """The Stokes number of the approach at ``x_ref >= x_start``: ``St V(x_ref)`` with the rigid
+    approach ``V(x_ref) = 1 + ln(x_ref / x_start) / St`` that arrives at ``x_start`` with speed 1,
+    i.e. ``St_ref = St + ln(x_ref / x_start)`` (the approach loses ``ln(x_ref/x0)/St`` of v0
+    between the two; exact for the classic film, deformation being negligible there)."""
+    if x_ref < x_start:
+        raise ValueError(f"x_ref = {x_ref:g} x1 lies inside the start x0 = {x_start:g} x1: the "
+                         "reference separation must be x_ref >= x0")
+    return stokes + math.log(x_ref / x_start)
+
+
+def stokes_at_start(stokes_ref, x_start, x_ref):
+    """Inverse of ``impact_stokes``: the Stokes number at ``x_start`` of an approach whose Stokes
+    number at ``x_ref >= x_start`` is ``stokes_ref``; ``St = St_ref - ln(x_ref / x_start)``, which
+    must be > 0 (else the rigid approach stops before it reaches ``x_start``)."""
+    stokes = stokes_ref - math.log(x_ref / x_start)
+    if not stokes > 0.0:
+        raise ValueError(f"St_ref = {stokes_ref:g} at x_ref/x0 = {x_ref / x_start:g}: the rigid "
+                         "approach comes to rest before x0 (St_ref <= ln(x_ref/x0))")
+    return stokes
+
+
+def restitution(x_from, v_from, physics, x_ref):
+    """The wet coefficient of restitution seen at ``x_ref`` (``>= x0``): the departure speed at
+    ``x_ref`` from the release state ``(X1, V1)`` over the approach speed there,
+    ``e_wet = ln(x_e / x_ref) / St_ref`` (``St_ref = impact_stokes``; 0 when the spheres stick).
+
+    The one place where the departure after the coupled phase is modelled: exact for the classic
+    film (``exact_for``). A film with a pressure floor (cavitation) or a pressure-dependent
+    viscosity departs differently; its departure goes here, selected by ``exact_for``."""
+    if not exact_for(physics):
+        raise NotImplementedError(f"no departure model for non-classic physics {physics}")
+    x_start = physics.x_start
+    speed = departure_speed(x_from, v_from, physics.St, x_ref)
+    return speed / (impact_stokes(physics.St, x_start, x_ref) / physics.St)
+
+
+def restitution_from_rest(ln_x_e, physics, x_ref):
+    """``restitution`` from the rest separation alone (the master curve's ``ln_x_e_x1``): the
+    same closed form, ``x_e`` fixing the whole rigid departure."""
+    if not exact_for(physics):
+        raise NotImplementedError(f"no departure model for non-classic physics {physics}")
+    speed = departure_speed_from_rest(ln_x_e, physics.St, x_ref)
+    return speed / (impact_stokes(physics.St, physics.x_start, x_ref) / physics.St)
 
 
 def deformation_ratio(x, v):

@@ -1,0 +1,132 @@
+"""``ehd export-dem STORE_OR_SCENE`` and ``ehd restitution SCENE`` (registered through
+``pipeline.cli.COMMAND_MODULES``).
+
+- ``export-dem``: from a sweep store (``.zarr``: every ok scene, grouped by eps) or a scene file
+  (solved along its impact speed, ``v0`` times 0.1 to 10), write ``restitution.csv``,
+  ``restitution.json`` and the LIGGGHTS, OpenFOAM and YADE snippets into ``--out``.
+- ``restitution``: e(St) of a scene file along a path in impact speed or size (eps moves with
+  both), printed as a table; ``--out`` writes the same export.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["register", "solve_path"]
+
+
+def solve_path(scene, vary: str, factors, accuracy: str = "standard"):
+    """Solve the scenes along a path (export.scene_path); scenes the solver refuses are skipped
+    with their reason. Returns ``(results, skipped)``."""
+    from pipeline.scenes.run import run_scene
+    from pipeline.scenes.scene import SceneError
+
+    from .export import scene_path
+
+    results, skipped = [], []
+    for s in scene_path(scene, vary, factors):
+        try:
+            results.append(run_scene(s, accuracy=accuracy, save_profiles=False))
+        except SceneError as exc:
+            skipped.append(f"{vary} x {s.v0 / scene.v0 if vary == 'v0' else s.body1.radius / scene.body1.radius:.3g}: {exc}")
+    return results, skipped
+
+
+def _scene(path, materials):
+    from pipeline.cli import UsageError
+    from pipeline.scenes.commands import load_scene
+
+    try:
+        return load_scene(path, None, materials or ())
+    except (ValueError, OSError) as exc:
+        raise UsageError(str(exc)) from None
+
+
+def _print_rows(rows, skipped):
+    print(f"{'St':>10} {'St_L':>10} {'eps':>10} {'v0 [m/s]':>10} {'e_wet':>8}  note")
+    for r in rows:
+        note = "sticks" if r["sticks"] else ""
+        if r["warning"]:
+            note = (note + "; " if note else "") + "roughness decides (see CSV)"
+        print(f"{r['St']:>10.4g} {r['St_L']:>10.4g} {r['eps']:>10.3g} {r['v0_m_s']:>10.4g} "
+              f"{r['e_wet']:>8.4f}  {note}")
+    for s in skipped:
+        print(f"skipped: {s}")
+
+
+def cmd_export_dem(args) -> int:
+    from pipeline.cli import UsageError
+
+    from .export import scene_rows, store_rows, write_export
+
+    path = Path(args.path)
+    if not path.exists():
+        raise UsageError(f"{args.path}: no such store or scene file")
+    if path.is_dir():
+        from pipeline import open_results
+
+        ds = open_results(str(path))
+        if "St" not in ds.dims or "eps" not in ds.dims:
+            raise UsageError(f"{args.path}: export-dem needs a store with St and eps axes")
+        if "e_wet" not in ds:
+            raise UsageError(f"{args.path}: the store has no e_wet (made before solver 1.4.0); "
+                             "rerun the sweep")
+        rows = store_rows(ds, args.density_ratio)
+    else:
+        scene = _scene(str(path), args.materials)
+        factors = np.geomspace(0.1, 10.0, args.n)
+        results, skipped = solve_path(scene, "v0", factors, args.accuracy)
+        rows = scene_rows(results, f"{scene.body1.solid.name}-{scene.body2.solid.name} in "
+                                   f"{scene.fluid.name}")
+        for s in skipped:
+            print(f"skipped: {s}")
+    paths = write_export(rows, args.out, str(path))
+    print(f"wrote {len(rows)} rows: " + ", ".join(str(p) for p in paths))
+    return 0
+
+
+def cmd_restitution(args) -> int:
+    from pipeline.cli import UsageError
+
+    from .export import scene_rows, write_export
+
+    scene = _scene(args.scene, args.materials)
+    if not (args.start > 0 and args.stop > 0 and args.n >= 1):
+        raise UsageError("--from and --to must be positive factors and --n >= 1")
+    factors = np.geomspace(args.start, args.stop, args.n)
+    results, skipped = solve_path(scene, args.vary, factors, args.accuracy)
+    rows = scene_rows(results, f"{scene.body1.solid.name}-{scene.body2.solid.name} in "
+                               f"{scene.fluid.name}, {args.vary} path")
+    _print_rows(rows, skipped)
+    if args.out:
+        paths = write_export(rows, args.out, args.scene)
+        print("wrote " + ", ".join(str(p) for p in paths))
+    return 0
+
+
+def register(sub) -> None:
+    p = sub.add_parser("export-dem", help="wet restitution e(St) for DEM codes: CSV, fits, "
+                                          "LIGGGHTS / OpenFOAM / YADE settings")
+    p.add_argument("path", metavar="STORE_OR_SCENE", help="a sweep store (.zarr) or a scene file")
+    p.add_argument("--out", default="dem_export", help="output folder (default dem_export)")
+    p.add_argument("--density-ratio", type=float, default=0.0,
+                   help="stores only: rho_f/rho_p for Legendre's St_L (default 0)")
+    p.add_argument("--n", type=int, default=13, help="scenes only: speeds from 0.1 to 10 v0")
+    p.add_argument("--accuracy", default="standard")
+    p.add_argument("--materials", action="append", default=None, metavar="FILE")
+    p.set_defaults(func=cmd_export_dem)
+
+    p = sub.add_parser("restitution", help="e(St) of a scene along a path in impact speed or size")
+    p.add_argument("scene", help="scene file")
+    p.add_argument("--vary", choices=("v0", "radius"), default="v0")
+    p.add_argument("--from", dest="start", type=float, default=0.1,
+                   help="first factor on v0 or the radii (default 0.1)")
+    p.add_argument("--to", dest="stop", type=float, default=10.0, help="last factor (default 10)")
+    p.add_argument("--n", type=int, default=9, help="points, log-spaced (default 9)")
+    p.add_argument("--out", default=None, help="also write the DEM export into this folder")
+    p.add_argument("--accuracy", default="standard")
+    p.add_argument("--materials", action="append", default=None, metavar="FILE")
+    p.set_defaults(func=cmd_restitution)

@@ -1,0 +1,143 @@
+"""DEM export: fits, the LIGGGHTS replica, exported files, the commands."""
+
+import json
+import math
+import re
+
+import numpy as np
+import pytest
+
+from pipeline.cli import main
+from pipeline.dem import liggghts
+from pipeline.dem.conventions import stokes_numbers
+from pipeline.dem.export import CSV_FIELDS, read_csv
+from pipeline.dem.fits import fit_exponential, fit_threshold
+
+EXAMPLE = "examples/glass_beads_water.toml"
+
+
+def test_conventions_for_a_sphere_on_a_wall():
+    # 3 mm steel (7800) in glycerol (1260, 1.4 Pa s) at 0.5 m/s on a wall: ours = rho d v / (9 mu)
+    rho, d, v, mu = 7800.0, 3e-3, 0.5, 1.4
+    m, a = rho * math.pi / 6 * d**3, d / 2
+    ours = m * v / (6 * math.pi * mu * a * a)
+    row = stokes_numbers(ours, rho_p=rho, d=d, v0=v, mu=mu, rho_f=1260.0)
+    assert row["St_exp"] == pytest.approx(ours, rel=1e-14)
+    assert row["St_L"] == pytest.approx(ours * (1 + 1260 / (2 * 7800)), rel=1e-14)
+    assert row["St_yade"] == pytest.approx(9 * ours, rel=1e-14)
+
+
+@pytest.mark.parametrize("law", [fit_exponential, fit_threshold])
+def test_fits_reproduce_their_table_within_their_error(law):
+    st = np.geomspace(8, 500, 15)
+    e = np.where(st > 12, 0.97 * (1 - 12 / st) + 0.01 * np.sin(st), 0.0)  # not of either form
+    fit = law(st, e)
+    up = e > 0
+    # the stated error is the largest residual over the rebounding rows: reproduced exactly
+    assert np.max(np.abs(fit(st[up]) - e[up])) == pytest.approx(fit.max_error, rel=1e-12)
+    assert fit.st_min == st[up][0] and fit.st_max == st[-1] and fit.st_stick == st[~up][-1]
+
+
+def test_fits_recover_exact_laws():
+    st = np.geomspace(15, 800, 12)
+    exp = fit_exponential(st, 0.9 * np.exp(-35 / st))
+    thr = fit_threshold(st, 0.95 * (1 - 11 / st))
+    # exact data: only the least-squares solvers' tolerances remain (~1e-8)
+    assert (exp.e_max, exp.c) == pytest.approx((0.9, 35.0), rel=1e-6)
+    assert (thr.e_max, thr.c) == pytest.approx((0.95, 11.0), rel=1e-10)
+
+
+@pytest.mark.parametrize("log_e", [-0.05, -0.7, -2.5])
+def test_replica_with_fixed_stokes_gives_its_target_exactly(log_e):
+    # damping from a fixed St: linear spring-dashpot, e = exp(-zeta pi/sqrt(1 - zeta^2)) = exp(L)
+    e_max, st_crit, st_fixed = 0.9, -(log_e - math.log(0.9)) * 20.0, 20.0
+    realised = liggghts.replica_restitution(7.0, e_max, st_crit, fixed_stokes=st_fixed)
+    assert liggghts.closed_form_restitution(log_e) == pytest.approx(math.exp(log_e), rel=1e-14)
+    # integration to rtol 1e-10 over half an oscillation: agreement to ~1e-9
+    assert realised == pytest.approx(math.exp(log_e), rel=1e-8)
+
+
+def test_replica_with_instantaneous_stokes_differs_and_calibration_fixes_it():
+    st = np.array([20.0, 40.0, 80.0, 160.0, 320.0])
+    target = 0.95 * np.exp(-15.0 / st)
+    plain = np.array([liggghts.replica_restitution(s, 0.95, 15.0) for s in st])
+    assert np.max(np.abs(plain - target)) > 0.05  # the law is not realised as written
+    e_max, c, err, realised = liggghts.calibrate(st, target, 0.95, 15.0)
+    assert err < np.max(np.abs(plain - target)) and 0 < e_max <= 1 and c > 0
+    assert np.max(np.abs(realised - target)) == pytest.approx(err)
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory):
+    out = tmp_path_factory.mktemp("dem")
+    assert main(["restitution", EXAMPLE, "--accuracy", "fast", "--from", "1", "--to", "30",
+                 "--n", "7", "--out", str(out)]) == 0
+    return out
+
+
+def test_exported_files_parse(exported):
+    rows = read_csv(exported / "restitution.csv")
+    assert len(rows) == 7 and tuple(rows[0]) == CSV_FIELDS
+    assert rows[0]["sticks"] and rows[0]["e_wet"] == 0.0 and not rows[-1]["sticks"]
+    assert all(r["warning"] for r in rows)  # glass at 1 nm rms against sub-nm films: roughness
+    doc = json.loads((exported / "restitution.json").read_text())
+    (group,) = doc["groups"].values()
+    for conv in ("St", "St_exp", "St_L", "St_yade"):
+        for law in ("exponential", "threshold"):
+            fit = group["fits"][conv][law]
+            assert fit["convention"] == conv and fit["max_error"] < 0.1 and fit["e_max"] <= 1
+    # CSV round trip: the fit's stated error is reproduced from the CSV's own numbers
+    fit = group["fits"]["St"]["threshold"]
+    st = np.array([r["St"] for r in rows if r["e_wet"] > 0])
+    e = np.array([r["e_wet"] for r in rows if r["e_wet"] > 0])
+    pred = fit["e_max"] * (1 - fit["c"] / st)
+    assert np.max(np.abs(pred - e)) == pytest.approx(fit["max_error"], rel=1e-9)
+
+    lig = next(exported.glob("liggghts_*.in")).read_text()
+    assert "pair_style gran model hooke" in lig and "viscous on" in lig
+    for key in ("FluidViscosity", "CriticalStokes", "MaximumRestitution"):
+        m = re.search(rf"fix \S+ all property/global {key} peratomtypepair (\d+) (.*)", lig)
+        n = int(m.group(1))
+        assert len(m.group(2).split()) == n * n  # an n x n matrix
+    for key in ("youngsModulus", "poissonsRatio"):
+        m = re.search(rf"property/global {key} peratomtype (.*)", lig)
+        assert len(m.group(1).split()) == n
+    foam = next(exported.glob("openfoam_*.txt")).read_text()
+    for key in ("patchInteractionModel localInteractionHW;", "type       rebound;", "e ",
+                "coeffStc", "eCutoffLog", "rhoF", "muP"):
+        assert key in foam
+    assert foam.count("{") == foam.count("}")
+    yade = next(exported.glob("yade_*.py")).read_text()
+    compile(yade, "yade", "exec")  # valid Python
+    for key in ("ViscElMat(", "en=", "lubrication=True", "viscoDyn=", "roughnessScale="):
+        assert key in yade
+
+
+def test_export_dem_from_a_scene_file(tmp_path, capsys):
+    assert main(["export-dem", EXAMPLE, "--accuracy", "fast", "--n", "5",
+                 "--out", str(tmp_path)]) == 0
+    rows = read_csv(tmp_path / "restitution.csv")
+    assert len(rows) == 5 and rows[0]["St"] < rows[-1]["St"]
+    assert main(["export-dem", str(tmp_path / "nothing.zarr")]) == 2
+
+
+def test_export_dem_from_a_sweep_store(tmp_path, capsys):
+    # a real (fast) sweep: e_wet goes into the store from the registry and out to the CSV
+    from pipeline import open_results
+    from pipeline.sweeps.config import parse_sweep
+    from pipeline.sweeps.run import run_sweep
+    from solver import collide
+
+    text = ('name = "dem"\nstore = "x.zarr"\n[grid]\nSt = [6.0, 10.0, 15.0, 30.0, 60.0]\n'
+            'eps = [0.01]\n[numerics]\naccuracy = "fast"\n')
+    sweep = parse_sweep(text).with_store(tmp_path / "s.zarr")
+    run_sweep(sweep, runner="serial", progress=None)
+    ds = open_results(sweep.store)
+    assert float(ds.e_wet.sel(St=30.0, eps=0.01)) == collide(30.0, 0.01, accuracy="fast").e_wet
+    assert main(["export-dem", str(sweep.store), "--out", str(tmp_path / "out")]) == 0
+    rows = read_csv(tmp_path / "out" / "restitution.csv")
+    assert [r["St"] for r in rows] == [6.0, 10.0, 15.0, 30.0, 60.0]
+    assert rows[0]["sticks"] and rows[0]["St_exp"] == 6.0 and rows[0]["St_yade"] == 54.0
+    doc = json.loads((tmp_path / "out" / "restitution.json").read_text())
+    assert set(doc["groups"]) == {"eps=0.01"}
+    assert doc["groups"]["eps=0.01"]["liggghts"]["MaximumRestitution"] <= 1.0
