@@ -290,7 +290,7 @@ def _coupled(physics, accuracy, numerics, x_switch, x_ref_x0=1.0):
             blocks.append(_rigid_block(t_tail, x_tail, v_tail, tau_per_t, 2,
                                        lost + (v_rel**2 - v_tail**2)))
     result.series = _concat(blocks)
-    result.tau_release = t_rel * tau_per_t
+    result.tau_release = t_c[-1] * tau_per_t
     result.ln_x_e_x1 = ln_x_e
     result.e_wet = _wet_restitution(physics, x_c, v_c, x_ref_x0 * x_start)
     _coupled_observables(result, cols, tau_per_t, ln_x_e, v_c[-1])

@@ -144,7 +144,7 @@ class Collision:
         """The rebound carries the spheres back beyond x0: the model's verdict "no sticking"
         (None when the scene failed and x_e is unknown)."""
         ln_x_e = self.ln_x_e_x0
-        return bool(ln_x_e > 0.0) if math.isfinite(ln_x_e) else None
+        return None if math.isnan(ln_x_e) else bool(ln_x_e > 0.0)
 
     @property
     def gap(self) -> np.ndarray | None:

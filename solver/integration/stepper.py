@@ -26,7 +26,7 @@ model's terms come from model/film.py; this module knows nothing of the physics 
 import numpy as np
 
 from .._jit import jit
-from ..model.film import (constrain, energy_rates, face_fluxes, film_force, gap, jacobian,
+from ..model.film import (cavity_edge, constrain, energy_rates, face_fluxes, film_force, gap, jacobian,
                           residual, update_cavity, void_work)
 from ..physics import CAVITATION
 from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
@@ -157,6 +157,7 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
     # initial row
     face_fluxes(s, s_face, y0[:n], h, phys, q)
     strain, diss_rate = energy_rates(s, s_face, weight, phys, x_init, y0[:n], w, h, q)
+    q_prev = q.copy()
     dissipated = dissipated_init
     n_rows = 0
 
@@ -198,11 +199,10 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
         row[_W_ABSMAX] = wmax
         row[_P_MAX] = pmax
         row[_P_MIN] = pmin
-        r_cav = 0.0
+        r_cav = cavity_edge(s, y0[:n], active0, phys)
         v_void = 0.0
         for i in range(n - 1):
             if active0[i]:
-                r_cav = np.sqrt(2.0 * s[i])
                 v_void += area[i] * (h[i] - h_onset[i])
         row[_R_CAV] = r_cav
         row[_V_VOID] = v_void
@@ -411,12 +411,6 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
             continue
 
         # ---- shift history -------------------------------------------------------------------
-        if floor:
-            worked += void_work(area, h, h0, active, phys)
-            for i in range(n - 1):
-                if active[i] and not active0[i]:
-                    h_onset[i] = h0[i]
-            active0[:] = active
         y2[:] = y1
         y1[:] = y0
         y0[:] = y
@@ -431,6 +425,13 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
         face_fluxes(s, s_face, y0[:n], h, phys, q)
         strain_new, diss_new = energy_rates(s, s_face, weight, phys, y0[n], y0[:n], w, h, q)
         dissipated += 0.5 * (diss_rate + diss_new) * dt
+        if floor:
+            worked += void_work(area, h0, h1, q, q_prev, dt, active, phys)
+            for i in range(n - 1):
+                if active[i] and not active0[i]:
+                    h_onset[i] = h1[i]
+            active0[:] = active
+            q_prev[:] = q
         strain = strain_new
         diss_rate = diss_new
 

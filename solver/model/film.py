@@ -27,6 +27,8 @@ for the cells, ``bh`` for the motion), ``bh`` the implicit BDF coefficient times
 physics array ``phys`` (solver/physics.py, ``Physics.as_array``) carries the dimensionless groups.
 """
 
+import numpy as np
+
 from .._jit import jit
 from ..integration.linalg import matvec
 from ..physics import CAVITATION, PI, ST
@@ -109,14 +111,41 @@ def cell_constraint(p, phys):
 
 
 @jit
-def void_work(area, h_new, h_old, active, phys):
-    """Work done against the floor while the cavities grow, ``(2/(3 St)) Pi Int_cav dH ds``,
-    between two states (relative to the initial kinetic energy; docs/model.md, "Energy"): the
-    energy that goes into creating the void."""
+def cavity_edge(s, p, active, phys):
+    """Radius of the outer edge of the cavity (0 without one). Outside a cavity edge ``s_c`` the
+    film leaves the floor with zero slope, ``P + Pi ~ c (s - s_c)^2``, so ``sqrt(P + Pi)`` is
+    linear in ``s``: extrapolated from the two full nodes past the outermost cavitated one, the
+    edge is second-order accurate instead of a node position."""
+    last = -1
+    for i in range(active.size):
+        if active[i]:
+            last = i
+    if last < 0:
+        return 0.0
+    s_c = s[last]
+    if last + 2 < s.size:
+        e1 = np.sqrt(max(p[last + 1] + phys[PI], 0.0))
+        e2 = np.sqrt(max(p[last + 2] + phys[PI], 0.0))
+        if e2 > e1:
+            s_c = s[last + 1] - e1 * (s[last + 2] - s[last + 1]) / (e2 - e1)
+            # the discrete edge may lie up to a cell either side of the outermost cavitated node
+            s_c = min(max(s_c, s[last - 1] if last > 0 else 0.0), s[last + 1])
+    return np.sqrt(2.0 * s_c)
+
+
+@jit
+def void_work(area, h_new, h_old, q_new, q_old, dt, active, phys):
+    """Work done against the floor over a step, ``(2/(3 St)) Pi dV_void`` (relative to the initial
+    kinetic energy; docs/model.md, "Energy"): the energy that goes into creating the void. The
+    void a cavitated cell gains is its opening ``area dH`` less the liquid its faces bring in,
+    ``dt dq`` (trapezoidal in time; ``q`` the face fluxes at the two states): zero inside a
+    cavity, where the pressure is flat, but not at its edge cells, which the film feeds."""
     total = 0.0
     for i in range(active.size):
         if active[i]:
-            total += area[i] * (h_new[i] - h_old[i])
+            inflow_new = q_new[i] - (q_new[i - 1] if i > 0 else 0.0)
+            inflow_old = q_old[i] - (q_old[i - 1] if i > 0 else 0.0)
+            total += area[i] * (h_new[i] - h_old[i]) - 0.5 * dt * (inflow_new + inflow_old)
     return 2.0 * phys[PI] * total / (3.0 * phys[ST])
 
 
