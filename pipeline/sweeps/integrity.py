@@ -95,7 +95,8 @@ def load_checked(path):
     for name in REQUIRED:
         if name in ds:
             for cell in np.argwhere(ok & np.isnan(ds[name].values)):
-                damage.add(cell, f"{name} (missing)")
+                if f"{name} (unreadable)" not in damage.where.get(tuple(cell), ()):
+                    damage.add(cell, f"{name} (missing)")
     if "model" in ds:
         for cell in np.argwhere(ok & (ds["model"].values == 0)):
             damage.add(cell, "model (missing)")

@@ -19,6 +19,7 @@ workers that join later run it too), so no worker compiles on its own.
 
 from __future__ import annotations
 
+import logging
 import os
 import sys
 import time
@@ -213,6 +214,9 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
         if stream is not None:
             print(f"waiting for the dask scheduler at {target} (up to {connect_seconds:g} s)...",
                   file=stream, flush=True)
+        # the client logs every failed reconnect with a traceback when the scheduler goes
+        # away; the runner reports that as one line (SchedulerLost)
+        logging.getLogger("distributed.client").setLevel(logging.CRITICAL)
         try:
             client = Client(address, timeout=connect_seconds)
         except (OSError, TimeoutError, ValueError) as exc:
@@ -237,9 +241,13 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
     processes = kind == "processes"
     # no dashboard; the scheduler still serves a small HTTP endpoint, on port 8787 unless told
     # otherwise, and warns when another cluster holds that port: use a free local port instead
-    cluster = LocalCluster(n_workers=n if processes else 1, threads_per_worker=1 if processes else n,
-                           processes=processes, dashboard_address=None,
-                           scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
+    with _workers_ignore_sigint():
+        cluster = LocalCluster(n_workers=n if processes else 1,
+                               threads_per_worker=1 if processes else n, processes=processes,
+                               dashboard_address=None,
+                               # a task cancelled on Ctrl-C is logged as a warning per worker
+                               silence_logs=logging.ERROR,
+                               scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
     try:
         client = Client(cluster)
     except BaseException:
@@ -257,6 +265,24 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
     else:
         client.close()
         cluster.close()
+
+
+@contextmanager
+def _workers_ignore_sigint():
+    """Worker processes started in here ignore SIGINT (an ignored signal stays ignored across
+    exec): Ctrl-C reaches the whole process group, and only this process should answer it (one
+    line, exit 130, the journal keeps every finished scene); the workers are closed by it."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _close_quietly(thing) -> None:
