@@ -334,8 +334,9 @@ class SweepStore:
                                 "--store PATH")
 
     def _check_provenance(self, sweep, add_sweep: bool) -> None:
-        """The same sweep file (same content, or same name and path: an edited grid) may write
-        again; another one needs ``add_sweep`` and is recorded in the ``sweeps`` attr."""
+        """The same sweep (same file content, or same ``name``: an edited grid) may write again,
+        each new version recorded; another sweep needs ``add_sweep`` and is recorded in the
+        ``sweeps`` attr."""
         attrs = self.ds.attrs
         entries = list(attrs.get("sweeps") or [])
         if not entries and attrs.get("sweep_file") is not None:  # a store of an earlier schema 3
@@ -346,8 +347,9 @@ class SweepStore:
                         "time": attrs.get("created")}]
         new = _provenance(sweep)
         same_content = any(e.get("sha256") == new["sha256"] for e in entries)
-        same_sweep = any(e.get("name") == new["name"] and e.get("path") == new["path"]
-                         for e in entries)
+        # a sweep is known by its name (an edited grid, a checkout moved elsewhere), a version
+        # of it by the file's hash
+        same_sweep = any(e.get("name") == new["name"] for e in entries)
         if not (same_content or same_sweep or add_sweep):
             last = entries[-1] if entries else {}
             raise StoreMismatch(
