@@ -517,3 +517,21 @@ def test_a_scheduler_killed_mid_sweep_is_one_line_and_keeps_finished_scenes(tmp_
     assert "Traceback" not in err and "lost the dask scheduler" in err.splitlines()[-1]
     kept = _finished_kept(tmp_path, capsys)
     assert 1 <= kept < len(FAULT_ST) * len(EPS)  # scenes done on workers may not have arrived
+
+
+def test_docs_list_every_exit_code_and_model_code():
+    import pipeline.errors as errors
+    from solver.observables import MODEL_CODES, STATUS
+
+    doc = (REPO / "docs" / "pipeline.md").read_text()
+    codes = {v for k, v in vars(errors).items() if k.startswith("EXIT_")}
+    for code in codes:
+        assert f"\n| {code} | " in doc, code
+    for name, code in MODEL_CODES.items():
+        assert f"{code} `{name}`" in doc, name
+    for name, (code, _) in STATUS.items():
+        assert f"| {code} | `{name}` |" in doc, name
+    assert "Store schema 3" in doc and "`store_schema` (3)" in doc
+    from pipeline.sweeps.layout import STORE_SCHEMA
+
+    assert STORE_SCHEMA == 3
