@@ -272,10 +272,10 @@ def _flush_quietly() -> None:
 def _quiet_dask() -> None:
     """After Ctrl-C: dask's loggers would print the tracebacks of its closing comms and
     workers; what matters was already said (and kept by the journal)."""
-    import logging
+    if "distributed" in sys.modules:
+        from .sweeps.runners import _quiet_dask as quiet
 
-    for name in ("distributed", "tornado", "asyncio"):
-        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
+        quiet()
 
 
 if __name__ == "__main__":

@@ -169,13 +169,19 @@ class Runner:
                              "and run the same command again to compute the rest")
 
 
-def _quiet_dask() -> None:
-    """distributed logs every closing comm of a lost or interrupted cluster with a traceback;
-    the one line the command prints says what happened."""
-    import logging
+_NOISY = ("distributed", "tornado", "asyncio")
 
-    for name in ("distributed", "tornado", "asyncio"):
-        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
+
+def _quiet_dask(names=_NOISY, level: int = logging.CRITICAL + 1) -> None:
+    """distributed logs every closing comm of a lost or interrupted cluster with a traceback
+    (through its own loggers, tornado's and asyncio's "exception was never retrieved"); the one
+    line the command prints says what happened. Child loggers that distributed configured with
+    their own level (``distributed.client``, ``tornado.application``...) are set too."""
+    loggers = [logging.getLogger(n) for n in names]
+    loggers += [logging.getLogger(n) for n in list(logging.root.manager.loggerDict)
+                if n.startswith(tuple(f"{p}." for p in names))]
+    for logger in loggers:
+        logger.setLevel(level)
 
 
 @contextmanager
@@ -214,9 +220,12 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
         if stream is not None:
             print(f"waiting for the dask scheduler at {target} (up to {connect_seconds:g} s)...",
                   file=stream, flush=True)
-        # the client logs every failed reconnect with a traceback when the scheduler goes
-        # away; the runner reports that as one line (SchedulerLost)
-        logging.getLogger("distributed.client").setLevel(logging.CRITICAL)
+        # when the scheduler goes away, the client logs every failed reconnect and every closed
+        # comm with a traceback (before the loss reaches this thread); the runner reports it as
+        # one line (SchedulerLost). Task failures still arrive as records.
+        _quiet_dask(("distributed.client", "distributed.comm", "distributed.core",
+                     "distributed.batched", "tornado.application", "asyncio"),
+                    level=logging.CRITICAL)
         try:
             client = Client(address, timeout=connect_seconds)
         except (OSError, TimeoutError, ValueError) as exc:
