@@ -366,9 +366,12 @@ def test_a_read_only_store_is_refused_before_any_solve(ws, capsys, monkeypatch):
                         if str(p).startswith(store) and mode & os.W_OK else
                         real_access(p, mode, *a, **k))  # chmod is no use when tests run as root
     before = tree_hash(ws / "s.zarr")
-    code, _, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    code, _, err = ehd(capsys, "sweep", "more.toml", "--executor", "serial")
     assert code == EXIT_USAGE and "not writable" in err and CALLS == []
     assert tree_hash(ws / "s.zarr") == before
+    # with nothing to do, a read-only store is only read
+    code, out, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    assert code == 0 and "cached 8" in out, err
 
 
 def test_an_unexpected_exception_is_a_bug_with_its_traceback(ws, capsys, monkeypatch):

@@ -153,6 +153,8 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         rerun = (status == 0) | (retry_failed & (status >= 2))
         todo = [c for c, r in zip(cells, rerun) if r]
         summary.scenes, summary.cached = len(cells), len(cells) - len(todo)
+        if todo:
+            st.require_writable()  # before any solve, not at the first merge
         if todo and sweep.fast_path and solve is solve_scene:
             solve = _master_solve(sweep, progress)
         if todo:

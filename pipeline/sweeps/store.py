@@ -208,6 +208,7 @@ class SweepStore:
         self._last_flush = 0.0
         self.ds = None
         self.damage = Damage()  # cells found damaged when the store was opened (now not run)
+        self._writable = False  # require_writable() passed
         self.damage_text = ""  # one line: how many cells, which variables, where
         self.journal_skipped = 0  # journal lines that were not records (skipped, scenes rerun)
 
@@ -306,7 +307,6 @@ class SweepStore:
         elif not (self.path / "zarr.json").is_file():
             raise StoreMismatch(f"{self.shown!r} exists but is not a zarr store; choose "
                                 "another --store")
-        self._check_writable()
         try:
             self._load()
         except (ValueError, KeyError, OSError) as exc:  # e.g. a zarr store without consolidation
@@ -324,14 +324,18 @@ class SweepStore:
         # reported in self.damage (pipeline/sweeps/integrity.py)
         self.ds, self.damage = load_checked(self.path)
 
-    def _check_writable(self) -> None:
-        """PathError before any solve when a folder of the store cannot be written (every chunk
-        is replaced by a rename inside its folder)."""
+    def require_writable(self) -> None:
+        """PathError when a folder of the store cannot be written (every chunk is replaced by a
+        rename inside its folder). Checked once, before the first write and before any scene is
+        solved (``run_sweep``): a read-only store with nothing to do is still readable."""
+        if self._writable:
+            return
         for d in (self.path, *(p for p in self.path.rglob("*") if p.is_dir())):
             if not os.access(d, os.W_OK | os.X_OK):
                 raise PathError(f"store {self.shown!r} is not writable ({str(d)!r}); make it "
                                 "writable (chmod -R u+w) or write the sweep elsewhere with "
                                 "--store PATH")
+        self._writable = True
 
     def _check_provenance(self, sweep, add_sweep: bool) -> None:
         """The same sweep (same file content, or same ``name``: an edited grid) may write again,
@@ -429,6 +433,7 @@ class SweepStore:
     def _set_attrs(self, **attrs) -> None:
         import zarr
 
+        self.require_writable()
         with zarr_warnings():
             group = zarr.open_group(self.path, mode="r+")
             group.attrs.update(attrs)
@@ -447,6 +452,7 @@ class SweepStore:
         for name in VARIABLES:  # reindex keeps values; restore dtypes the fill may have widened
             grown[name] = grown[name].astype(self.ds[name].dtype)
         grown.attrs.update(updated=_now())
+        self.require_writable()
         _write_new(grown, self.path)
         self._load()
 
@@ -483,6 +489,7 @@ class SweepStore:
 
         physics = self.scene(cell)
         if self._journal is None:
+            self.require_writable()
             self._journal = _journal_path(self.path).open("a")
         self._journal.write(json.dumps({"physics": physics, "key": self.key, **rec}) + "\n")
         self._journal.flush()  # in the OS page cache: survives the process being killed
@@ -549,6 +556,7 @@ class SweepStore:
         import time
 
         if self._dirty:
+            self.require_writable()
             axes = self.axes
             lead = np.array(sorted(self._dirty), dtype=int).reshape(len(self._dirty), -1)
             region = {a: slice(int(lead[:, k].min()), int(lead[:, k].max()) + 1)
