@@ -2,11 +2,15 @@
 modules add subcommands (``COMMAND_MODULES``). Importing ``pipeline`` (this module's package) sets
 the process environment first (pipeline/environment.py).
 
-Exit codes: 0 success, 1 a scene failed (its status and message are printed), 2 bad input
-(including output paths that cannot be written, checked before any solve), 130 interrupted,
-141 the reader of stdout went away (``ehd run ... | head``): like a Unix tool killed by SIGPIPE
-(128 + 13), so ``set -o pipefail`` scripts see the usual code, but without a traceback; the rest
-of the output goes to /dev/null (the recipe of the Python docs, "Note on SIGPIPE").
+The error boundary of every command is :func:`main`: an expected failure is a
+``pipeline.errors.EhdError`` (one line on stderr, its exit code); anything else is a bug (its
+traceback, one line saying so, exit 70). Exit codes (the table is in ``pipeline/errors.py`` and
+docs/pipeline.md): 0 success, 1 a scene failed (its status and message are printed), 2 bad input
+(including output paths that cannot be written, checked before any solve), 3/4 a sweep with failed
+scenes / a lost scheduler, 5 a damaged store, 70 a bug, 130 interrupted, 141 the reader of stdout
+went away (``ehd run ... | head``): like a Unix tool killed by SIGPIPE (128 + 13), so ``set -o
+pipefail`` scripts see the usual code, but without a traceback; the rest of the output goes to
+/dev/null (the recipe of the Python docs, "Note on SIGPIPE").
 
 ``ehd run`` takes one flag per dimensionless group of ``solver.physics`` (``--St``, ``--eps``),
 generated from its declaration, and prints one row per labelled observable of
@@ -25,11 +29,10 @@ from pathlib import Path
 from solver.observables import LABELS, OBSERVABLES
 from solver.physics import GROUPS, Physics
 
-__all__ = ["main", "COMMANDS"]
+from .errors import (BUG_REPORT, EXIT_BROKEN_PIPE, EXIT_INTERNAL, EXIT_INTERRUPTED, EhdError,
+                     PathError, UsageError)
 
-
-class UsageError(Exception):
-    """Bad input: printed as one line, exit code 2, no traceback."""
+__all__ = ["main", "COMMANDS", "UsageError", "check_output_paths", "check_output_dir"]
 
 
 def _add_numerics_flags(p: argparse.ArgumentParser) -> None:
@@ -83,28 +86,41 @@ def _print_scene(d: dict) -> None:
         print(f"note: {d['message']}")
 
 
+def check_output_dir(flag: str, value: str | None) -> None:
+    """PathError, before any work, when the folder ``value`` of ``flag`` cannot be made or
+    written: empty, an existing file, a file among its parents, or a read-only parent."""
+    if value is None:
+        return
+    if not str(value).strip():
+        raise PathError(f"{flag}: empty path; give a folder")
+    path = Path(value)
+    if path.exists() and not path.is_dir():
+        raise PathError(f"{flag} {value}: exists and is not a directory")
+    existing = next((p for p in (path, *path.parents) if p.exists()), Path("."))
+    if not existing.is_dir():
+        raise PathError(f"{flag} {value}: {str(existing)!r} is not a directory")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise PathError(f"{flag} {value}: {str(existing)!r} is not writable")
+
+
 def check_output_paths(save: str | None = None, plot: str | None = None) -> None:
-    """UsageError, before any solve, when ``--save FILE`` or ``--plot DIR`` cannot be written:
-    a missing parent directory, or an existing path of the wrong kind (a ``.zarr`` store and
-    ``DIR`` are directories, a ``.nc`` file is a file)."""
-    if save:
+    """PathError, before any solve, when ``--save FILE`` or ``--plot DIR`` cannot be written:
+    a missing or read-only parent directory, or an existing path of the wrong kind (a ``.zarr``
+    store and ``DIR`` are directories, a ``.nc`` file is a file)."""
+    if save is not None:
         if not save.endswith((".nc", ".zarr")):
-            raise UsageError(f"--save: unknown file type {save!r}; use a .nc or .zarr path")
+            raise PathError(f"--save: unknown file type {save!r}; use a .nc or .zarr path")
         path = Path(save)
         parent = path.parent
         if not parent.is_dir():
-            raise UsageError(f"--save {save}: the directory {str(parent)!r} does not exist")
+            raise PathError(f"--save {save}: the directory {str(parent)!r} does not exist")
+        if not os.access(parent, os.W_OK | os.X_OK):
+            raise PathError(f"--save {save}: the directory {str(parent)!r} is not writable")
         if save.endswith(".zarr") and path.exists() and not path.is_dir():
-            raise UsageError(f"--save {save}: exists and is not a directory (a .zarr store is one)")
+            raise PathError(f"--save {save}: exists and is not a directory (a .zarr store is one)")
         if save.endswith(".nc") and path.is_dir():
-            raise UsageError(f"--save {save}: is a directory, not a file")
-    if plot:
-        path = Path(plot)
-        if path.exists() and not path.is_dir():
-            raise UsageError(f"--plot {plot}: exists and is not a directory")
-        existing = next((p for p in path.parents if p.exists()), None)
-        if existing is not None and not existing.is_dir():
-            raise UsageError(f"--plot {plot}: {str(existing)!r} is not a directory")
+            raise PathError(f"--save {save}: is a directory, not a file")
+    check_output_dir("--plot", plot)
 
 
 def physics_from_args(args) -> Physics:
@@ -224,23 +240,52 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    """Run one ``ehd`` command: the error boundary of them all (see the module docstring)."""
     args = _parser().parse_args(argv)
+    name = f"ehd {args.command}"
     try:
         code = args.func(args)
         sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
         return code
-    except UsageError as exc:
-        print(f"ehd {args.command}: error: {exc}", file=sys.stderr)
-        return 2
+    except EhdError as exc:
+        _flush_quietly()
+        print(f"{name}: error: {exc.line()}", file=sys.stderr)
+        return exc.exit_code
     except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
+        _quiet_dask()
+        _flush_quietly()
+        print(f"{name}: interrupted; everything finished so far is kept", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except BrokenPipeError:
         # the reader went away (``ehd ... | head``): no traceback, and the interpreter's final
         # flush must not raise again, so stdout points to /dev/null (Python docs, SIGPIPE note)
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
-        return 141
+        return EXIT_BROKEN_PIPE
+    except Exception:
+        import traceback
+
+        _flush_quietly()
+        traceback.print_exc()
+        print(f"{name}: internal error: this is a bug in ehd-collision, not in your input; please "
+              f"report it at {BUG_REPORT}", file=sys.stderr)
+        return EXIT_INTERNAL
+
+
+def _flush_quietly() -> None:
+    try:
+        sys.stdout.flush()
+    except (BrokenPipeError, OSError, ValueError):
+        pass
+
+
+def _quiet_dask() -> None:
+    """After Ctrl-C: dask's loggers would print the tracebacks of its closing comms and
+    workers; what matters was already said (and kept by the journal)."""
+    if "distributed" in sys.modules:
+        from .sweeps.runners import _quiet_dask as quiet
+
+        quiet()
 
 
 if __name__ == "__main__":

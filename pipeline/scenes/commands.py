@@ -248,8 +248,10 @@ def _list_materials(args) -> int:
 
 
 def cmd_paper_figures(args) -> int:
+    from ..cli import check_output_dir
     from ..plots.paper_figures import paper_figures
 
+    check_output_dir("--out", args.out)
     try:
         paths = paper_figures(args.out, accuracy=args.accuracy)
     except ValueError as exc:

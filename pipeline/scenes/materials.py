@@ -23,13 +23,14 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
+from ..errors import UsageError
 from .units import FieldSpec, UnitError, to_si
 
 __all__ = ["Solid", "FluidProps", "MaterialTable", "SOLID_FIELDS", "FLUID_FIELDS",
            "load_table", "user_table_paths", "MaterialError"]
 
 
-class MaterialError(ValueError):
+class MaterialError(UsageError, ValueError):
     """A materials file or entry that cannot be used (the message names file and field)."""
 
 
@@ -162,6 +163,11 @@ def read_toml(path, what: str = "materials file", error=MaterialError) -> dict:
         raise error(f"{what} {str(path)!r} is a directory") from None
     except tomllib.TOMLDecodeError as exc:
         raise error(f"{what} {str(path)!r} is not valid TOML: {exc}") from None
+    except UnicodeDecodeError:
+        raise error(f"{what} {str(path)!r} is not a text file (not UTF-8): give a TOML "
+                    "file") from None
+    except OSError as exc:
+        raise error(f"cannot read {what} {str(path)!r}: {exc.strerror}") from None
 
 
 def user_table_paths(environ=None) -> list[Path]:

@@ -28,13 +28,14 @@ from dataclasses import dataclass
 
 from solver.physics import Physics
 
+from ..errors import UsageError
 from .materials import FluidProps, Solid
 from .units import format_quantity
 
 __all__ = ["SceneError", "Body", "Scene"]
 
 
-class SceneError(ValueError):
+class SceneError(UsageError, ValueError):
     """A scene that cannot be built or solved (the message names the field or parameter)."""
 
 

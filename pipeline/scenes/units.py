@@ -14,7 +14,10 @@ from functools import lru_cache
 __all__ = ["UnitError", "FieldSpec", "to_si", "format_quantity"]
 
 
-class UnitError(ValueError):
+from ..errors import UsageError
+
+
+class UnitError(UsageError, ValueError):
     """A value that is not a number or quantity of the right dimension or range."""
 
 

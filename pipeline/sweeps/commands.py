@@ -1,9 +1,11 @@
 """``ehd sweep``, ``ehd status``, ``ehd figures`` (registered by ``pipeline.cli``).
 
-Exit codes: 0 success; 2 bad input (sweep file, store of another solver version/numerics, busy
-store, unreachable scheduler), one line on stderr; 3 the sweep finished but failed scenes remain
-in it (stored with status and message; rerun them with ``--retry-failed``); 130 interrupted
-(everything finished so far is kept).
+Exit codes (``pipeline/errors.py``): 0 success; 2 bad input (sweep file, unusable path, store of
+another solver version/numerics/sweep file, busy store, unreachable scheduler), one line on
+stderr, nothing computed; 3 the sweep finished but failed scenes remain in it (stored with status
+and message; rerun them with ``--retry-failed``); 4 the scheduler went away mid-sweep (finished
+scenes kept); 5 ``status``/``figures``: the store is damaged (the cells are listed; ``ehd sweep``
+recomputes them); 130 interrupted (everything finished so far is kept).
 """
 
 from __future__ import annotations
@@ -29,7 +31,8 @@ def register(sub) -> None:
     p = sub.add_parser(
         "sweep", help="compute a sweep (grid over Physics fields) into its zarr store (cached, resumable)",
         description="Compute every scene of a sweep file that its store lacks. Exit codes: 0 all "
-                    "scenes ok, 2 bad input, 3 finished with failed scenes, 130 interrupted.")
+                    "scenes ok, 2 bad input, 3 finished with failed scenes, 4 scheduler lost "
+                    "mid-sweep, 130 interrupted.")
     p.add_argument("sweep_file", metavar="SWEEP_FILE", help="sweep definition, e.g. sweeps/paper.toml")
     p.add_argument("--store", metavar="PATH", default=None,
                    help="zarr store to use instead of the one named in the sweep file")
@@ -48,11 +51,18 @@ def register(sub) -> None:
     p.add_argument("--wait-workers", metavar="SECONDS", type=float, default=None,
                    help="with --scheduler/--scheduler-file and --workers N: give up (exit 2) when "
                         "N workers are not connected after SECONDS (default 60)")
+    p.add_argument("--connect-timeout", metavar="SECONDS", type=float, default=None,
+                   help="with --scheduler/--scheduler-file: give up (exit 2) when the scheduler "
+                        "does not answer within SECONDS (default 30)")
+    p.add_argument("--add-sweep", action="store_true",
+                   help="write this sweep file into a store that another sweep file wrote "
+                        "(recorded in the store's 'sweeps' attr)")
     p.add_argument("--retry-failed", action="store_true",
                    help="rerun the scenes stored as failed (by default they are kept as they are)")
     p.set_defaults(func=cmd_sweep)
 
-    p = sub.add_parser("status", help="what a sweep store holds: done, failed, missing")
+    p = sub.add_parser("status", help="what a sweep store holds: done, failed, missing, damaged "
+                                       "(exit 5 when damaged)")
     p.add_argument("store", metavar="STORE", help="sweep store, e.g. results/paper.zarr")
     p.set_defaults(func=cmd_status)
 
@@ -65,45 +75,62 @@ def register(sub) -> None:
 
 
 def cmd_sweep(args) -> int:
-    from ..cli import UsageError
-    from .config import ConfigError, load_sweep
-    from .runners import RunnerError
-    from .store import StoreBusy, StoreMismatch
+    from .config import load_sweep
     from .run import run_sweep
 
-    try:
-        sweep = load_sweep(args.sweep_file)
-    except ConfigError as exc:
-        raise UsageError(str(exc)) from None
-    try:
-        summary = run_sweep(sweep, store=args.store, runner=args.executor or "processes",
-                            workers=args.workers, address=args.scheduler,
-                            scheduler_file=args.scheduler_file, retry_failed=args.retry_failed,
-                            wait_workers=args.wait_workers)
-    except (StoreMismatch, StoreBusy, RunnerError) as exc:
-        raise UsageError(str(exc)) from None
+    sweep = load_sweep(args.sweep_file)  # ConfigError: one line, exit 2 (pipeline/errors.py)
+    summary = run_sweep(sweep, store=args.store, runner=args.executor or "processes",
+                        workers=args.workers, address=args.scheduler,
+                        scheduler_file=args.scheduler_file, retry_failed=args.retry_failed,
+                        wait_workers=args.wait_workers, add_sweep=args.add_sweep,
+                        connect_seconds=args.connect_timeout)
     print(summary.text())
     return summary.exit_code
 
 
-def cmd_status(args) -> int:
+def _open_checked(store: str):
+    """``(dataset, damage, journal lines skipped)`` of the store at ``store``, read whole; a
+    missing or unreadable store is a one-line error (exit 2)."""
+    from ..errors import PathError, UsageError
+    from .integrity import load_checked
+    from .journal import _journal_path, read_journal
+    from .store import open_results
+
+    if not str(store).strip():
+        raise PathError("STORE: empty path; give a store directory such as results/paper.zarr")
     import warnings
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # a pending journal is reported
+            open_results(store, chunks=None)  # is it a sweep store at all?
+        ds, damage = load_checked(store)
+    except FileNotFoundError as exc:
+        raise UsageError(str(exc)) from None
+    except (ValueError, KeyError, OSError) as exc:
+        raise UsageError(f"{store!r} cannot be opened as an ehd sweep store "
+                         f"({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
+                         ) from None
+    _, skipped = read_journal(_journal_path(store))
+    return ds, damage, skipped
+
+
+def cmd_status(args) -> int:
+    import sys
 
     import numpy as np
 
-    from ..cli import UsageError
+    from ..errors import EXIT_DAMAGED
     from .analysis import PlaneError, planes
     from .journal import pending_journal
     from .layout import MODEL_CODES, STATUS_CODES
     from .run import format_physics
-    from .store import open_results
 
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)  # a pending journal is reported below
-            ds = open_results(args.store, chunks=None)
-    except FileNotFoundError as exc:
-        raise UsageError(str(exc)) from None
+    ds, damage, skipped = _open_checked(args.store)
+    fixed = ds.attrs.get("fixed_physics") or {}
+    damage_text = damage.describe(ds, fixed, limit=20) if damage else ""
+    for cell in damage.cells:  # never counted or tabulated as data
+        ds["status"].values[cell] = 0
     status = ds["status"].values
     model = ds["model"].values
     ok = status == STATUS_CODES["ok"]
@@ -129,6 +156,11 @@ def cmd_status(args) -> int:
     if pending:
         print(f"  journal   {pending:6d}   finished scenes of an interrupted run, merged by the "
               "next ehd sweep")
+    if skipped:
+        print(f"  journal   {skipped:6d}   bad lines skipped (their scenes run again)")
+    if damage:
+        print(f"  damaged   {len(damage):6d}   counted as not run above; the next ehd sweep "
+              "computes them again")
     try:
         for extra, plane in planes(ds):
             _status_table(plane, extra, format_physics)
@@ -141,6 +173,10 @@ def cmd_status(args) -> int:
               f"{ds['message'].values[tuple(cell)]}")
     if len(cells) > 20:
         print(f"  ... {len(cells) - 20} more failed scenes")
+    if damage:
+        print(f"ehd status: error: store {args.store} is damaged: {damage_text}; run its sweep "
+              "again (ehd sweep SWEEP_FILE) to compute them again", file=sys.stderr)
+        return EXIT_DAMAGED
     return 0
 
 
@@ -165,15 +201,24 @@ def _status_table(plane, extra: dict, format_physics) -> None:
 
 
 def cmd_figures(args) -> int:
-    from ..cli import UsageError
+    from ..cli import check_output_dir
+    from ..errors import StoreDamaged, UsageError
     from ..plots.sweep_maps import update_figures
     from .analysis import PlaneError
+    from .layout import STATUS_CODES
     from .store import open_results
 
-    try:
-        ds = open_results(args.store, chunks=None)
-    except FileNotFoundError as exc:
-        raise UsageError(str(exc)) from None
+    check_output_dir("--out", args.out)
+    checked, damage, _skipped = _open_checked(args.store)
+    if damage:
+        raise StoreDamaged(f"store {args.store} is damaged: "
+                           f"{damage.describe(checked, checked.attrs.get('fixed_physics') or {})}; no "
+                           "figures drawn from it: run its sweep again (ehd sweep SWEEP_FILE) to "
+                           "compute those cells again")
+    if not (checked["status"].values == STATUS_CODES["ok"]).any():
+        raise UsageError(f"store {args.store} holds no finished scene yet: nothing to draw; run "
+                         "its sweep first (ehd sweep SWEEP_FILE)")
+    ds = open_results(args.store, chunks=None)
     try:
         paths, rendered = update_figures(ds, args.out)
     except PlaneError as exc:

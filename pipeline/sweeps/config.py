@@ -37,6 +37,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import UsageError
+
 __all__ = ["Sweep", "load_sweep", "parse_sweep", "cache_key", "canonical_json", "ConfigError",
            "physics_json", "physics_from_json"]
 
@@ -45,7 +47,7 @@ _RANGE_KEYS = {"start", "stop", "num"}
 MAX_SCENES = 10**7  # a typo guard (num = 1e9), far above any real sweep
 
 
-class ConfigError(ValueError):
+class ConfigError(UsageError, ValueError):
     """A sweep file is malformed; the message names the file and the offending key."""
 
 
@@ -163,9 +165,15 @@ def load_sweep(path) -> Sweep:
     """
     path = Path(path)
     try:
-        text = path.read_text()
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"sweep file {str(path)!r} is not a text file (byte {exc.start} is not "
+                          "UTF-8): give a TOML sweep file such as sweeps/quick.toml") from None
     except OSError as exc:
         raise ConfigError(f"cannot read sweep file {str(path)!r}: {exc.strerror}") from None
+    if "\x00" in text:
+        raise ConfigError(f"sweep file {str(path)!r} is not a text file (it holds NUL bytes): "
+                          "give a TOML sweep file such as sweeps/quick.toml")
     return parse_sweep(text, path=path)
 
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from .layout import MODEL_CODES, STATUS_CODES
 from .progress import Progress
-from .runners import open_runner
+from .runners import check_runner, open_runner
 from .store import SweepStore
 from .tasks import MasterSolve, solve_scene, warm
 
@@ -43,6 +43,8 @@ class Summary:
     done: int = 0  # stored as ok
     failed: int = 0  # stored as failed (this run or before)
     not_run: int = 0  # still missing (an interrupted run)
+    repaired: int = 0  # damaged cells found when the store was opened (recomputed if in the grid)
+    journal_skipped: int = 0  # journal lines that were not scene records (their scenes rerun)
     rigid: int = 0  # answered by the rigid solution, no PDE solve
     rigid_computed: int = 0
     wall_s: float = 0.0
@@ -68,6 +70,12 @@ class Summary:
         ]
         if self.not_run:
             lines.append(f"  not run     {self.not_run:6d}")
+        if self.repaired:
+            lines.append(f"  repaired    {self.repaired:6d}   (damaged cells found in the store, "
+                         "computed again)")
+        if self.journal_skipped:
+            lines.append(f"  journal     {self.journal_skipped:6d}   bad lines skipped (their "
+                         "scenes computed again)")
         lines.append(f"  runner      {self.runner}; {self.computed} scenes in {self.wall_s:.1f} s"
                      + (f" ({self.rate:.1f} scenes/s)" if self.computed else ""))
         for physics, status, message in self.failures:
@@ -83,7 +91,8 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
               address: str | None = None, scheduler_file: str | None = None,
               retry_failed: bool = False, solve=solve_scene, warm_up: bool | None = None,
               progress=sys.stderr, flush_seconds: float | None = None,
-              wait_workers: float | None = None) -> Summary:
+              wait_workers: float | None = None, add_sweep: bool = False,
+              connect_seconds: float | None = None) -> Summary:
     """Compute every scene of ``sweep`` that its store lacks.
 
     Parameters
@@ -111,6 +120,10 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         Journal -> store merge interval (default ``store.FLUSH_SECONDS``).
     wait_workers : float, optional
         With a scheduler: seconds to wait for ``workers`` (default ``runners.WAIT_WORKERS_SECONDS``).
+    add_sweep : bool
+        Allow another sweep file to write into an existing store (recorded in its ``sweeps``).
+    connect_seconds : float, optional
+        With a scheduler: seconds to try to reach it (default ``runners.CONNECT_SECONDS``).
 
     Returns
     -------
@@ -122,14 +135,26 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
     if warm_up is None:
         warm_up = solve is solve_scene
     overrides = dict(sweep.overrides)
-    with SweepStore.open(sweep, store, **kwargs) as st:
-        summary = Summary(name=sweep.name, store=str(st.path), shape=sweep.shape,
+    # the executor's settings and a scheduler file are checked before the store is touched
+    address = check_runner(runner, workers, address, scheduler_file)
+    runner_kw = {} if wait_workers is None else {"wait_workers": wait_workers}
+    if connect_seconds is not None:
+        runner_kw["connect_seconds"] = connect_seconds
+    with SweepStore.open(sweep, store, add_sweep=add_sweep, **kwargs) as st:
+        summary = Summary(name=sweep.name, store=st.shown, shape=sweep.shape,
                           axes=sweep.axis_names)
+        summary.repaired = len(st.damage)
+        summary.journal_skipped = st.journal_skipped
+        if st.damage and progress is not None:
+            print(f"store {st.shown} is damaged: {st.damage_text}; "
+                  "those cells are computed again", file=progress, flush=True)
         cells = st.cells(sweep)
         status = st.status_of(cells)
         rerun = (status == 0) | (retry_failed & (status >= 2))
         todo = [c for c, r in zip(cells, rerun) if r]
         summary.scenes, summary.cached = len(cells), len(cells) - len(todo)
+        if todo:
+            st.require_writable()  # before any solve, not at the first merge
         if todo and sweep.fast_path and solve is solve_scene:
             solve = _master_solve(sweep, progress)
         if todo:
@@ -137,9 +162,8 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
             bar = Progress(len(jobs), stream=progress)
             warm_fn = _Warm(sweep.accuracy, overrides) if warm_up else None
             try:
-                with open_runner(runner, workers, address, scheduler_file, warm=warm_fn,
-                                 **({} if wait_workers is None else {"wait_workers": wait_workers})
-                                 ) as run:
+                with open_runner(runner, workers, address, None, warm=warm_fn,
+                                 stream=progress, **runner_kw) as run:
                     summary.runner = run.description
                     if progress is not None:
                         print(f"{len(jobs)} scenes to compute ({summary.cached} cached) on "

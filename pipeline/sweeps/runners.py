@@ -19,6 +19,7 @@ workers that join later run it too), so no worker compiles on its own.
 
 from __future__ import annotations
 
+import logging
 import os
 import sys
 import time
@@ -28,17 +29,66 @@ from contextlib import contextmanager
 from distributed import WorkerPlugin
 
 from ..environment import configure
+from ..errors import SchedulerError, SchedulerLost
 
-__all__ = ["open_runner", "default_workers", "max_local_workers", "RUNNERS", "Runner",
+__all__ = ["open_runner", "check_runner", "scheduler_address", "CONNECT_SECONDS", "default_workers", "max_local_workers", "RUNNERS", "Runner",
            "RunnerError", "WorkerSetup", "WAIT_WORKERS_SECONDS"]
 
 RUNNERS = ("processes", "threads", "serial")
 WAIT_WORKERS_SECONDS = 60.0  # how long a sweep waits for --workers N on an existing scheduler
+CONNECT_SECONDS = 30.0  # how long a sweep tries to reach an existing scheduler
 
 
-class RunnerError(RuntimeError):
+class RunnerError(SchedulerError, RuntimeError):
     """The executor could not be started or reached (unreachable scheduler, workers that cannot
     import the project)."""
+
+
+def scheduler_address(scheduler_file) -> str:
+    """The address in a ``dask scheduler --scheduler-file FILE`` file, or RunnerError naming
+    what is wrong with the file (checked before anything else happens: distributed itself
+    would wait forever for a file that does not exist)."""
+    import json
+
+    where = f"--scheduler-file {scheduler_file}"
+    try:
+        text = open(scheduler_file, "rb").read().decode("utf-8")
+    except FileNotFoundError:
+        raise RunnerError(f"{where}: no such file; start the scheduler first (dask scheduler "
+                          f"--scheduler-file {scheduler_file})") from None
+    except UnicodeDecodeError:
+        raise RunnerError(f"{where}: not a scheduler file (not text)") from None
+    except OSError as exc:
+        raise RunnerError(f"{where}: cannot read it ({exc.strerror})") from None
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise RunnerError(f"{where}: not a scheduler file (not JSON: {exc.msg} at line "
+                          f"{exc.lineno})") from None
+    address = doc.get("address") if isinstance(doc, dict) else None
+    if not isinstance(address, str) or "://" not in address:
+        raise RunnerError(f"{where}: not a scheduler file (no \"address\" such as "
+                          "tcp://10.0.0.1:8786)")
+    return address
+
+
+def check_runner(kind: str | None = "processes", workers: int | None = None,
+                 address: str | None = None, scheduler_file: str | None = None) -> str | None:
+    """Everything about the executor that can be checked before any work (the store is not
+    touched yet): the executor name, the local worker limit, the scheduler file. Returns the
+    scheduler address (None: local)."""
+    local = address is None and scheduler_file is None
+    if local and kind not in RUNNERS:
+        raise RunnerError(f"executor must be one of {RUNNERS}, got {kind!r}")
+    if local and kind != "serial" and workers and workers > max_local_workers():
+        raise RunnerError(f"--workers {workers} is more than {max_local_workers()} (4 per usable "
+                          f"core, {default_workers()} here): extra local workers only queue for "
+                          "the cores; use a dask scheduler for more")
+    if scheduler_file is not None:
+        return scheduler_address(scheduler_file)
+    if address is not None and not address.strip():
+        raise RunnerError("--scheduler: empty address; give one such as tcp://10.0.0.1:8786")
+    return address
 
 
 def default_workers() -> int:
@@ -92,20 +142,53 @@ class Runner:
                 except Exception as exc:
                     yield tag, exc
             return
+        from concurrent.futures import CancelledError
+
         futures = {self._executor.submit(fn, *args): tag for tag, args in jobs}
         try:
             for fut in as_completed(futures):
-                exc = fut.exception()
+                try:
+                    exc = fut.exception()
+                except CancelledError:  # we cancel nothing: the scheduler went away
+                    raise self._lost(len(jobs) - len(futures)) from None
+                if exc is not None and self._scheduler_gone():
+                    raise self._lost(len(jobs) - len(futures)) from None
                 yield futures.pop(fut), (exc if exc is not None else fut.result())
         finally:
             for fut in futures:  # interrupted: do not leave scenes running on a shared cluster
                 fut.cancel()
 
 
+    def _scheduler_gone(self) -> bool:
+        return self.client is not None and self.client.status not in ("running", "newly-created")
+
+    def _lost(self, finished: int) -> "SchedulerLost":
+        _quiet_dask()
+        return SchedulerLost(f"lost the dask scheduler ({self.description}) mid-sweep; the "
+                             f"{finished} scenes finished before are kept: restart the scheduler "
+                             "and run the same command again to compute the rest")
+
+
+_NOISY = ("distributed", "tornado", "asyncio")
+
+
+def _quiet_dask(names=_NOISY, level: int = logging.CRITICAL + 1) -> None:
+    """distributed logs every closing comm of a lost or interrupted cluster with a traceback
+    (through its own loggers, tornado's and asyncio's "exception was never retrieved"); the one
+    line the command prints says what happened. Child loggers that distributed configured with
+    their own level (``distributed.client``, ``tornado.application``...) are set too."""
+    loggers = [logging.getLogger(n) for n in names]
+    loggers += [logging.getLogger(n) for n in list(logging.root.manager.loggerDict)
+                if n.startswith(tuple(f"{p}." for p in names))]
+    for logger in loggers:
+        logger.setLevel(level)
+
+
 @contextmanager
 def open_runner(kind: str | None = "processes", workers: int | None = None,
                 address: str | None = None, scheduler_file: str | None = None, warm=None,
-                wait_workers: float = WAIT_WORKERS_SECONDS, stream=None):
+                wait_workers: float = WAIT_WORKERS_SECONDS, stream=None,
+                connect_seconds: float = CONNECT_SECONDS):
     """Start (or connect to) an executor and yield a :class:`Runner`.
 
     Parameters
@@ -121,13 +204,9 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
     warm : callable, optional
         Called once here before any worker starts, then on every worker (:class:`WorkerSetup`).
     """
-    local = address is None and scheduler_file is None
-    if local and kind not in RUNNERS:
-        raise ValueError(f"executor must be one of {RUNNERS}, got {kind!r}")
-    if local and kind != "serial" and workers and workers > max_local_workers():
-        raise RunnerError(f"--workers {workers} is more than {max_local_workers()} (4 per usable "
-                          f"core, {default_workers()} here): extra local workers only queue for "
-                          "the cores; use a dask scheduler for more")
+    address = check_runner(kind, workers, address, scheduler_file)
+    local = address is None
+    stream = sys.stderr if stream is None else stream
     if warm is not None:
         warm()  # compile once, here: writes the on-disk numba cache the workers will load
     if local and kind == "serial":
@@ -136,29 +215,90 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
 
     from dask.distributed import Client, LocalCluster
 
-    if address is not None or scheduler_file is not None:
-        target = address if address is not None else f"scheduler file {scheduler_file}"
+    if not local:
+        target = address + (f" (from {scheduler_file})" if scheduler_file else "")
+        if stream is not None:
+            print(f"waiting for the dask scheduler at {target} (up to {connect_seconds:g} s)...",
+                  file=stream, flush=True)
+        # when the scheduler goes away, the client logs every failed reconnect and every closed
+        # comm with a traceback (before the loss reaches this thread); the runner reports it as
+        # one line (SchedulerLost). Task failures still arrive as records.
+        _quiet_dask(("distributed.client", "distributed.comm", "distributed.core",
+                     "distributed.batched", "tornado.application", "asyncio"),
+                    level=logging.CRITICAL)
         try:
-            client = Client(address, timeout="30s") if address is not None else \
-                Client(scheduler_file=scheduler_file, timeout="30s")
+            client = Client(address, timeout=connect_seconds)
         except (OSError, TimeoutError, ValueError) as exc:
-            raise RunnerError(f"cannot reach the dask scheduler ({target}): {exc}") from None
-        with client:
+            _quiet_dask()
+            raise RunnerError(f"cannot reach the dask scheduler at {target} within "
+                              f"{connect_seconds:g} s ({type(exc).__name__}: "
+                              f"{str(exc).splitlines()[0] if str(exc) else 'no answer'}); start "
+                              "it, check the address, or raise --connect-timeout") from None
+        try:
             if workers:
-                _wait_for_workers(client, workers, wait_workers,
-                                  sys.stderr if stream is None else stream)
+                _wait_for_workers(client, workers, wait_workers, stream)
             yield _dask_runner(client, f"dask scheduler {client.scheduler.address}", warm)
+        except BaseException:
+            _quiet_dask()  # closing a client of a lost scheduler logs tracebacks
+            _close_quietly(client)
+            raise
+        else:
+            client.close()
         return
 
     n = workers or default_workers()
     processes = kind == "processes"
     # no dashboard; the scheduler still serves a small HTTP endpoint, on port 8787 unless told
     # otherwise, and warns when another cluster holds that port: use a free local port instead
-    cluster = LocalCluster(n_workers=n if processes else 1, threads_per_worker=1 if processes else n,
-                           processes=processes, dashboard_address=None,
-                           scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
-    with cluster, Client(cluster) as client:
+    with _workers_ignore_sigint():
+        cluster = LocalCluster(n_workers=n if processes else 1,
+                               threads_per_worker=1 if processes else n, processes=processes,
+                               dashboard_address=None,
+                               # a task cancelled on Ctrl-C is logged as a warning per worker
+                               silence_logs=logging.ERROR,
+                               scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
+    try:
+        client = Client(cluster)
+    except BaseException:
+        _quiet_dask()
+        _close_quietly(cluster)
+        raise
+    try:
         yield _dask_runner(client, f"local {'processes' if processes else 'threads'} x{n}", warm)
+    except BaseException:
+        # interrupted or failed: dask would log the tracebacks of every comm it closes
+        _quiet_dask()
+        _close_quietly(client)
+        _close_quietly(cluster)
+        raise
+    else:
+        client.close()
+        cluster.close()
+
+
+@contextmanager
+def _workers_ignore_sigint():
+    """Worker processes started in here ignore SIGINT (an ignored signal stays ignored across
+    exec): Ctrl-C reaches the whole process group, and only this process should answer it (one
+    line, exit 130, the journal keeps every finished scene); the workers are closed by it."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _close_quietly(thing) -> None:
+    try:
+        thing.close(timeout=2)
+    except BaseException:  # noqa: BLE001 - the scheduler is gone; nothing left to close
+        pass
 
 
 def _wait_for_workers(client, n: int, timeout: float, stream) -> None:

@@ -11,6 +11,12 @@ Rules this module enforces (docs/pipeline.md):
   the new coordinates along every axis, existing cells copied over.
 - One writer: :class:`SweepStore` is the only code that writes a store; an exclusive lock
   (``<store>.lock``, released by the OS even after ``kill -9``) keeps a second sweep out.
+- Integrity: the store is read whole, chunk by chunk where a chunk cannot be decoded, when a
+  sweep opens it (:mod:`pipeline.sweeps.integrity`); damaged cells are turned into "not run"
+  and their chunks rewritten, so the sweep recomputes them and never reads them as data.
+- Provenance: the root attr ``sweeps`` lists every sweep file that wrote into the store (name,
+  path, sha256 of the file, time); another sweep file needs ``add_sweep`` (``--add-sweep``).
+- The store is known by its real path (symlinks resolved): one lock and one journal per store.
 - Crash safety: each finished scene is appended to a journal (``<store>.journal``, one JSON line
   ``{"physics": {...}, "key": ..., **record}``, flushed to the OS) before anything else, then merged into the store in batches; a new run
   merges a journal left by a killed run first, so no finished scene is ever computed twice.
@@ -33,8 +39,10 @@ import numpy as np
 from solver.observables import MODEL_CODES, STATUS_CODES
 from solver.physics import Physics
 
+from ..errors import EhdError, PathError, UsageError
 from .config import physics_from_json, physics_json
-from .journal import _journal_path, _read_journal, pending_journal
+from .integrity import Damage, load_checked
+from .journal import _journal_path, pending_journal, read_journal
 from .layout import (COUNTS, DIAGNOSTIC, FLAGS, FLOATS, SCALING, STORE_SCHEMA, VARIABLES, _encoding,
                      _fill, _now, _package_versions, empty_dataset, zarr_warnings)
 
@@ -44,15 +52,16 @@ RTOL_COORD = 1e-9  # grid values this close are the same scene (geomspace round-
 FLUSH_SECONDS = 2.0  # journal -> store merge interval: the journal already makes results durable
 
 
-class StoreMismatch(ValueError):
+class StoreMismatch(UsageError, ValueError):
     """The store belongs to another solver version, numerics, physics or schema: refuse to mix."""
 
 
-class StoreBusy(RuntimeError):
+class StoreBusy(EhdError, RuntimeError):
     """Another process is writing the store."""
 
 
 def _lock_path(path: Path) -> Path:
+    path = Path(os.path.realpath(path))
     return path.with_name(path.name + ".lock")
 
 
@@ -156,6 +165,18 @@ def _index(coord: np.ndarray, values) -> np.ndarray:
     return np.asarray(idx, dtype=int)
 
 
+def _sha256(text: str) -> str:
+    import hashlib
+
+    return hashlib.sha256(str(text).encode()).hexdigest()
+
+
+def _provenance(sweep) -> dict:
+    """An entry of the store's ``sweeps`` attr: which sweep file wrote into it, and when."""
+    path = str(Path(sweep.path).resolve()) if sweep.path is not None else ""
+    return {"name": sweep.name, "path": path, "sha256": _sha256(sweep.source), "time": _now()}
+
+
 class SweepStore:
     """The single writer of a sweep store (use :meth:`open` as a context manager).
 
@@ -171,7 +192,13 @@ class SweepStore:
 
     def __init__(self, path: Path, key: str, flush_seconds: float = FLUSH_SECONDS,
                  worker_key: str | None = None, fixed: dict | None = None):
-        self.path = Path(path)
+        if not str(path).strip():
+            raise PathError("--store: empty path; give a store directory such as "
+                            "results/NAME.zarr")
+        self.shown = str(path)  # as the user typed it (messages, the summary)
+        # the real path: the same store through a symlink has one lock, one journal, and its
+        # re-layouts rename the directory, not the link
+        self.path = Path(os.path.realpath(path))
         self.key = key
         self.worker_key = worker_key  # what records of this installation carry (None: any)
         self.fixed = dict(fixed or {})
@@ -181,11 +208,16 @@ class SweepStore:
         self._dirty: set[tuple] = set()  # leading indices (all axes but the last) to write
         self._last_flush = 0.0
         self.ds = None
+        self.damage = Damage()  # cells found damaged when the store was opened (now not run)
+        self._writable = False  # require_writable() passed
+        self.damage_text = ""  # one line: how many cells, which variables, where
+        self.journal_skipped = 0  # journal lines that were not records (skipped, scenes rerun)
 
     # ---- opening --------------------------------------------------------------------------------
     @classmethod
     @contextmanager
-    def open(cls, sweep, path=None, flush_seconds: float = FLUSH_SECONDS):
+    def open(cls, sweep, path=None, flush_seconds: float = FLUSH_SECONDS,
+             add_sweep: bool = False):
         """Lock, recover, check, extend and load the store of ``sweep``; flush and unlock on exit.
 
         Raises
@@ -195,13 +227,15 @@ class SweepStore:
             physics, axes or schema.
         StoreBusy
             Another process holds the store's lock.
+        PathError
+            The store or its folder cannot be written.
         """
-        path = Path(path if path is not None else sweep.store)
+        path = path if path is not None else sweep.store
         self = cls(path, sweep.cache_key(), flush_seconds, worker_key=sweep.worker_key(),
                    fixed=sweep.fixed)
         self._acquire_lock()
         try:
-            self._prepare(sweep)
+            self._prepare(sweep, add_sweep)
             try:
                 yield self
             finally:
@@ -215,15 +249,24 @@ class SweepStore:
     def _acquire_lock(self) -> None:
         import fcntl
 
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        f = _lock_path(self.path).open("a+")
+        where = f"--store {self.shown}"
+        parent = next((p for p in (self.path.parent, *self.path.parent.parents) if p.exists()),
+                      Path("/"))
+        if not parent.is_dir():
+            raise PathError(f"{where}: {str(parent)!r} is not a directory")
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            f = _lock_path(self.path).open("a+")
+        except OSError as exc:
+            raise PathError(f"{where}: cannot write next to the store in {str(self.path.parent)!r} "
+                            f"({exc.strerror}); choose a writable --store") from None
         try:
             fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             f.seek(0)
             holder = f.read().strip() or "another process"
             f.close()
-            raise StoreBusy(f"store {str(self.path)!r} is being written by {holder}; wait for it "
+            raise StoreBusy(f"store {self.shown!r} is being written by {holder}; wait for it "
                             "to finish (only one sweep writes a store)") from None
         f.seek(0)
         f.truncate()
@@ -249,41 +292,107 @@ class SweepStore:
             "sweep_name": sweep.name,
             "sweep_path": str(sweep.path) if sweep.path is not None else "",
             "sweep_file": sweep.source,
+            "sweeps": [_provenance(sweep)],
             "package_versions": _package_versions(),
             "created": _now(),
             "scaling": SCALING,
         }
 
-    def _prepare(self, sweep) -> None:
+    def _prepare(self, sweep, add_sweep: bool = False) -> None:
         _recover(self.path)
+        if self.path.exists() and not self.path.is_dir():
+            raise PathError(f"--store {self.shown}: exists and is not a directory (a store is "
+                            "one); choose another --store")
         if not self.path.exists():
             _write_new(empty_dataset(sweep.axes, self._attrs(sweep)), self.path)
         elif not (self.path / "zarr.json").is_file():
-            raise StoreMismatch(f"{str(self.path)!r} exists but is not a zarr store; choose "
+            raise StoreMismatch(f"{self.shown!r} exists but is not a zarr store; choose "
                                 "another --store")
         try:
             self._load()
         except (ValueError, KeyError, OSError) as exc:  # e.g. a zarr store without consolidation
-            raise StoreMismatch(f"{str(self.path)!r} cannot be opened as an ehd sweep store "
+            raise StoreMismatch(f"{self.shown!r} cannot be opened as an ehd sweep store "
                                 f"({type(exc).__name__}: {exc}); choose another --store") from None
         self._check(sweep)
+        self._check_provenance(sweep, add_sweep)
+        self.damage_text = self.damage.describe(self.ds, self.fixed) if self.damage else ""
+        self._forget(self.damage)
         self._replay()
         self._extend(sweep)
-        if self.ds.attrs.get("sweep_file") != sweep.source:
-            self._set_attrs(sweep_file=sweep.source, sweep_name=sweep.name,
-                            sweep_path=str(sweep.path) if sweep.path is not None else "")
 
     def _load(self) -> None:
-        import xarray as xr
+        # every chunk read once; chunks that cannot be decoded and ok cells without data are
+        # reported in self.damage (pipeline/sweeps/integrity.py)
+        self.ds, self.damage = load_checked(self.path)
 
-        with zarr_warnings():
-            # chunks=None: plain lazy arrays, no dask graph (several times quicker to load whole)
-            self.ds = xr.open_zarr(self.path, consolidated=True, chunks=None).load()
+    def require_writable(self) -> None:
+        """PathError when a folder of the store cannot be written (every chunk is replaced by a
+        rename inside its folder). Checked once, before the first write and before any scene is
+        solved (``run_sweep``): a read-only store with nothing to do is still readable."""
+        if self._writable:
+            return
+        for d in (self.path, *(p for p in self.path.rglob("*") if p.is_dir())):
+            if not os.access(d, os.W_OK | os.X_OK):
+                raise PathError(f"store {self.shown!r} is not writable ({str(d)!r}); make it "
+                                "writable (chmod -R u+w) or write the sweep elsewhere with "
+                                "--store PATH")
+        self._writable = True
+
+    def _check_provenance(self, sweep, add_sweep: bool) -> None:
+        """The same sweep (same file content, or same ``name``: an edited grid) may write again,
+        each new version recorded; another sweep needs ``add_sweep`` and is recorded in the
+        ``sweeps`` attr."""
+        attrs = self.ds.attrs
+        entries = list(attrs.get("sweeps") or [])
+        if not entries and attrs.get("sweep_file") is not None:  # a store of an earlier schema 3
+            old_path = attrs.get("sweep_path") or ""
+            entries = [{"name": attrs.get("sweep_name"),
+                        "path": str(Path(old_path).resolve()) if old_path else "",
+                        "sha256": _sha256(attrs.get("sweep_file", "")),
+                        "time": attrs.get("created")}]
+        new = _provenance(sweep)
+        same_content = any(e.get("sha256") == new["sha256"] for e in entries)
+        # a sweep is known by its name (an edited grid, a checkout moved elsewhere), a version
+        # of it by the file's hash
+        same_sweep = any(e.get("name") == new["name"] for e in entries)
+        if not (same_content or same_sweep or add_sweep):
+            last = entries[-1] if entries else {}
+            raise StoreMismatch(
+                f"store {self.shown!r} holds sweep {last.get('name')!r} "
+                f"({last.get('path') or 'no file'}); this is another sweep file "
+                f"({new['name']!r}, {new['path'] or 'no file'}): add --add-sweep to write it into "
+                "the same store (recorded in its 'sweeps' attr) or use --store PATH")
+        if not same_content:
+            entries.append(new)
+        update = {}
+        if entries != list(attrs.get("sweeps") or []):
+            update["sweeps"] = entries
+        if attrs.get("sweep_file") != sweep.source:
+            update.update(sweep_file=sweep.source, sweep_name=sweep.name, sweep_path=new["path"])
+        if update:
+            self._set_attrs(**update)
+
+    def _forget(self, damage: Damage) -> None:
+        """Damaged cells become "not run" (every variable at its fill value) and their chunks
+        are rewritten at the next flush: the sweep recomputes them, nobody reads them as data."""
+        if not damage:
+            return
+        for cell in damage.cells:
+            for name in FLOATS:
+                self.ds[name].values[cell] = math.nan
+            for name in FLAGS:
+                self.ds[name].values[cell] = math.nan
+            for name in COUNTS:
+                self.ds[name].values[cell] = 0
+            self.ds["model"].values[cell] = 0
+            self.ds["message"].values[cell] = ""
+            self.ds["status"].values[cell] = 0
+            self._dirty.add(cell[:-1])
 
     def _check(self, sweep) -> None:
         attrs = self.ds.attrs
         if "store_schema" not in attrs:
-            raise StoreMismatch(f"{str(self.path)!r} is a zarr store but not an ehd sweep store; "
+            raise StoreMismatch(f"{self.shown!r} is a zarr store but not an ehd sweep store; "
                                 "choose another --store")
         if attrs.get("store_schema") != STORE_SCHEMA:
             raise StoreMismatch(
@@ -325,6 +434,7 @@ class SweepStore:
     def _set_attrs(self, **attrs) -> None:
         import zarr
 
+        self.require_writable()
         with zarr_warnings():
             group = zarr.open_group(self.path, mode="r+")
             group.attrs.update(attrs)
@@ -343,6 +453,7 @@ class SweepStore:
         for name in VARIABLES:  # reindex keeps values; restore dtypes the fill may have widened
             grown[name] = grown[name].astype(self.ds[name].dtype)
         grown.attrs.update(updated=_now())
+        self.require_writable()
         _write_new(grown, self.path)
         self._load()
 
@@ -379,6 +490,7 @@ class SweepStore:
 
         physics = self.scene(cell)
         if self._journal is None:
+            self.require_writable()
             self._journal = _journal_path(self.path).open("a")
         self._journal.write(json.dumps({"physics": physics, "key": self.key, **rec}) + "\n")
         self._journal.flush()  # in the OS page cache: survives the process being killed
@@ -422,7 +534,7 @@ class SweepStore:
     def _replay(self) -> None:
         """Merge the journal of an interrupted run: records of this cache key whose physics
         matches the store on every axis and in its fixed values."""
-        recs = _read_journal(_journal_path(self.path))
+        recs, self.journal_skipped = read_journal(_journal_path(self.path))
         axes = self.axes
         for rec in recs:
             if rec.get("key") != self.key:
@@ -445,6 +557,7 @@ class SweepStore:
         import time
 
         if self._dirty:
+            self.require_writable()
             axes = self.axes
             lead = np.array(sorted(self._dirty), dtype=int).reshape(len(self._dirty), -1)
             region = {a: slice(int(lead[:, k].min()), int(lead[:, k].max()) + 1)

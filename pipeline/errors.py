@@ -1,0 +1,83 @@
+"""The expected failures of ``ehd`` and their exit codes: one hierarchy, one error boundary.
+
+Every expected failure is an :class:`EhdError` carrying a one-line message (what is wrong and
+what would fix it) and its exit code; ``pipeline.cli.main`` is the one place that turns it into
+``ehd <command>: error: <message>`` on stderr and that code. Anything else that escapes a
+command is a bug: its traceback is printed with one line saying so, exit ``EXIT_INTERNAL``.
+
+Exit codes of every ``ehd`` command (docs/pipeline.md, "Exit codes"):
+
+| code | meaning |
+|---:|---|
+| 0 | success |
+| 1 | ``run``/``scene``: the scene failed (its status and message are printed) |
+| 2 | bad input: arguments, sweep/scene file, unusable path, store of other physics or numerics, busy store, scheduler unreachable (nothing computed) |
+| 3 | ``sweep``: finished, but failed scenes remain in the store |
+| 4 | ``sweep``: the scheduler went away mid-sweep (every scene finished so far is kept; rerun) |
+| 5 | damaged store: ``status`` found damaged cells (listed), ``figures`` refuses to draw them |
+| 70 | internal error: a bug (traceback printed; please report it) |
+| 130 | interrupted (Ctrl-C): every scene finished so far is kept |
+| 141 | the reader of stdout went away (``ehd ... | head``) |
+
+No imports here: every module may import this one.
+"""
+
+from __future__ import annotations
+
+__all__ = ["EhdError", "UsageError", "PathError", "SchedulerError", "SchedulerLost",
+           "StoreDamaged", "EXIT_OK", "EXIT_SCENE_FAILED", "EXIT_USAGE", "EXIT_SWEEP_FAILED",
+           "EXIT_SCHEDULER_LOST", "EXIT_DAMAGED", "EXIT_INTERNAL", "EXIT_INTERRUPTED",
+           "EXIT_BROKEN_PIPE", "BUG_REPORT"]
+
+EXIT_OK = 0
+EXIT_SCENE_FAILED = 1
+EXIT_USAGE = 2
+EXIT_SWEEP_FAILED = 3
+EXIT_SCHEDULER_LOST = 4
+EXIT_DAMAGED = 5
+EXIT_INTERNAL = 70  # EX_SOFTWARE of sysexits.h
+EXIT_INTERRUPTED = 130  # 128 + SIGINT
+EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE
+
+BUG_REPORT = "the project's issue tracker (issues new), with the command and the traceback above"
+
+
+class EhdError(Exception):
+    """An expected failure: a one-line ``message`` and the ``exit_code`` of the command."""
+
+    exit_code = EXIT_USAGE
+
+    def __init__(self, message: str = "", exit_code: int | None = None):
+        super().__init__(message)
+        if exit_code is not None:
+            self.exit_code = exit_code
+
+    def line(self) -> str:
+        """The message as one line (a multi-line message is joined with '; ')."""
+        parts = [p.strip() for p in str(self).splitlines() if p.strip()]
+        return "; ".join(parts) or type(self).__name__
+
+
+class UsageError(EhdError):
+    """Bad input (arguments, a sweep or scene file): exit 2."""
+
+
+class PathError(UsageError):
+    """A path that cannot be used (missing directory, a file where a directory belongs, not
+    writable, empty): exit 2, before any work."""
+
+
+class SchedulerError(EhdError):
+    """The executor could not be started or reached: exit 2, nothing computed."""
+
+
+class SchedulerLost(SchedulerError):
+    """The scheduler went away while the sweep ran: exit 4; finished scenes are kept."""
+
+    exit_code = EXIT_SCHEDULER_LOST
+
+
+class StoreDamaged(EhdError):
+    """Chunks of a store cannot be read or contradict its status: exit 5."""
+
+    exit_code = EXIT_DAMAGED

@@ -1,0 +1,540 @@
+"""Hostile inputs and faults (issue 9): every command, a catalogue of bad inputs and damaged
+stores, one clear line and the documented exit code, nothing previously stored changed.
+
+The matrix runs ``pipeline.cli.main`` in this process (no subprocess start-up) with the sweep's
+solver replaced by the stand-in of tests/test_pipeline.py, so no case solves a real scene. The
+fault tests (Ctrl-C, a scheduler killed mid-sweep) run ``ehd sweep`` in a subprocess.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import pipeline.sweeps.run as run_module
+from pipeline.cli import main
+from pipeline.errors import (EXIT_DAMAGED, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_SCHEDULER_LOST,
+                             EXIT_USAGE)
+from pipeline.sweeps.config import load_sweep
+from pipeline.sweeps.store import StoreBusy, SweepStore
+from tests.test_pipeline import CALLS, fake_solve, sweep_text
+
+REPO = Path(__file__).resolve().parents[1]
+ST, EPS = [1.0, 3.0, 5.0, 20.0], [1e-4, 1e-2]
+EXAMPLE = REPO / "examples" / "glass_beads_water.toml"
+
+
+# ---- a healthy store, built once; every case works on its own copy ------------------------------
+@pytest.fixture(scope="module")
+def base(tmp_path_factory):
+    d = tmp_path_factory.mktemp("base")
+    (d / "s.toml").write_text(sweep_text(ST, EPS, store="s.zarr"))
+    cwd = os.getcwd()
+    os.chdir(d)
+    try:
+        run_module.run_sweep(load_sweep("s.toml"), runner="serial", solve=fake_solve,
+                             progress=None)
+    finally:
+        os.chdir(cwd)
+    return d
+
+
+@pytest.fixture
+def ws(base, tmp_path, monkeypatch):
+    """A working folder (the current directory) with ``s.toml`` and its store ``s.zarr``; the
+    sweep's solver is the stand-in."""
+    shutil.copy(base / "s.toml", tmp_path / "s.toml")
+    shutil.copytree(base / "s.zarr", tmp_path / "s.zarr")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(run_module, "run_sweep",
+                        functools.partial(run_module.run_sweep, solve=fake_solve, warm_up=False,
+                                          progress=None))
+    CALLS.clear()
+    return tmp_path
+
+
+def tree_hash(path) -> str:
+    """sha256 over every file under ``path`` (relative name and bytes)."""
+    h = hashlib.sha256()
+    path = Path(path)
+    for f in sorted(p for p in path.rglob("*") if p.is_file()):
+        h.update(str(f.relative_to(path)).encode() + b"\0" + f.read_bytes())
+    return h.hexdigest()
+
+
+def ehd(capsys, *args):
+    """``(exit code, stdout, stderr)`` of ``ehd ARGS`` run in this process."""
+    capsys.readouterr()
+    try:
+        code = main([str(a) for a in args])
+    except SystemExit as exc:  # argparse
+        code = exc.code
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+# ---- the catalogue: how to make each bad input -----------------------------------------------------
+def _write(name, data):
+    def make(ws):
+        p = ws / name
+        p.parent.mkdir(parents=True, exist_ok=True)
+        (p.write_bytes if isinstance(data, bytes) else p.write_text)(data)
+    return make
+
+
+def _binary(name):
+    return _write(name, bytes(np.random.default_rng(0).integers(0, 256, 3000, dtype=np.uint8)))
+
+
+def _mkdir(name):
+    return lambda ws: (ws / name).mkdir(parents=True)
+
+
+def _truncate(rel, size=5):
+    def make(ws):
+        with open(ws / rel, "r+b") as f:
+            f.truncate(size)
+    return make
+
+
+def _remove(rel):
+    return lambda ws: (ws / rel).unlink()
+
+
+def _other_sweep(ws):
+    (ws / "other.toml").write_text(sweep_text([7.0], EPS, store="s.zarr").replace(
+        'name = "test"', 'name = "other"'))
+
+
+def _other_numerics(ws):
+    (ws / "num.toml").write_text(sweep_text(ST, EPS, store="s.zarr", extra="rtol = 1e-3"))
+
+
+def _huge(ws):
+    (ws / "huge.toml").write_text(sweep_text("{start = 1.0, stop = 50.0, num = 100000000}", EPS))
+
+
+def _schema(ws):
+    meta = json.loads((ws / "s.zarr" / "zarr.json").read_text())
+    meta["attributes"]["store_schema"] = 2
+    (ws / "s.zarr" / "zarr.json").write_text(json.dumps(meta))
+
+
+def _nothing_done(ws):
+    (ws / "e.toml").write_text(sweep_text(ST, EPS, store="e.zarr"))
+    with SweepStore.open(load_sweep(ws / "e.toml")):
+        pass  # an empty store: laid out, no scene run
+
+
+def _closed_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+NO_SETUP = None
+# (case id, setup, argv, exit code, keyword of the one error line)
+CASES = [
+    # --- ehd sweep: the sweep file
+    ("sweep-binary-file", _binary("g.toml"), ["sweep", "g.toml"], 2, "not a text file"),
+    ("sweep-latin1-file", _write("l.toml", "name = 'caf\xe9'\n".encode("latin-1")),
+     ["sweep", "l.toml"], 2, "UTF-8"),
+    ("sweep-nul-bytes", _write("n.toml", b"name = 'x'\x00\n"), ["sweep", "n.toml"], 2, "NUL"),
+    ("sweep-file-is-dir", _mkdir("d.toml"), ["sweep", "d.toml"], 2, "cannot read"),
+    ("sweep-file-missing", NO_SETUP, ["sweep", "none.toml"], 2, "cannot read"),
+    ("sweep-not-toml", _write("t.toml", "name = [\n"), ["sweep", "t.toml"], 2, "TOML"),
+    ("sweep-empty-file", _write("empty.toml", ""), ["sweep", "empty.toml"], 2, "store"),
+    ("sweep-huge-grid", _huge, ["sweep", "huge.toml"], 2, "at most"),
+    ("sweep-bad-range", _write("r.toml", sweep_text(ST, [0.5])), ["sweep", "r.toml"], 2,
+     "grid.eps"),
+    # --- ehd sweep: the store path
+    ("sweep-store-empty", NO_SETUP, ["sweep", "s.toml", "--store", ""], 2, "empty path"),
+    ("sweep-store-blank", NO_SETUP, ["sweep", "s.toml", "--store", "  "], 2, "empty path"),
+    ("sweep-store-is-file", _write("f.zarr", "x"), ["sweep", "s.toml", "--store", "f.zarr"], 2,
+     "not a directory"),
+    ("sweep-store-under-file", _write("f", "x"), ["sweep", "s.toml", "--store", "f/s.zarr"], 2,
+     "not a directory"),
+    ("sweep-store-not-zarr", _mkdir("plain.zarr"), ["sweep", "s.toml", "--store", "plain.zarr"],
+     2, "not a zarr store"),
+    ("sweep-store-zarr-json-garbage", _write("s.zarr/zarr.json", "{"), ["sweep", "s.toml"], 2,
+     "cannot be opened"),
+    ("sweep-store-other-schema", _schema, ["sweep", "s.toml"], 2, "schema"),
+    ("sweep-store-other-numerics", _other_numerics, ["sweep", "num.toml"], 2, "never mix"),
+    ("sweep-store-other-sweep-file", _other_sweep, ["sweep", "other.toml"], 2, "--add-sweep"),
+    # --- ehd sweep: the executor (checked before the store is touched)
+    ("sweep-scheduler-file-missing", NO_SETUP,
+     ["sweep", "s.toml", "--scheduler-file", "nope.json"], 2, "no such file"),
+    ("sweep-scheduler-file-binary", _binary("b.json"),
+     ["sweep", "s.toml", "--scheduler-file", "b.json"], 2, "not a scheduler file"),
+    ("sweep-scheduler-file-not-json", _write("j.json", "{'address': 1"),
+     ["sweep", "s.toml", "--scheduler-file", "j.json"], 2, "not JSON"),
+    ("sweep-scheduler-file-no-address", _write("a.json", '{"id": "x"}'),
+     ["sweep", "s.toml", "--scheduler-file", "a.json"], 2, "address"),
+    ("sweep-scheduler-file-is-dir", _mkdir("sd.json"),
+     ["sweep", "s.toml", "--scheduler-file", "sd.json"], 2, "cannot read"),
+    ("sweep-scheduler-empty", NO_SETUP, ["sweep", "s.toml", "--scheduler", ""], 2,
+     "empty address"),
+    ("sweep-workers-1000", NO_SETUP, ["sweep", "s.toml", "--workers", "1000"], 2, "more than"),
+    ("sweep-workers-0", NO_SETUP, ["sweep", "s.toml", "--workers", "0"], 2, "--workers"),
+    ("sweep-workers-text", NO_SETUP, ["sweep", "s.toml", "--workers", "many"], 2, "--workers"),
+    # --- ehd run: output paths and physics (all before any solve)
+    ("run-save-missing-dir", NO_SETUP,
+     ["run", "--St", "5", "--eps", "0.01", "--save", "/nonexistent/d/x.nc"], 2, "does not exist"),
+    ("run-save-bad-type", NO_SETUP, ["run", "--St", "5", "--eps", "0.01", "--save", "x.txt"], 2,
+     "unknown file type"),
+    ("run-save-nc-is-dir", _mkdir("x.nc"), ["run", "--St", "5", "--eps", "0.01", "--save", "x.nc"],
+     2, "is a directory"),
+    ("run-save-zarr-is-file", _write("x.zarr", "x"),
+     ["run", "--St", "5", "--eps", "0.01", "--save", "x.zarr"], 2, "not a directory"),
+    ("run-plot-is-file", _write("afile", "x"),
+     ["run", "--St", "5", "--eps", "0.01", "--plot", "afile"], 2, "not a directory"),
+    ("run-plot-under-file", _write("afile", "x"),
+     ["run", "--St", "5", "--eps", "0.01", "--plot", "afile/sub"], 2, "not a directory"),
+    ("run-plot-empty", NO_SETUP, ["run", "--St", "5", "--eps", "0.01", "--plot", ""], 2,
+     "empty path"),
+    ("run-St-nan", NO_SETUP, ["run", "--St", "nan", "--eps", "0.01"], 2, "finite"),
+    ("run-eps-out-of-range", NO_SETUP, ["run", "--St", "5", "--eps", "0.5"], 2, "valid range"),
+    ("run-bad-accuracy", NO_SETUP, ["run", "--St", "5", "--eps", "0.01", "--accuracy", "x"], 2,
+     "accuracy"),
+    # --- ehd scene
+    ("scene-binary-file", _binary("b.toml"), ["scene", "b.toml"], 2, "not a text file"),
+    ("scene-file-missing", NO_SETUP, ["scene", "none.toml"], 2, "not found"),
+    ("scene-file-is-dir", _mkdir("sc.toml"), ["scene", "sc.toml"], 2, "is a directory"),
+    ("scene-plot-is-file", _write("afile", "x"), ["scene", EXAMPLE, "--plot", "afile"], 2,
+     "not a directory"),
+    ("scene-plot-under-file", _write("afile", "x"), ["scene", EXAMPLE, "--plot", "afile/x"], 2,
+     "not a directory"),
+    # --- ehd figures
+    ("figures-out-is-file", _write("afile", "x"), ["figures", "s.zarr", "--out", "afile"], 2,
+     "not a directory"),
+    ("figures-out-under-file", _write("afile", "x"), ["figures", "s.zarr", "--out", "afile/f"], 2,
+     "not a directory"),
+    ("figures-store-missing", NO_SETUP, ["figures", "none.zarr"], 2, "no sweep store"),
+    ("figures-store-empty", NO_SETUP, ["figures", ""], 2, "empty path"),
+    ("figures-store-is-file", _write("f.zarr", "x"), ["figures", "f.zarr"], 2, "no sweep store"),
+    ("figures-nothing-finished", _nothing_done, ["figures", "e.zarr", "--out", "fig"], 2,
+     "no finished scene"),
+    ("figures-truncated-chunk", _truncate("s.zarr/v_r/c/1/0"), ["figures", "s.zarr"],
+     EXIT_DAMAGED, "damaged"),
+    ("figures-deleted-chunk", _remove("s.zarr/v_r/c/1/0"), ["figures", "s.zarr"], EXIT_DAMAGED,
+     "damaged"),
+    ("figures-truncated-status-chunk", _truncate("s.zarr/status/c/2/0", 3),
+     ["figures", "s.zarr"], EXIT_DAMAGED, "damaged"),
+    # --- ehd paper-figures
+    ("paper-figures-out-is-file", _write("afile", "x"), ["paper-figures", "--out", "afile"], 2,
+     "not a directory"),
+    ("paper-figures-out-under-file", _write("afile", "x"), ["paper-figures", "--out", "afile/p"],
+     2, "not a directory"),
+    # --- ehd status
+    ("status-store-missing", NO_SETUP, ["status", "none.zarr"], 2, "no sweep store"),
+    ("status-store-empty", NO_SETUP, ["status", ""], 2, "empty path"),
+    ("status-store-not-zarr", _mkdir("plain.zarr"), ["status", "plain.zarr"], 2, "no sweep store"),
+    ("status-zarr-json-garbage", _write("s.zarr/zarr.json", "{"), ["status", "s.zarr"], 2,
+     "cannot be opened"),
+    ("status-truncated-chunk", _truncate("s.zarr/v_r/c/1/0"), ["status", "s.zarr"],
+     EXIT_DAMAGED, "damaged"),
+    ("status-deleted-chunk", _remove("s.zarr/v_r/c/1/0"), ["status", "s.zarr"], EXIT_DAMAGED,
+     "damaged"),
+    ("status-truncated-model-chunk", _truncate("s.zarr/model/c/0/0", 2), ["status", "s.zarr"],
+     EXIT_DAMAGED, "damaged"),
+    ("status-truncated-ln_x_e-chunk", _truncate("s.zarr/ln_x_e_x1/c/3/0", 7),
+     ["status", "s.zarr"], EXIT_DAMAGED, "damaged"),
+    # --- any command
+    ("unknown-command", NO_SETUP, ["frobnicate"], 2, "invalid choice"),
+]
+
+
+@pytest.mark.parametrize("setup, argv, code, keyword", [c[1:] for c in CASES],
+                         ids=[c[0] for c in CASES])
+def test_bad_input_gives_one_line_and_changes_nothing(ws, capsys, setup, argv, code, keyword):
+    if setup is not None:
+        setup(ws)
+    before = tree_hash(ws / "s.zarr")
+    got, out, err = ehd(capsys, *argv)
+    assert got == code, err
+    assert "Traceback" not in err and "Traceback" not in out
+    lines = [line for line in err.splitlines() if line.strip()]
+    errors = [line for line in lines if "error" in line]
+    assert len(errors) == 1, err
+    assert keyword in errors[0], err
+    assert tree_hash(ws / "s.zarr") == before  # nothing stored was changed
+    assert CALLS == []  # and nothing was computed
+
+
+def test_the_catalogue_size():
+    """The closing note of issue 9 quotes this count."""
+    assert len(CASES) >= 60
+
+
+# ---- the store repairs itself -------------------------------------------------------------------
+def _stored(path):
+    ds = xr.open_zarr(path).drop_vars("wall_s").load()
+    ds.attrs = {}
+    return ds
+
+
+@pytest.mark.parametrize("damage", [_truncate("s.zarr/v_r/c/1/0"), _remove("s.zarr/v_r/c/1/0"),
+                                    _truncate("s.zarr/status/c/2/0", 3),
+                                    _truncate("s.zarr/h_m_x1/c/0/0", 0)],
+                         ids=["truncated-data", "deleted-data", "truncated-status", "empty-data"])
+def test_a_sweep_recomputes_damaged_cells_and_nothing_else(ws, base, capsys, damage):
+    damage(ws)
+    code, out, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    assert code == 0 and "Traceback" not in err
+    assert "repaired" in out
+    row = {(1, 3.0), (0, 1.0), (2, 5.0)}
+    assert set(CALLS) <= {(s, e) for _, s in row for e in EPS} and len(CALLS) == len(EPS)
+    xr.testing.assert_identical(_stored(ws / "s.zarr"), _stored(base / "s.zarr"))
+    assert ehd(capsys, "status", "s.zarr")[0] == 0  # healthy again
+
+
+def test_status_lists_the_damaged_cells(ws, capsys):
+    _remove("s.zarr/v_r/c/1/0")(ws)
+    code, out, err = ehd(capsys, "status", "s.zarr")
+    assert code == EXIT_DAMAGED
+    assert "damaged" in out and "St=3 eps=0.0001" in err and "v_r (missing)" in err
+
+
+def test_bad_journal_lines_are_skipped_and_counted(ws, capsys):
+    good = {"physics": {"St": 7.0, "eps": 1e-2}, "key": "x", "status": "ok"}
+    (ws / "s.zarr.journal").write_bytes(b"\xff\xfe garbage\n[1, 2]\n{\"physics\": 3}\n"
+                                        + json.dumps(good).encode() + b"\n{\"cut")
+    code, out, err = ehd(capsys, "status", "s.zarr")
+    assert code == 0 and "4 " in out and "bad lines skipped" in out
+    code, out, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    assert code == 0 and "bad lines skipped" in out
+    assert not (ws / "s.zarr.journal").exists()
+
+
+# ---- locks, provenance, the boundary itself -----------------------------------------------------
+def test_the_lock_is_keyed_on_the_real_path(ws):
+    os.symlink(ws / "s.zarr", ws / "link.zarr")
+    sweep = load_sweep(ws / "s.toml")
+    with SweepStore.open(sweep, ws / "s.zarr"):
+        with pytest.raises(StoreBusy, match="being written"):
+            with SweepStore.open(sweep, ws / "link.zarr"):
+                pass
+    with SweepStore.open(sweep, ws / "link.zarr") as st:  # a store through a link works
+        assert st.path == (ws / "s.zarr").resolve()
+    assert (ws / "link.zarr").is_symlink()
+
+
+def test_a_busy_store_is_one_line(ws, capsys):
+    with SweepStore.open(load_sweep(ws / "s.toml")):
+        code, _, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    assert code == EXIT_USAGE and "being written" in err and len(err.strip().splitlines()) == 1
+
+
+def test_another_sweep_file_needs_add_sweep_and_is_recorded(ws, capsys):
+    _other_sweep(ws)
+    code, out, err = ehd(capsys, "sweep", "other.toml", "--executor", "serial", "--add-sweep")
+    assert code == 0, err
+    sweeps = xr.open_zarr(ws / "s.zarr").attrs["sweeps"]
+    assert [s["name"] for s in sweeps] == ["test", "other"]
+    assert all(len(s["sha256"]) == 64 and s["time"] for s in sweeps)
+    # the first sweep file again, and the other one again: both known now, no flag needed
+    assert ehd(capsys, "sweep", "s.toml", "--executor", "serial")[0] == 0
+    assert ehd(capsys, "sweep", "other.toml", "--executor", "serial")[0] == 0
+    assert len(xr.open_zarr(ws / "s.zarr").attrs["sweeps"]) == 2
+    # the same sweep edited (same name: a grid extended) is recorded, no flag needed
+    (ws / "s.toml").write_text(sweep_text(ST + [40.0], EPS, store="s.zarr"))
+    code, _, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    assert code == 0, err
+    assert len(xr.open_zarr(ws / "s.zarr").attrs["sweeps"]) == 3
+
+
+def test_a_read_only_store_is_refused_before_any_solve(ws, capsys, monkeypatch):
+    (ws / "more.toml").write_text(sweep_text(ST + [40.0], EPS, store="s.zarr"))
+    real_access = os.access
+    store = str((ws / "s.zarr").resolve())
+    monkeypatch.setattr(os, "access", lambda p, mode, *a, **k: False
+                        if str(p).startswith(store) and mode & os.W_OK else
+                        real_access(p, mode, *a, **k))  # chmod is no use when tests run as root
+    before = tree_hash(ws / "s.zarr")
+    code, _, err = ehd(capsys, "sweep", "more.toml", "--executor", "serial")
+    assert code == EXIT_USAGE and "not writable" in err and CALLS == []
+    assert tree_hash(ws / "s.zarr") == before
+    # with nothing to do, a read-only store is only read
+    code, out, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    assert code == 0 and "cached 8" in out, err
+
+
+def test_an_unexpected_exception_is_a_bug_with_its_traceback(ws, capsys, monkeypatch):
+    import pipeline.cli
+
+    def broken(args):
+        raise ZeroDivisionError("boom")
+
+    monkeypatch.setattr(pipeline.cli, "cmd_info", broken)
+    code, _, err = ehd(capsys, "info")
+    assert code == EXIT_INTERNAL
+    assert "Traceback" in err and "ZeroDivisionError: boom" in err
+    assert "internal error" in err.splitlines()[-1] and "bug" in err.splitlines()[-1]
+
+
+def test_an_unreachable_scheduler_gives_up_with_one_line(ws, capsys):
+    (ws / "more.toml").write_text(sweep_text([7.0], EPS, store="m.zarr"))
+    t = time.monotonic()
+    code, _, err = ehd(capsys, "sweep", "more.toml", "--scheduler",
+                       f"tcp://127.0.0.1:{_closed_port()}", "--connect-timeout", "1")
+    assert code == EXIT_USAGE and time.monotonic() - t < 15
+    assert "waiting for the dask scheduler at tcp://127.0.0.1" in err
+    assert "cannot reach" in err.splitlines()[-1] and "Traceback" not in err
+
+
+# ---- faults: Ctrl-C and a scheduler that dies, in a real ehd sweep ------------------------------
+SLOW_SWEEP = textwrap.dedent("""
+    import functools, sys, time
+    sys.path.insert(0, {repo!r})
+    import pipeline.sweeps.run as r
+    from tests.test_pipeline import fake_solve
+
+    def slow(physics, accuracy, overrides):
+        time.sleep(0.5)
+        rec = fake_solve(physics, accuracy, overrides)
+        with open({log!r}, "a") as f:  # the test waits for a few finished scenes
+            f.write("done\\n")
+        return rec
+
+    if __name__ == "__main__":  # dask's worker processes import this file too
+        r.run_sweep = functools.partial(r.run_sweep, solve=slow, warm_up=False)
+        from pipeline.cli import main
+        sys.exit(main(sys.argv[1:]))
+    """)
+FAULT_ST = [round(float(v), 6) for v in np.geomspace(1.0, 50.0, 12)]
+
+
+def _fault_setup(tmp_path):
+    (tmp_path / "slow.py").write_text(SLOW_SWEEP.format(repo=str(REPO),
+                                                        log=str(tmp_path / "done.log")))
+    (tmp_path / "f.toml").write_text(sweep_text(FAULT_ST, EPS, store="f.zarr"))
+    env = {**os.environ, "PYTHONPATH": str(REPO), "OPENBLAS_NUM_THREADS": "1"}
+    return env
+
+
+def _wait_for(proc, tmp_path, n=4, timeout=60):
+    """Until the stand-in has finished ``n`` scenes."""
+    log = tmp_path / "done.log"
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if log.exists() and len(log.read_text().splitlines()) >= n:
+            return
+        if proc.poll() is not None:
+            pytest.fail(f"ended early ({proc.returncode}): {(tmp_path / 'err.txt').read_text()}")
+        time.sleep(0.02)
+    pytest.fail(f"{n} scenes never finished: {(tmp_path / 'err.txt').read_text()}")
+
+
+def _finished_kept(tmp_path, capsys):
+    """Scenes stored or journaled after the fault; the rerun computes exactly the rest."""
+    import warnings
+
+    from pipeline import open_results
+    from pipeline.sweeps.journal import pending_journal
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ds = open_results(tmp_path / "f.zarr").load()
+    kept = int((ds.status.values != 0).sum()) + pending_journal(tmp_path / "f.zarr")
+    return kept
+
+
+@pytest.mark.parametrize("executor", ["processes", "threads"])
+def test_ctrl_c_is_exit_130_one_line_and_keeps_every_finished_scene(tmp_path, capsys, executor):
+    env = _fault_setup(tmp_path)
+    err_path = tmp_path / "err.txt"
+    with err_path.open("w") as err_file:
+        proc = subprocess.Popen([sys.executable, "slow.py", "sweep", "f.toml", "--executor",
+                                 executor, "--workers", "2"], cwd=tmp_path, env=env,
+                                stdout=subprocess.DEVNULL, stderr=err_file,
+                                start_new_session=True)
+        _wait_for(proc, tmp_path)  # a few scenes done
+        os.killpg(proc.pid, signal.SIGINT)  # Ctrl-C reaches the whole process group
+        proc.wait(timeout=60)
+    err = err_path.read_text()
+    assert proc.returncode == EXIT_INTERRUPTED, err
+    assert "Traceback" not in err and "interrupted" in err.splitlines()[-1]
+    assert "WARNING" not in err and "ERROR" not in err
+    kept = _finished_kept(tmp_path, capsys)
+    assert 1 <= kept < len(FAULT_ST) * len(EPS)  # scenes done on workers may not have arrived
+    # nothing lost: the rerun computes exactly the scenes not kept
+    os.chdir(tmp_path)
+    try:
+        summary = run_module.run_sweep(load_sweep("f.toml"), runner="serial", solve=fake_solve,
+                                       progress=None)
+    finally:
+        os.chdir(REPO)
+    assert summary.computed == len(FAULT_ST) * len(EPS) - kept and summary.done == summary.scenes
+
+
+def test_a_scheduler_killed_mid_sweep_is_one_line_and_keeps_finished_scenes(tmp_path, capsys):
+    env = _fault_setup(tmp_path)
+    bin_dir = Path(sys.executable).parent
+    sched_file = tmp_path / "sched.json"
+    sched = subprocess.Popen([str(bin_dir / "dask"), "scheduler", "--host", "127.0.0.1",
+                              "--port", "0", "--no-dashboard", "--scheduler-file",
+                              str(sched_file)], cwd=tmp_path, env=env,
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    worker = None
+    try:
+        deadline = time.monotonic() + 30
+        while not sched_file.exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        time.sleep(0.2)  # the file is written whole before the scheduler listens
+        worker = subprocess.Popen([str(bin_dir / "dask"), "worker", "--scheduler-file",
+                                   str(sched_file), "--nthreads", "2", "--no-nanny", "--host",
+                                   "127.0.0.1"], cwd=tmp_path, env=env,
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        err_path = tmp_path / "err.txt"
+        with err_path.open("w") as err_file:
+            proc = subprocess.Popen([sys.executable, "slow.py", "sweep", "f.toml",
+                                     "--scheduler-file", str(sched_file), "--workers", "1"],
+                                    cwd=tmp_path, env=env, stdout=subprocess.DEVNULL,
+                                    stderr=err_file)
+            _wait_for(proc, tmp_path)
+            sched.kill()
+            sched.wait()
+            proc.wait(timeout=90)
+    finally:
+        for p in (sched, worker):
+            if p is not None and p.poll() is None:
+                p.kill()
+                p.wait()
+    err = err_path.read_text()
+    assert proc.returncode == EXIT_SCHEDULER_LOST, err
+    assert "Traceback" not in err and "lost the dask scheduler" in err.splitlines()[-1]
+    kept = _finished_kept(tmp_path, capsys)
+    assert 1 <= kept < len(FAULT_ST) * len(EPS)  # scenes done on workers may not have arrived
+
+
+def test_docs_list_every_exit_code_and_model_code():
+    import pipeline.errors as errors
+    from solver.observables import MODEL_CODES, STATUS
+
+    doc = (REPO / "docs" / "pipeline.md").read_text()
+    codes = {v for k, v in vars(errors).items() if k.startswith("EXIT_")}
+    for code in codes:
+        assert f"\n| {code} | " in doc, code
+    for name, code in MODEL_CODES.items():
+        assert f"{code} `{name}`" in doc, name
+    for name, (code, _) in STATUS.items():
+        assert f"| {code} | `{name}` |" in doc, name
+    assert "Store schema 3" in doc and "`store_schema` (3)" in doc
+    from pipeline.sweeps.layout import STORE_SCHEMA
+
+    assert STORE_SCHEMA == 3
