@@ -46,6 +46,7 @@ figures: $(STAMP)
 bench: $(STAMP)
 	$(PY) benchmarks/bench_solver.py
 	$(PY) benchmarks/bench_accuracy.py
+	$(PY) benchmarks/bench_cavitation.py
 
 bench-sweep: $(STAMP)
 	$(PY) benchmarks/bench_sweep.py

@@ -1,0 +1,145 @@
+"""The cavitating film (Reynolds floor) next to the classic one: speed and accuracy per preset.
+
+1. Speed: median wall time per collision (one core, compiled code warm) of the classic film and
+   of the floor at Pi = 1e-4 (the liquid scenes) and Pi = 1e-2, on the same scenes and presets.
+2. Accuracy: per scene, a reference from three resolutions beyond the presets (grid cells x2 and
+   time tolerance /8 per level, as benchmarks/bench_accuracy.py), Richardson-extrapolated with
+   the observed order; each preset's error against it.
+
+``python benchmarks/bench_cavitation.py`` (a few minutes on 2 cores) writes
+``benchmarks/cavitation.md`` and ``cavitation.json``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import statistics
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+HERE = Path(__file__).parent
+SPEED_SCENES = [(st, ep) for ep in (1e-2, 1e-6) for st in (5.0, 10.0, 30.0, 100.0)]
+FLOORS = (math.inf, 1e-2, 1e-4)
+PRESETS = ("fast", "standard", "fine")
+REPEATS = 3
+ACCURACY_SCENES = [(10.0, 1e-2, 1e-4), (30.0, 1e-6, 1e-4), (10.0, 1e-2, 1e-2), (100.0, 1e-4, 1e-3)]
+KEYS = ("v_r", "h_m_x1", "ln_x_e_x1", "cavity_radius_max", "e_wet")
+LEVELS = [dict(n_inner=64 * 2**k, stretch=1.0 + 0.2 / 2**k, max_rel=0.3 / 2**k,
+               rtol=4e-5 / 8**k, switch=1e-4, release=3.125e-5) for k in range(3)]
+if "--quick" in sys.argv:  # smoke run of the script itself
+    SPEED_SCENES, ACCURACY_SCENES, REPEATS = SPEED_SCENES[:2], ACCURACY_SCENES[:1], 1
+    HERE = Path("/tmp")
+
+
+def _physics(st, eps, pi):
+    from solver import Physics
+
+    return Physics(St=st, eps=eps, Pi=pi)
+
+
+def timed(args):
+    st, eps, pi, preset = args
+    from solver import collide
+
+    collide(_physics(st, eps, pi), accuracy=preset, save_profiles=False)  # grid, compile
+    walls = []
+    for _ in range(REPEATS):
+        c = collide(_physics(st, eps, pi), accuracy=preset, save_profiles=False)
+        walls.append(c.wall_s)
+    return statistics.median(walls), c.status
+
+
+def solve(args):
+    st, eps, pi, preset, overrides = args
+    from solver import collide
+
+    c = collide(_physics(st, eps, pi), accuracy=preset, save_profiles=False, **overrides)
+    return {k: float(getattr(c, k)) for k in KEYS} | {"status": c.status, "wall_s": c.wall_s}
+
+
+def richardson(values):
+    """Limit of three values at ratio-2 refinement, with the observed order and the estimate's
+    own error (the last correction); NaN order when the differences do not shrink."""
+    a, b, c = values
+    d1, d2 = b - a, c - b
+    if d2 == 0.0:
+        return c, math.inf, 0.0
+    ratio = d1 / d2
+    if not ratio > 1.0:
+        return c, math.nan, abs(d2)
+    p = math.log2(ratio)
+    corr = d2 / (2.0**p - 1.0)
+    return c + corr, p, abs(corr)
+
+
+def main():
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    t0 = time.time()
+    with ProcessPoolExecutor(2) as pool:
+        pool.submit(timed, (5.0, 1e-2, 1e-4, "fast")).result()  # compile once per worker...
+        speed_jobs = [(st, ep, pi, pr) for pr in PRESETS for pi in FLOORS for st, ep in SPEED_SCENES]
+        speed = list(pool.map(timed, speed_jobs))
+        ref_jobs = [(st, ep, pi, "fine", lv) for st, ep, pi in ACCURACY_SCENES for lv in LEVELS]
+        refs = list(pool.map(solve, ref_jobs))
+        preset_jobs = [(st, ep, pi, pr, {}) for st, ep, pi in ACCURACY_SCENES for pr in PRESETS]
+        presets = list(pool.map(solve, preset_jobs))
+    res = {"speed": [], "accuracy": [], "seconds": 0.0}
+    for (st, ep, pi, pr), (wall, status) in zip(speed_jobs, speed):
+        res["speed"].append(dict(St=st, eps=ep, Pi=pi, preset=pr, wall_s=wall, status=status))
+    for k, (st, ep, pi) in enumerate(ACCURACY_SCENES):
+        levels = refs[3 * k: 3 * k + 3]
+        row = dict(St=st, eps=ep, Pi=pi, reference={}, order={}, ref_error={}, presets={})
+        for key in KEYS:
+            ref, order, err = richardson([lv[key] for lv in levels])
+            row["reference"][key], row["order"][key], row["ref_error"][key] = ref, order, err
+        for j, pr in enumerate(PRESETS):
+            got = presets[3 * k + j]
+            row["presets"][pr] = {key: abs(got[key] - row["reference"][key])
+                                  / max(abs(row["reference"][key]), 1e-3) for key in KEYS}
+            row["presets"][pr]["wall_s"] = got["wall_s"]
+        res["accuracy"].append(row)
+    res["seconds"] = time.time() - t0
+    (HERE / "cavitation.json").write_text(json.dumps(res, indent=1, default=str))
+    write_report(res)
+
+
+def write_report(res):
+    lines = ["# Cavitation (Reynolds floor) next to the classic film", "",
+             "`python benchmarks/bench_cavitation.py` regenerates this file (`make bench`). One "
+             "scene at a time per core, compiled code warm, OPENBLAS_NUM_THREADS=1; median of "
+             f"{REPEATS} runs.", "", "## Speed: median wall time per collision [ms]", "",
+             "| preset | classic | Pi = 1e-2 | Pi = 1e-4 | ratio Pi=1e-4 / classic |",
+             "|---|---|---|---|---|"]
+    for pr in PRESETS:
+        med = {pi: statistics.median(r["wall_s"] for r in res["speed"]
+                                     if r["preset"] == pr and r["Pi"] == pi) for pi in FLOORS}
+        lines.append(f"| {pr} | {med[math.inf] * 1e3:.1f} | {med[1e-2] * 1e3:.1f} | "
+                     f"{med[1e-4] * 1e3:.1f} | {med[1e-4] / med[math.inf]:.2f} |")
+    bad = [r for r in res["speed"] if r["status"] != "ok"]
+    lines += ["", f"Scenes: St in {{5, 10, 30, 100}} x eps in {{1e-2, 1e-6}}; "
+              f"{len(bad)} of {len(res['speed'])} runs not ok.", "",
+              "## Accuracy: relative error of each preset against a refined reference", "",
+              "Reference: three levels beyond `fine` (cells x2, rtol /8 per level, switch 1e-4, "
+              "release 3.1e-5), Richardson-extrapolated; `order` is the observed order, `ref err` "
+              "the extrapolation's own correction. Errors relative to max(|ref|, 1e-3).", ""]
+    head = "| St | eps | Pi | quantity | reference | order | ref err | fast | standard | fine |"
+    lines += [head, "|---" * 10 + "|"]
+    for row in res["accuracy"]:
+        for key in KEYS:
+            p = row["presets"]
+            lines.append(f"| {row['St']:g} | {row['eps']:g} | {row['Pi']:g} | {key} | "
+                         f"{row['reference'][key]:.6g} | {row['order'][key]:.2f} | "
+                         f"{row['ref_error'][key]:.1e} | {p['fast'][key]:.1e} | "
+                         f"{p['standard'][key]:.1e} | {p['fine'][key]:.1e} |")
+    lines += ["", f"Run time of this benchmark: {res['seconds'] / 60:.1f} min.", ""]
+    text = "\n".join(lines)
+    (HERE / "cavitation.md").write_text(text)
+    print(text)
+
+
+if __name__ == "__main__":
+    main()
