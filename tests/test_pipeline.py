@@ -149,6 +149,17 @@ def test_bad_sweep_file_names_the_parameter(St, eps, extra, words):
         assert w in str(err.value)
 
 
+def test_cavitation_sweep_file_has_a_Pi_axis_with_the_classic_limit():
+    from pipeline.sweeps.config import load_sweep
+
+    # inf (TOML's inf) is a grid value like any other: the classic film on the same axes
+    s = load_sweep(REPO / "sweeps" / "cavitation.toml")
+    assert s.axis_names == ("St", "eps", "Pi") and s.axes["Pi"][-1] == math.inf
+    assert s.axes["Pi"][0] == 1e-5 and s.fixed["cavitation"] == "reynolds"
+    with pytest.raises(ConfigError, match="repeated"):
+        parse_sweep(sweep_text([1.0], [1e-2]).replace("[numerics]", "Pi = [inf, inf]\n[numerics]"))
+
+
 def test_range_axis_is_log_spaced_and_sorted():
     s = parse_sweep(sweep_text("{start = 100.0, stop = 1.0, num = 3}", [1e-3, 1e-2]))
     assert s.axes["St"] == pytest.approx((1.0, 10.0, 100.0), rel=1e-12)
