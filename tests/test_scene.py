@@ -439,11 +439,13 @@ def test_shipped_water_examples_switch_cavitation_on_and_say_why(name, capsys):
 
 
 def test_glycerol_and_air_examples_keep_the_classic_film(capsys):
-    # the steel ball in glycerol creeps to rest along the rigid path: the film never pulls
+    # the steel ball in glycerol barely rebounds (v_r ~ 5e-4): its film pulls a few kPa at most,
+    # far from glycerol's ~0.01 Pa vapour pressure at 1 atm, so the classic film stands
     assert main(["scene", str(EXAMPLES / "steel_ball_glass_wall_glycerol.toml"), "--json",
                  "--accuracy", "fast"]) == 0
     d = json.loads(capsys.readouterr().out)
-    assert d["cavitation"] == "off" and d["min_pressure_Pa"] >= 0.0 and d["Pi"] > 0
+    assert d["cavitation"] == "off" and d["Pi"] > 0 and d["cavitated"] is not True
+    assert 101325.0 + d["min_pressure_Pa"] > 0.5 * 101325.0 > d["cavitation_pressure_Pa"]
     assert d["cavitation_reason"].startswith("classic film: the film's lowest absolute pressure")
     # a gas film does not cavitate; its (unphysical) tension below zero absolute is a warning
     assert main(["scene", str(EXAMPLES / "glass_bead_wall_air.toml"), "--json",
