@@ -70,7 +70,9 @@ def test_replica_with_instantaneous_stokes_differs_and_calibration_fixes_it():
 @pytest.fixture(scope="module")
 def exported(tmp_path_factory):
     out = tmp_path_factory.mktemp("dem")
-    assert main(["restitution", EXAMPLE, "--accuracy", "fast", "--from", "1", "--to", "30",
+    # the example cavitates (water at 1 atm): St_c ~ 6 instead of the classic film's ~ 12, so
+    # the path starts at 0.2 v0 (St ~ 2) to include sticking
+    assert main(["restitution", EXAMPLE, "--accuracy", "fast", "--from", "0.2", "--to", "6",
                  "--n", "7", "--out", str(out)]) == 0
     return out
 
@@ -79,7 +81,8 @@ def test_exported_files_parse(exported):
     rows = read_csv(exported / "restitution.csv")
     assert len(rows) == 7 and tuple(rows[0]) == CSV_FIELDS
     assert rows[0]["sticks"] and rows[0]["e_wet"] == 0.0 and not rows[-1]["sticks"]
-    assert all(r["warning"] for r in rows)  # glass at 1 nm rms against sub-nm films: roughness
+    # glass at 1 nm rms against the sub-nm films of the rebounding collisions: roughness
+    assert all(r["warning"] for r in rows if not r["sticks"])
     doc = json.loads((exported / "restitution.json").read_text())
     (group,) = doc["groups"].values()
     for conv in ("St", "St_exp", "St_L", "St_yade"):

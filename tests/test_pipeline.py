@@ -149,6 +149,17 @@ def test_bad_sweep_file_names_the_parameter(St, eps, extra, words):
         assert w in str(err.value)
 
 
+def test_cavitation_sweep_file_has_a_Pi_axis_with_the_classic_limit():
+    from pipeline.sweeps.config import load_sweep
+
+    # inf (TOML's inf) is a grid value like any other: the classic film on the same axes
+    s = load_sweep(REPO / "sweeps" / "cavitation.toml")
+    assert s.axis_names == ("St", "eps", "Pi") and s.axes["Pi"][-1] == math.inf
+    assert s.axes["Pi"][0] == 1e-5 and s.fixed["cavitation"] == "reynolds"
+    with pytest.raises(ConfigError, match="repeated"):
+        parse_sweep(sweep_text([1.0], [1e-2]).replace("[numerics]", "Pi = [inf, inf]\n[numerics]"))
+
+
 def test_range_axis_is_log_spaced_and_sorted():
     s = parse_sweep(sweep_text("{start = 100.0, stop = 1.0, num = 3}", [1e-3, 1e-2]))
     assert s.axes["St"] == pytest.approx((1.0, 10.0, 100.0), rel=1e-12)
@@ -749,9 +760,19 @@ def test_a_three_axis_store_end_to_end(tmp_path, third_axis, capsys, monkeypatch
 
     monkeypatch.setattr(figures, "FORMATS", ("png",))
     paths, rendered = figures.update_figures(ds3, tmp_path / "figs")
+    # ... and, with Pi an axis, the cavitation figures: per eps the curves against St, one per
+    # Pi, and St_c against Pi
     assert rendered and {p.name for p in paths} == {
         f"{n}_Pi={v}.png" for n in figures.FIGURES for v in ("0.001", "0.01", "0.1")} | \
-        {"critical_stokes.csv"}
+        {"critical_stokes.csv", "cavitation_eps=0.001.png", "cavitation_eps=0.01.png",
+         "critical_stokes_vs_Pi.png"}
+    drawn = dict(figures.pi_figures(ds3))
+    fig = drawn["cavitation_eps=0.01"]()
+    assert [len(ax.get_lines()) for ax in fig.axes] == [3, 4, 3]  # + the ln(x_e/x0) = 0 line
+    (ax,) = drawn["critical_stokes_vs_Pi"]().axes
+    x, y = ax.get_lines()[0].get_data()  # the first curve: the largest eps, St_c at each Pi
+    assert list(x) == [0.001, 0.01, 0.1]
+    assert list(y) == [r["St_c"] for r in rows if r["eps"] == 1e-2]
     # a store without St or eps has no plane: figures refused with one line
     ds_flat = ds3.isel(eps=0).drop_vars("eps")
     ds_flat.attrs = {**ds3.attrs, "fixed_physics": {}}

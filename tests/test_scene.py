@@ -196,21 +196,74 @@ def test_yield_check_fires_and_stays_quiet_below_yield(table):
     assert slow.peak_pressure < 276e6 and not any(w.check.startswith("yield") for w in slow.warnings)
 
 
-def test_cavitation_check(table):
-    fires = run_scene(scene_from_dict(sandstone(fluid={"name": "water", "ambient_pressure": "1 atm"}),
+def test_cavitation_switches_on_where_the_classic_tension_crosses_the_floor(table):
+    # water at the default 1 atm: the classic film pulls ~ -100 MPa, far below water's vapour
+    # pressure, so the scene re-solves with the Reynolds floor and says why
+    r = run_scene(scene_from_dict(sandstone(fluid={"name": "water"}), table), accuracy="fast")
+    s, c, d = r.scene, r.collision, r.to_dict()
+    assert s.ambient_pressure == 101325.0 and s.cavitation_pressure == 2339.0
+    # Pi = (p_amb - p_v) / p*: one formula, float rounding only
+    assert c.physics.cavitation == "reynolds" and d["cavitation"] == "reynolds"
+    assert d["Pi"] == pytest.approx((101325.0 - 2339.0) / s.pressure_scale, rel=1e-12)
+    assert d["cavitation_pressure_Pa"] == 2339.0 and d["cavitated"] is True
+    assert d["cavitation_reason"].startswith(f"reynolds cavitation at Pi = {d['Pi']:.3g}: ")
+    assert "below the cavitation pressure 2.339 kPa (the vapour pressure of water)" in d["cavitation_reason"]
+    # the floor holds: the absolute pressure never falls below p_v (the solver's P >= -Pi, to
+    # its round-off)
+    assert s.ambient_pressure + r.min_pressure >= 2339.0 - 1e-9 * s.pressure_scale
+    assert "cavitation" not in names(r.warnings)
+    # the cavity in SI: single multiplications of the dimensionless observables
+    assert d["cavity_radius_max_m"] == pytest.approx(
+        c.cavity_radius_max * math.sqrt(s.reduced_radius * s.x1), rel=1e-12)
+    assert d["void_volume_max_m3"] == pytest.approx(
+        c.void_volume_max * 2 * math.pi * s.reduced_radius * s.x1**2, rel=1e-12)
+    assert d["cavitation_onset_s"] == pytest.approx(c.tau_cavitation_onset * s.time_scale, rel=1e-12)
+    assert 0 < d["cavity_radius_max_m"] < s.reduced_radius and d["void_volume_max_m3"] > 0
+    # an ambient pressure above the largest tension (~100 MPa here): the classic film stands
+    quiet = run_scene(scene_from_dict(sandstone(fluid={"name": "water", "ambient_pressure": "1 GPa"}),
                                       table), accuracy="fast")
-    (w,) = [w for w in fires.warnings if w.check == "cavitation"]
-    assert w.value == pytest.approx(101325.0 + fires.min_pressure) and w.threshold == 2339.0
-    # an ambient pressure above the largest tension (~100 MPa here) suppresses cavitation
-    quiet = run_scene(scene_from_dict(sandstone(fluid={"name": "water",
-                                                       "ambient_pressure": "1 GPa"}), table),
-                      accuracy="fast")
-    assert "cavitation" not in names(quiet.warnings)
-    # no ambient pressure given: not checked, and the notes say so
-    unchecked = run_scene(scene_from_dict(sandstone(fluid={"name": "water"}), table),
-                          accuracy="fast")
-    assert "cavitation" not in names(unchecked.warnings)
-    assert any("ambient_pressure" in n for n in unchecked.notes)
+    assert quiet.collision.physics.classic and "cavitation" not in names(quiet.warnings)
+    assert quiet.cavitation_reason.startswith("classic film: the film's lowest absolute pressure")
+    # forced off: the classic film, and the old warning says the liquid would cavitate
+    off = run_scene(scene_from_dict(sandstone(fluid={"name": "water"}, cavitation="off"), table),
+                    accuracy="fast")
+    (w,) = [w for w in off.warnings if w.check == "cavitation"]
+    assert w.value == pytest.approx(101325.0 + off.min_pressure) and w.threshold == 2339.0
+    assert off.collision.physics.classic and "as asked for" in off.cavitation_reason
+    # a liquid without a vapour pressure: not switched, and the notes say so
+    unchecked = run_scene(scene_from_dict(sandstone(), table), accuracy="fast")
+    assert unchecked.collision.physics.classic
+    assert any("cavitation not checked" in n for n in unchecked.notes)
+
+
+def test_cavitation_pressure_presets_and_tensile_strength(table):
+    def scene(**fluid):
+        return scene_from_dict(sandstone(fluid={"name": "water", **fluid}), table)
+
+    assert scene().cavitation_pressure == 2339.0  # the default for a liquid: "vapour"
+    assert scene(cavitation_pressure="vapour").cavitation_pressure == 2339.0
+    gas = scene(cavitation_pressure="gas-saturated", ambient_pressure="2 bar")
+    assert gas.cavitation_pressure == 2e5 and gas.Pi == 0.0 and gas.physics("auto").Pi == 0.0
+    t = scene(tensile_strength="10 MPa")
+    assert t.cavitation_pressure == pytest.approx(101325.0 - 1e7, rel=1e-12)
+    assert t.Pi == pytest.approx(1e7 / t.pressure_scale, rel=1e-12)
+    assert scene(cavitation_pressure="5 kPa").cavitation_pressure == pytest.approx(5e3)
+    # a gas has no cavitation pressure: its scene stays classic even when a model is "auto"
+    air = scene_from_dict(sandstone(fluid={"name": "air"}), table)
+    assert air.cavitation_pressure is None and air.physics("auto").classic
+
+
+@pytest.mark.parametrize("fluid, message", [
+    ({"name": "water", "cavitation_pressure": "1 kPa", "tensile_strength": "1 MPa"}, "not both"),
+    ({"name": "water", "cavitation_pressure": "boiling"}, "must be a pressure .* or one of"),
+    ({"name": "water", "cavitation_pressure": "2 bar"}, "above the ambient pressure"),
+    ({"name": "water", "cavitation_pressure": "1 m"}, "fluid.cavitation_pressure"),
+    ({"viscosity": "1 mPa s", "density": "1000 kg/m^3", "cavitation_pressure": "vapour"},
+     "has no vapour_pressure"),
+])
+def test_bad_cavitation_pressure_names_the_field(table, fluid, message):
+    with pytest.raises(ValueError, match=message):
+        scene_from_dict(sandstone(fluid=fluid), table)
 
 
 def test_mean_free_path_check(table):
@@ -358,11 +411,60 @@ def test_cli_scene_plot_onto_a_file_exits_2_before_solving(tmp_path, capsys, mon
 
 
 def test_cli_strict_exits_1_on_warnings(tmp_path, capsys):
-    path = write(tmp_path, SCENE.replace('name = "water"', 'name = "water"\nambient_pressure = "1 atm"'))
-    assert main(["scene", path, "--accuracy", "fast"]) == 0
+    path = write(tmp_path, SCENE)
+    assert main(["scene", path, "--accuracy", "fast", "--cavitation", "off"]) == 0
     out = capsys.readouterr().out
-    assert "[cavitation]" in out
-    assert main(["scene", path, "--accuracy", "fast", "--strict"]) == 1
+    assert "[cavitation]" in out and "physics: classic film, as asked for" in out
+    assert main(["scene", path, "--accuracy", "fast", "--cavitation", "off", "--strict"]) == 1
+
+
+# ---- cavitation: the shipped examples and the override ------------------------------------------
+EXAMPLES = __import__("pathlib").Path(__file__).resolve().parent.parent / "examples"
+
+
+@pytest.mark.parametrize("name", ["sandstone_water.toml", "glass_beads_water.toml"])
+def test_shipped_water_examples_switch_cavitation_on_and_say_why(name, capsys):
+    assert main(["scene", str(EXAMPLES / name), "--json", "--accuracy", "fast"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["cavitation"] == "reynolds" and d["cavitated"] is True
+    # the liquid scenes sit at Pi ~ 1e-4 to 6e-4 (issue 10)
+    assert 1e-4 < d["Pi"] < 1e-3
+    reason = d["cavitation_reason"]
+    assert reason.startswith("reynolds cavitation at Pi = ")
+    assert "the vapour pressure of water" in reason and "MPa" in reason
+    assert "cavitation" not in [w["check"] for w in d["warnings"]]
+    assert main(["scene", str(EXAMPLES / name), "--accuracy", "fast"]) == 0
+    out = capsys.readouterr().out
+    assert "physics: reynolds cavitation at Pi = " in out and "largest cavity radius" in out
+
+
+def test_glycerol_and_air_examples_keep_the_classic_film(capsys):
+    # the steel ball in glycerol barely rebounds (v_r ~ 5e-4): its film pulls a few kPa at most,
+    # far from glycerol's ~0.01 Pa vapour pressure at 1 atm, so the classic film stands
+    assert main(["scene", str(EXAMPLES / "steel_ball_glass_wall_glycerol.toml"), "--json",
+                 "--accuracy", "fast"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["cavitation"] == "off" and d["Pi"] > 0 and d["cavitated"] is not True
+    assert 101325.0 + d["min_pressure_Pa"] > 0.5 * 101325.0 > d["cavitation_pressure_Pa"]
+    assert d["cavitation_reason"].startswith("classic film: the film's lowest absolute pressure")
+    # a gas film does not cavitate; its (unphysical) tension below zero absolute is a warning
+    assert main(["scene", str(EXAMPLES / "glass_bead_wall_air.toml"), "--json",
+                 "--accuracy", "fast"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["cavitation"] == "off" and d["Pi"] is None and d["cavitation_pressure_Pa"] is None
+    assert d["cavitation_reason"] == ("classic film: a gas film does not cavitate, so the film "
+                                      "is not switched")
+    assert {"gas_tension", "mean_free_path"} <= {w["check"] for w in d["warnings"]}
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--cavitation", "jfo"], "'jfo'"),
+    (["--fluid", "air", "--cavitation", "reynolds"], "needs a cavitation pressure"),
+])
+def test_cli_cavitation_override_errors_exit_2_with_one_line(tmp_path, capsys, argv, message):
+    assert main(["scene", write(tmp_path, SCENE), "--accuracy", "fast", *argv]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and "Traceback" not in err and len(err.splitlines()) == 1
 
 
 # ---- materials ------------------------------------------------------------------------------------

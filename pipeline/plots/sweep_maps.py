@@ -10,7 +10,11 @@ bytes).
   eps's start separation ``x0/x1 = eps^-0.4`` for reference (``x_e > x0``: the spheres escape);
 - the same three quantities as maps over the (St, eps) plane;
 - stick or rebound: the map of ``escaped`` with the critical Stokes number St_c(eps) against the
-  experimental St ~ 10, and the St_c table as CSV.
+  experimental St ~ 10, and the St_c table as CSV;
+- a store with a ``Pi`` axis (cavitation) also gets, per eps, ``v_r``, ``ln(x_e/x0)`` and
+  ``e_wet`` against St with one curve per Pi and the classic film (Pi = inf) on the same axes
+  (``cavitation_eps=...``), and ``St_c`` against Pi per eps (``critical_stokes_vs_Pi``):
+  ``pi_figures``.
 
 Every figure is drawn on an (eps, St) plane of the store (``analysis.planes``: St or eps fixed by
 the sweep is a plane one row or column wide). A store with further axes gets one set of figures
@@ -33,8 +37,9 @@ import numpy as np
 
 from ..sweeps.analysis import (EXPERIMENT_REFERENCE, EXPERIMENT_ST_C, critical_stokes,
                                critical_stokes_csv, planes, valid)
+from ..sweeps.config import physics_from_json
 
-__all__ = ["render_all", "update_figures", "fingerprint", "FIGURES"]
+__all__ = ["render_all", "update_figures", "fingerprint", "FIGURES", "pi_figures"]
 
 FIGURES = ("fig12_rebound_velocity", "fig12b_wet_restitution", "fig13_closest_approach",
            "fig14_equilibrium_separation", "map_rebound_velocity", "map_closest_approach",
@@ -81,6 +86,12 @@ def render_all(ds, out) -> list:
                     path = out / f"{name}{_suffix(extra)}.{fmt}"
                     fig.savefig(path, format=fmt, dpi=DPI, metadata=_METADATA[fmt])
                     paths.append(path)
+        for name, draw in pi_figures(ds):
+            fig = draw()
+            for fmt in FORMATS:
+                path = out / f"{name}.{fmt}"
+                fig.savefig(path, format=fmt, dpi=DPI, metadata=_METADATA[fmt])
+                paths.append(path)
     csv_path = out / CSV_NAME
     csv_path.write_text(critical_stokes_csv(critical_stokes(ds)))
     paths.append(csv_path)
@@ -120,7 +131,8 @@ def update_figures(ds, out) -> tuple[list, bool]:
     key = fingerprint(ds)
     stamp = out / STAMP_NAME
     expected = [out / f"{n}{_suffix(extra)}.{f}" for extra, _ in planes(ds) for n in FIGURES
-                for f in FORMATS] + [out / CSV_NAME]
+                for f in FORMATS] + [out / f"{n}.{f}" for n, _ in pi_figures(ds)
+                                     for f in FORMATS] + [out / CSV_NAME]
     if stamp.is_file() and stamp.read_text().strip() == key and all(p.is_file() for p in expected):
         return expected, False
     out.mkdir(parents=True, exist_ok=True)
@@ -484,4 +496,123 @@ def _stick_or_rebound(ds):
     ax2.text(0.02, 0.02, "experiments: " + EXPERIMENT_REFERENCE.replace("; ", ";\n"),
              transform=ax2.transAxes, fontsize=6, color="0.3", va="bottom", wrap=True)
     ax2.legend(loc="upper right", frameon=False)
+    return fig
+
+
+# ---- a store with a Pi axis: the cavitation number as the curve parameter -----------------------
+PI_AXIS = "Pi"
+# per eps: v_r, ln(x_e/x0) and e_wet against St, one curve per Pi (classic, Pi = inf, dashed)
+PI_FIGURE = "cavitation"
+# St_c against Pi, one curve per eps (the classic film's St_c as a dashed line)
+PI_ST_C_FIGURE = "critical_stokes_vs_Pi"
+
+
+def pi_figures(ds):
+    """Yield ``(name, draw)`` of the cavitation figures of a store with a Pi axis (none without
+    one): per eps ``cavitation_eps=...`` (``_pi_curves``), and ``critical_stokes_vs_Pi``
+    (``_pi_critical_stokes``); names carry the values of the store's further axes (``_suffix``).
+    Each ``draw()`` returns a Figure; nothing is computed but St_c (``analysis``)."""
+    import itertools
+
+    if PI_AXIS not in ds["status"].dims or "St" not in ds["status"].dims:
+        return
+    fixed = physics_from_json(dict(ds.attrs.get("fixed_physics", {})))
+    if "eps" not in ds["status"].dims:
+        ds = ds.expand_dims({"eps": [float(fixed["eps"])]})
+    others = [d for d in ds["status"].dims if d not in ("St", "eps", PI_AXIS)]
+    for values in itertools.product(*(range(ds.sizes[a]) for a in others)):
+        sel = dict(zip(others, values))
+        cube = ds.isel(sel).transpose(PI_AXIS, "eps", "St")
+        extra = {a: float(ds[a].values[i]) for a, i in sel.items()}
+        for j, eps in enumerate(cube["eps"].values):
+            yield (f"{PI_FIGURE}{_suffix({'eps': float(eps), **extra})}",
+                   lambda c=cube.isel(eps=j), e=extra: _pi_curves(c, e))
+        yield (f"{PI_ST_C_FIGURE}{_suffix(extra)}",
+               lambda c=cube, e=extra: _pi_critical_stokes(c, e))
+
+
+def _pi_label(pi: float) -> str:
+    if math.isinf(pi):
+        return r"classic film ($\Pi = \infty$)"
+    k = math.log10(pi) if pi > 0 else math.nan
+    if math.isfinite(k) and abs(k - round(k)) < 1e-9:
+        return rf"$\Pi = 10^{{{int(round(k))}}}$"
+    return rf"$\Pi = {pi:.3g}$"
+
+
+def _pi_styles(pis):
+    """Colour and line style per Pi: finite values along plasma (small Pi dark), inf black dashed."""
+    import matplotlib
+
+    cmap = matplotlib.colormaps["plasma"]
+    finite = [p for p in pis if math.isfinite(p)]
+    shade = dict(zip(finite, np.linspace(0.0, 0.85, len(finite)) if len(finite) > 1 else [0.0]))
+    return [("k", "--", 1.6) if math.isinf(p) else (cmap(shade[p]), "-", 1.2) for p in pis]
+
+
+def _pi_curves(cube, extra):
+    """One eps: ``v_r``, ``ln(x_e/x0)`` and ``e_wet`` against St, a curve per Pi."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(13.0, 4.2), layout="constrained")
+    axes = fig.subplots(1, 3)
+    St, pis = cube["St"].values, [float(p) for p in cube[PI_AXIS].values]
+    ok = valid(cube)
+    panels = (("v_r", r"maximum rebound velocity $v_r/v_0$"),
+              ("ln_x_e_x0", r"equilibrium separation $\ln(x_e/x_0)$ ($> 0$: rebound)"),
+              ("e_wet", r"wet restitution $e_{wet}$ (at $x_0$)"))
+    for ax, (name, label) in zip(axes, panels):
+        y = np.where(ok, np.asarray(cube[name].values, dtype=float), np.nan)
+        for k, (pi, (color, ls, lw)) in enumerate(zip(pis, _pi_styles(pis))):
+            ax.plot(St, y[k], color=color, ls=ls, lw=lw, marker="o", ms=1.8, label=_pi_label(pi))
+        ax.set_xscale("log")
+        ax.set_xlabel(r"Stokes number $St$")
+        ax.set_ylabel(label)
+        ax.grid(True, which="major", lw=0.4, alpha=0.5)
+    axes[0].set_ylim(bottom=0.0)
+    axes[2].set_ylim(0.0, 1.0)
+    axes[1].axhline(0.0, color="0.3", lw=0.8, ls=":")
+    # ln(x_e/x0) grows ~ St past escape: keep the threshold region readable
+    y = np.where(ok, np.asarray(cube["ln_x_e_x0"].values, dtype=float), np.nan)
+    if np.isfinite(y).any():
+        axes[1].set_ylim(max(float(np.nanmin(y)), -20.0) - 0.5, 10.0)
+    failed = int(_failed(cube).sum())
+    if failed:
+        axes[0].text(0.01, 0.01, f"{failed} failed scene(s) left out", transform=axes[0].transAxes,
+                     fontsize=7, color=FAILED_COLOR)
+    axes[2].legend(loc="lower right", frameon=False, fontsize=7)
+    eps = float(cube["eps"].values)
+    fig.suptitle(f"Cavitation (Reynolds floor $P \\geq -\\Pi$) at {_eps_label(eps)}")
+    _footer(fig, cube, {**extra, "eps": eps})
+    return fig
+
+
+def _pi_critical_stokes(cube, extra):
+    """St_c against Pi, a curve per eps; the classic film's St_c (Pi = inf) dashed."""
+    fig = _figure()
+    ax = fig.add_subplot()
+    rows = [r for r in critical_stokes(cube) if math.isfinite(r["St_c"])]
+    eps_values = [float(e) for e in cube["eps"].values]
+    colors = _eps_colors(len(eps_values))
+    for i in range(len(eps_values) - 1, -1, -1):
+        mine = [r for r in rows if r["eps"] == eps_values[i]]
+        finite = sorted((r[PI_AXIS], r["St_c"]) for r in mine if math.isfinite(r[PI_AXIS]))
+        if finite:
+            x, y = zip(*finite)
+            ax.plot(x, y, color=colors[i], marker="o", ms=3.5, lw=1.3,
+                    label=_eps_label(eps_values[i]))
+        for r in mine:
+            if math.isinf(r[PI_AXIS]):
+                ax.axhline(r["St_c"], color=colors[i], ls="--", lw=1.0)
+    ax.plot([], [], color="0.3", ls="--", lw=1.0, label=r"classic film ($\Pi = \infty$)")
+    ax.axhline(EXPERIMENT_ST_C, color="k", ls=":", lw=1.0,
+               label=r"experiments: no rebound below $St \approx 10$")
+    ax.set_xscale("log")
+    ax.set_xlabel(r"cavitation number $\Pi = (p_{amb} - p_{cav}) x_1^2 / (\mu a v_0)$")
+    ax.set_ylabel(r"critical Stokes number $St_c$")
+    ax.set_ylim(bottom=0.0)
+    ax.set_title(r"stick-or-rebound threshold against the cavitation number")
+    ax.grid(True, which="major", lw=0.4, alpha=0.5)
+    ax.legend(loc="lower right", frameon=False)
+    _footer(fig, cube, extra)
     return fig

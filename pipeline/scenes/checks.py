@@ -2,7 +2,9 @@
 
 Each premise is reported as a ``Check`` carrying the number that triggered it and its threshold
 (``THRESHOLDS``); ``premise_checks`` needs only the scene, ``outcome_checks`` the solution.
-``model_reason`` says why the rigid or the EHD model answered.
+``model_reason`` says why the rigid or the EHD model answered, ``cavitation_reason`` which film
+model (classic or with a cavitation floor) answered and why; ``cavitation_crosses`` is the
+automatic switch of ``run.run_scene``.
 """
 
 from __future__ import annotations
@@ -18,7 +20,8 @@ from .scene import Scene
 from .units import format_quantity
 
 __all__ = ["Check", "premise_checks", "outcome_checks", "THRESHOLDS", "model_reason",
-           "roughness_check", "combined_roughness"]
+           "roughness_check", "combined_roughness", "cavitation_crosses", "cavitation_reason",
+           "physics_label", "gas"]
 
 # Thresholds of the validity checks (each check warns when its number exceeds the threshold).
 THRESHOLDS = {
@@ -102,22 +105,22 @@ def outcome_checks(scene: Scene, c, p_max: float, p_min: float) -> tuple[list[Ch
                 f"peak film pressure {format_quantity(p_max, 'Pa')} exceeds the yield strength "
                 f"{format_quantity(y, 'Pa')} of "
                 f"{body.label} ({body.solid.name}): plastic deformation is not modelled")))
-    if scene.ambient_pressure is not None:
-        pv = scene.fluid.vapour_pressure
-        if pv is None:
-            notes.append("cavitation check skipped: the fluid has no vapour_pressure")
-        else:
-            absolute = scene.ambient_pressure + p_min
-            if absolute < pv:
-                out.append(Check("cavitation", absolute, pv, (
-                    "the film tension brings the absolute pressure to "
-                    f"{format_quantity(absolute, 'Pa')} (ambient "
-                    f"{format_quantity(scene.ambient_pressure, 'Pa')} + min film pressure "
-                    f"{format_quantity(p_min, 'Pa')}), below the vapour pressure "
-                    f"{format_quantity(pv, 'Pa')}: cavitation is not modelled")))
-    elif p_min < 0.0 and scene.fluid.vapour_pressure is not None:
-        notes.append("cavitation not checked: give fluid.ambient_pressure to check the film "
-                     f"tension ({p_min:.3g} Pa) against the vapour pressure")
+    p_cav, absolute = scene.cavitation_pressure, scene.ambient_pressure + p_min
+    if p_cav is not None and c.physics.classic and absolute < p_cav:
+        # only where the classic film was asked for (cavitation = "off"): else the scene
+        # switched the floor on (run.run_scene)
+        out.append(Check("cavitation", absolute, p_cav, (
+            f"the film tension brings the absolute pressure to {_crossing(scene, p_min)}, "
+            f"below the cavitation pressure {format_quantity(p_cav, 'Pa')} "
+            f"({scene.cavitation_pressure_source}): the liquid would cavitate, and "
+            "cavitation = 'off' solved the film without it")))
+    elif p_cav is None and gas(scene) and absolute < 0.0:
+        out.append(Check("gas_tension", absolute, 0.0, (
+            f"the film tension brings the gas's absolute pressure to {_crossing(scene, p_min)}, "
+            "below zero, which a gas cannot carry: the gas's compressibility is not modelled")))
+    elif p_cav is None and not gas(scene) and p_min < 0.0:
+        notes.append(f"cavitation not checked: {scene.cavitation_pressure_source}; the film "
+                     f"tension reaches {format_quantity(p_min, 'Pa')}")
     rough = roughness_check(scene, c)
     if rough is not None:
         out.append(rough)
@@ -130,6 +133,57 @@ def outcome_checks(scene: Scene, c, p_max: float, p_min: float) -> tuple[list[Ch
                 f"path {format_quantity(lam, 'm')} (Knudsen number {lam / h_m:.3g}): continuum lubrication "
                 "is not valid")))
     return out, notes
+
+
+def gas(scene: Scene) -> bool:
+    """The fluid is a gas: it has a mean free path (the fluids table gives one to gases only)."""
+    return scene.fluid.mean_free_path is not None
+
+
+def _crossing(scene: Scene, p_min: float) -> str:
+    return (f"{format_quantity(scene.ambient_pressure + p_min, 'Pa')} (ambient "
+            f"{format_quantity(scene.ambient_pressure, 'Pa')} + min film pressure "
+            f"{format_quantity(p_min, 'Pa')})")
+
+
+def cavitation_crosses(scene: Scene, p_min: float | None) -> bool:
+    """True when the classic film's lowest pressure ``p_min`` [Pa, gauge; None: not known]
+    brings the absolute pressure below the scene's cavitation pressure: the automatic switch."""
+    p_cav = scene.cavitation_pressure
+    return p_cav is not None and p_min is not None and scene.ambient_pressure + p_min < p_cav
+
+
+def physics_label(physics) -> str:
+    """The film model used: "classic film" or "reynolds cavitation at Pi = ..."."""
+    if physics.classic:
+        return "classic film"
+    return f"{physics.cavitation} cavitation at Pi = {physics.Pi:.3g}"
+
+
+def cavitation_reason(scene: Scene, physics, classic_p_min: float | None, *,
+                      forced: bool) -> str:
+    """Which film model answered (``physics_label``) and why, in one sentence with numbers.
+
+    ``classic_p_min`` is the classic film's lowest pressure [Pa, gauge] (None: the classic film
+    was not solved or failed); ``forced``: the model was asked for (``cavitation`` not "auto").
+    """
+    label, p_cav = physics_label(physics), scene.cavitation_pressure
+    floor = ("" if p_cav is None else f"the cavitation pressure {format_quantity(p_cav, 'Pa')} "
+             f"({scene.cavitation_pressure_source})")
+    if forced:
+        why = f"{label}, as asked for (cavitation = {scene.cavitation!r})"
+        return why + (f"; {floor}" if floor and not physics.classic else "")
+    if p_cav is None:
+        return f"{label}: {scene.cavitation_pressure_source}, so the film is not switched"
+    if classic_p_min is None:
+        return f"{label}: the classic solve failed, so the cavitation switch was not decided"
+    if physics.classic:
+        return (f"{label}: the film's lowest absolute pressure, "
+                f"{_crossing(scene, classic_p_min)}, stays above {floor}")
+    return (f"{label}: the classic film's tension would bring the absolute pressure to "
+            f"{_crossing(scene, classic_p_min)}, below {floor}, so the film is solved with the "
+            f"floor p >= p_cav (P >= -Pi, Pi = (p_amb - p_cav) / p* with p* = "
+            f"{format_quantity(scene.pressure_scale, 'Pa')})")
 
 
 def combined_roughness(scene: Scene) -> float | None:
@@ -168,7 +222,7 @@ def _fmt_log(log_value: float) -> str:
 
 def model_reason(scene: Scene, c) -> str:
     """Why the scene needed the rigid or the EHD model, in one sentence with numbers."""
-    physics, switch = scene.physics(), c.numerics.switch
+    physics, switch = c.physics, c.numerics.switch
     peak = _fmt_log(rigid.log_peak_deformation_ratio(physics.x_start, physics.St))
     if c.model == "rigid":
         # the rigid path from (x0, V = 1) comes to rest at x0 exp(-St)

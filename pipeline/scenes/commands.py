@@ -19,6 +19,8 @@ _FLAG_FIELDS = {
     "fluid": ("fluid", "name"), "viscosity": ("fluid", "viscosity"),
     "fluid_density": ("fluid", "density"), "vapour_pressure": ("fluid", "vapour_pressure"),
     "mean_free_path": ("fluid", "mean_free_path"), "ambient_pressure": ("fluid", "ambient_pressure"),
+    "cavitation_pressure": ("fluid", "cavitation_pressure"),
+    "tensile_strength": ("fluid", "tensile_strength"), "cavitation": (None, "cavitation"),
 }
 _BODY_FLAGS = {"material": "material", "radius": "radius", "density": "density",
                "youngs_modulus": "youngs_modulus", "poisson_ratio": "poisson_ratio",
@@ -156,10 +158,19 @@ def format_report(d: dict) -> str:
         ("min separation x", f"{_g(d['min_separation_nm'])} nm (negative: flattened overlap)"),
         ("dimple", _g(d["dimple"]) + (f" (depth {_g(d['dimple_depth_nm'])} nm)" if d["dimple"] else "")),
     ]
+    if d["cavitated"]:
+        results += [
+            ("largest cavity radius", _q(d["cavity_radius_max_m"], "m")),
+            ("largest void volume", f"{_g(d['void_volume_max_m3'], '.3g')} m^3"),
+            ("cavitation onset", _q(d["cavitation_onset_s"], "s")),
+        ]
+    elif d["cavitation"] != "off":
+        results.append(("cavitated", "no (the film stayed above the cavitation pressure)"))
     width = max(len(k) for k, _ in rows + results)
     lines.append("derived")
     lines += [f"  {k:<{width}}  {v}" for k, v in rows]
     lines.append(f"model: {d['model_reason']}")
+    lines.append(f"physics: {d['cavitation_reason']}")
     if d["status"] != "ok":
         lines.append(f"solve FAILED ({d['status']}): {d['message']}")
     else:
@@ -293,7 +304,16 @@ def _build_scene(sub) -> None:
     g.add_argument("--vapour-pressure", dest="vapour_pressure", default=None, help="e.g. '2.3 kPa'")
     g.add_argument("--mean-free-path", dest="mean_free_path", default=None, help="gases, e.g. '67 nm'")
     g.add_argument("--ambient-pressure", dest="ambient_pressure", default=None,
-                   help="absolute ambient pressure (enables the cavitation check), e.g. '1 atm'")
+                   help="absolute ambient pressure (default 1 atm), e.g. '2 bar'")
+    g.add_argument("--cavitation-pressure", dest="cavitation_pressure", default=None,
+                   help="absolute pressure at which the liquid cavitates: a pressure, 'vapour' "
+                        "(the default for a liquid) or 'gas-saturated' (the ambient pressure)")
+    g.add_argument("--tensile-strength", dest="tensile_strength", default=None,
+                   help="cavitation at the ambient pressure minus this, e.g. '10 MPa'")
+    g.add_argument("--cavitation", default=None, choices=("auto", "off", "reynolds", "jfo"),
+                   help="film model: auto (default: the classic film, switched to the Reynolds "
+                        "cavitation floor where its tension would cross the cavitation "
+                        "pressure), or forced off / reynolds / jfo")
     g = p.add_argument_group("approach")
     g.add_argument("--v0", default=None, help="approach speed, e.g. '10 cm/s'")
     g.add_argument("--x0", default=None, help="starting gap, e.g. '250 nm' (default 0.01 a)")

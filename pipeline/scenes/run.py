@@ -11,7 +11,8 @@ from dataclasses import dataclass, field
 
 from solver.physics import Physics
 
-from .checks import Check, model_reason, outcome_checks, premise_checks
+from .checks import (Check, cavitation_crosses, cavitation_reason, model_reason, outcome_checks,
+                     premise_checks)
 from .scene import Scene
 
 __all__ = ["SceneResult", "run_scene", "RESULT_KEYS", "check_solvable"]
@@ -20,11 +21,13 @@ __all__ = ["SceneResult", "run_scene", "RESULT_KEYS", "check_solvable"]
 RESULT_KEYS = (
     "title", "inputs", "reduced_radius_m", "reduced_mass_kg", "theta_per_Pa", "effective_modulus_Pa",
     "x0_m", "x0_over_a", "x1_m", *Physics.names(), "Re", "Re_x0_over_a", "sound_speed_m_per_s",
-    "wave_parameter", "model", "model_reason", "status", "message", "v_r",
+    "wave_parameter", "model", "model_reason", "cavitation_reason", "cavitation_pressure_Pa",
+    "status", "message", "v_r",
     "rebound_speed_m_per_s", "e_wet", "departure_speed_m_per_s", "closest_approach_nm", "closest_approach_on_approach_nm",
     "equilibrium_separation_m", "log10_equilibrium_separation_m", "escaped", "time_to_stop_s",
     "time_of_max_rebound_s", "peak_force_N", "peak_pressure_Pa", "min_pressure_Pa",
     "max_central_deformation_nm", "min_separation_nm", "dimple", "dimple_depth_nm",
+    "cavitated", "cavity_radius_max_m", "void_volume_max_m3", "cavitation_onset_s",
     "warnings", "notes", "dimensionless",
 )
 
@@ -39,6 +42,7 @@ class SceneResult:
     notes: list[str] = field(default_factory=list)
     peak_pressure: float = math.nan  # Pa
     min_pressure: float = math.nan  # Pa (negative: tension)
+    cavitation_reason: str = ""  # the film model used and why, one sentence with numbers
 
     def to_dict(self) -> dict:
         """All results (keys ``RESULT_KEYS``), SI with the unit in the key, non-finite as None."""
@@ -55,10 +59,15 @@ class SceneResult:
             "reduced_radius_m": num(s.reduced_radius), "reduced_mass_kg": num(s.reduced_mass),
             "theta_per_Pa": s.theta, "effective_modulus_Pa": s.effective_modulus,
             "x0_m": x0, "x0_over_a": x0 / s.reduced_radius, "x1_m": x1,
-            **s.physics().as_dict(), "Re": s.reynolds,
+            # the physics solved (Pi = inf, the classic film without a floor, is null as in
+            # the solver's JSON)
+            **{k: num(v) if isinstance(v, float) else v for k, v in c.physics.as_dict().items()},
+            "Re": s.reynolds,
             "Re_x0_over_a": s.reynolds * x0 / s.reduced_radius,
             "sound_speed_m_per_s": s.sound_speed, "wave_parameter": s.wave_parameter,
             "model": c.model, "model_reason": model_reason(s, c),
+            "cavitation_reason": self.cavitation_reason,
+            "cavitation_pressure_Pa": s.cavitation_pressure,
             "status": c.status, "message": c.message,
             "v_r": num(c.v_r), "rebound_speed_m_per_s": num(c.v_r * s.v0),
             # the speed leaving the lubrication region at x_ref (default x0): e_wet times the
@@ -77,6 +86,11 @@ class SceneResult:
             "max_central_deformation_nm": num(c.w0_max_x1 * x1 * 1e9),
             "min_separation_nm": num(c.x_min_x1 * x1 * 1e9),
             "dimple": bool(c.dimple), "dimple_depth_nm": num(c.dimple_depth_x1 * x1 * 1e9),
+            # the cavity in SI: radius in sqrt(a x1), void volume in 2 pi a x1^2, time in x0/v0
+            "cavitated": None if c.cavitated is None else bool(c.cavitated),
+            "cavity_radius_max_m": num(c.cavity_radius_max * math.sqrt(s.reduced_radius * x1)),
+            "void_volume_max_m3": num(c.void_volume_max * 2.0 * math.pi * s.reduced_radius * x1**2),
+            "cavitation_onset_s": num(c.tau_cavitation_onset * s.time_scale),
             "warnings": [w.as_dict() for w in self.warnings], "notes": list(self.notes),
             "dimensionless": c.to_dict(),
         }
@@ -92,6 +106,12 @@ def check_solvable(scene: Scene) -> Physics:
 
 def run_scene(scene: Scene, accuracy: str = "standard", **overrides) -> SceneResult:
     """Solve a scene and check it.
+
+    With the scene's ``cavitation = "auto"`` (the default) the classic film is solved first; where
+    its tension brings the absolute pressure below the scene's cavitation pressure
+    (``checks.cavitation_crosses``) the scene is solved again with the floor (``Pi`` finite, the
+    solver's default model). ``SceneResult.cavitation_reason`` says which film answered and why.
+    A forced model (``"off"``, ``"reynolds"``, ``"jfo"``) is solved once.
 
     Parameters
     ----------
@@ -109,10 +129,17 @@ def run_scene(scene: Scene, accuracy: str = "standard", **overrides) -> SceneRes
     """
     from solver import collide
 
-    physics = check_solvable(scene)
+    auto = scene.cavitation == "auto"
+    # the automatic switch starts from the classic film (docs/scenes.md, "Cavitation")
+    physics = check_solvable(scene) if not auto else scene.physics("off")
     overrides = {k: v for k, v in overrides.items() if v is not None}
     overrides.setdefault("save_profiles", False)
     c = collide(physics, accuracy=accuracy, **overrides)
+    # the classic film's lowest pressure [Pa, gauge], when the classic film was solved
+    classic_p_min = c.p_min * scene.pressure_scale if c.ok and c.physics.classic else None
+    if auto and cavitation_crosses(scene, classic_p_min):
+        c = collide(scene.physics("auto"), accuracy=accuracy, **overrides)
+    reason = cavitation_reason(scene, c.physics, classic_p_min, forced=not auto)
     warnings = premise_checks(scene)
     notes = []
     p_max = p_min = math.nan
@@ -124,4 +151,4 @@ def run_scene(scene: Scene, accuracy: str = "standard", **overrides) -> SceneRes
     if scene.sound_speed is None:
         notes.append("elastic-wave check skipped: no density known for either solid")
     return SceneResult(scene=scene, collision=c, warnings=warnings, notes=notes,
-                       peak_pressure=p_max, min_pressure=p_min)
+                       peak_pressure=p_max, min_pressure=p_min, cavitation_reason=reason)

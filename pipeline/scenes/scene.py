@@ -32,7 +32,10 @@ from ..errors import UsageError
 from .materials import FluidProps, Solid
 from .units import format_quantity
 
-__all__ = ["SceneError", "Body", "Scene"]
+__all__ = ["SceneError", "Body", "Scene", "STANDARD_ATMOSPHERE", "CAVITATION_CHOICES"]
+
+STANDARD_ATMOSPHERE = 101325.0  # Pa: the default ambient pressure of a scene (a liquid at sea level)
+CAVITATION_CHOICES = ("auto", "off", "reynolds", "jfo")
 
 
 class SceneError(UsageError, ValueError):
@@ -74,7 +77,14 @@ class Scene:
     fluid: FluidProps
     v0: float
     x0: float
-    ambient_pressure: float | None = None  # Pa, absolute; enables the cavitation check
+    ambient_pressure: float = STANDARD_ATMOSPHERE  # Pa, absolute (default 1 atm)
+    # absolute pressure at which the liquid cavitates [Pa]; None: the film cannot cavitate (a gas)
+    # or nothing is known (a liquid without a vapour pressure): the classic film, unchecked
+    cavitation_pressure: float | None = None
+    cavitation_pressure_source: str = ""  # how it was set, for the report
+    # the cavitation model: "auto" (classic, switched to the default model where the classic
+    # tension would cross the floor: run.run_scene), or forced "off", "reynolds", "jfo"
+    cavitation: str = "auto"
 
     # ---- derived numbers (SI), docs/model.md---------------------------------------------------
     @property
@@ -131,13 +141,36 @@ class Scene:
         c = self.sound_speed
         return None if c is None else (self.v0 / c) ** 0.2
 
-    def physics(self) -> Physics:
+    @property
+    def Pi(self) -> float:
+        """Cavitation number ``(p_amb - p_cav) / p*`` with ``p* = mu a v0 / x1^2``
+        (``pressure_scale``); inf when the scene has no cavitation pressure."""
+        if self.cavitation_pressure is None:
+            return math.inf
+        return (self.ambient_pressure - self.cavitation_pressure) / self.pressure_scale
+
+    def physics(self, cavitation: str | None = None) -> Physics:
         """The scene's dimensionless groups: the one place a scene becomes solver input.
 
+        ``cavitation`` is the model (default: the scene's own choice); "auto" is the solver's
+        default model where the scene has a cavitation pressure (``Pi`` finite) and the classic
+        film where it has none. The automatic switch of a scene (classic first, the floor only
+        where the classic tension crosses it) is ``run.run_scene``'s: it asks for "off" first.
+        With "off" and a cavitation pressure, ``Pi`` is kept (finite) and ignored by the solver.
+
         Raises SceneError when a group is outside what the solver accepts (the Physics' own
-        range check); for a group above its range the message says what to change in the scene.
+        range check; for a group above its range the message says what to change in the
+        scene), or when a cavitation model is asked for a scene without a cavitation pressure.
         """
-        values = {"St": self.stokes, "eps": self.eps}
+        model = self.cavitation if cavitation is None else cavitation
+        if model not in CAVITATION_CHOICES:
+            raise SceneError(f"cavitation must be one of {list(CAVITATION_CHOICES)}, got {model!r}")
+        if model in ("reynolds", "jfo") and self.cavitation_pressure is None:
+            raise SceneError(f"cavitation = {model!r} needs a cavitation pressure, and this scene "
+                             f"has none ({self.cavitation_pressure_source or 'not given'}): give "
+                             "fluid.cavitation_pressure (a pressure, 'vapour' or 'gas-saturated') "
+                             "or fluid.tensile_strength")
+        values = {"St": self.stokes, "eps": self.eps, "Pi": self.Pi, "cavitation": model}
         try:
             return Physics(**values)
         except ValueError as exc:
@@ -183,7 +216,10 @@ class Scene:
                 "fluid": {"name": f.name, "viscosity_Pa_s": f.viscosity,
                           "density_kg_per_m3": f.density, "vapour_pressure_Pa": f.vapour_pressure,
                           "mean_free_path_m": f.mean_free_path,
-                          "ambient_pressure_Pa": self.ambient_pressure, "source": f.source},
+                          "ambient_pressure_Pa": self.ambient_pressure,
+                          "cavitation_pressure_Pa": self.cavitation_pressure,
+                          "cavitation_pressure_source": self.cavitation_pressure_source,
+                          "source": f.source},
                 "v0_m_per_s": self.v0, "x0_m": self.x0}
 
 

@@ -9,8 +9,8 @@ from __future__ import annotations
 import math
 
 from .materials import FLUID_FIELDS, SOLID_FIELDS, FluidProps, MaterialTable, Solid
-from .scene import Body, Scene, SceneError, _reduced
-from .units import FieldSpec, to_si
+from .scene import CAVITATION_CHOICES, STANDARD_ATMOSPHERE, Body, Scene, SceneError, _reduced
+from .units import FieldSpec, format_quantity, to_si
 
 __all__ = ["scene_from_dict", "DEFAULT_X0_OVER_A"]
 
@@ -22,9 +22,14 @@ _GAP = FieldSpec("[length]", "500 nm", si_unit="m")
 _RATIO = FieldSpec("", "0.01")
 _PRESSURE = FieldSpec("[pressure]", "101.325 kPa", si_unit="Pa")
 
-_TOP_KEYS = ("title", "v0", "x0", "x0_over_a", "body1", "body2", "fluid", "materials", "fluids")
+_TOP_KEYS = ("title", "v0", "x0", "x0_over_a", "cavitation", "body1", "body2", "fluid",
+             "materials", "fluids")
 _BODY_KEYS = ("material", "radius", "wall", *SOLID_FIELDS)
-_FLUID_KEYS = ("name", "ambient_pressure", *FLUID_FIELDS)
+_FLUID_KEYS = ("name", "ambient_pressure", "cavitation_pressure", "tensile_strength",
+               *FLUID_FIELDS)
+_TENSILE = FieldSpec("[pressure]", "10 MPa", si_unit="Pa")
+# fluid.cavitation_pressure presets (docs/scenes.md, "Cavitation")
+CAVITATION_PRESETS = ("vapour", "gas-saturated")
 
 
 def _check_keys(raw, valid, where):
@@ -104,10 +109,53 @@ def _fluid(data, table: MaterialTable):
     values, name, source = _properties(raw, FLUID_FIELDS, base, "fluid", "fluid")
     fluid = FluidProps(name=name, source=source, description=base.description if base else "",
                        **values)
-    ambient = None
+    ambient = STANDARD_ATMOSPHERE
     if "ambient_pressure" in raw:
         ambient = to_si(raw["ambient_pressure"], _PRESSURE, "fluid.ambient_pressure")
-    return fluid, ambient
+    p_cav, how = _cavitation_pressure(raw, fluid, ambient)
+    return fluid, ambient, p_cav, how
+
+
+def _cavitation_pressure(raw, fluid: FluidProps, ambient: float):
+    """``(p_cav [Pa] or None, how it was set)`` from ``fluid.cavitation_pressure`` (a pressure or
+    a preset) or ``fluid.tensile_strength``; by default the vapour pressure of a liquid, none for
+    a gas (a fluid with a mean free path) or a liquid without a vapour pressure."""
+    if "cavitation_pressure" in raw and "tensile_strength" in raw:
+        raise SceneError("fluid: give either cavitation_pressure or tensile_strength, not both")
+    if "tensile_strength" in raw:
+        t = to_si(raw["tensile_strength"], _TENSILE, "fluid.tensile_strength")
+        p_cav = ambient - t
+        return p_cav, (f"tensile strength {format_quantity(t, 'Pa')} below the ambient "
+                       f"{format_quantity(ambient, 'Pa')}")
+    given = raw.get("cavitation_pressure", "vapour" if fluid.mean_free_path is None else None)
+    if given is None:
+        return None, "a gas film does not cavitate"
+    preset = given.strip().lower().replace("vapor", "vapour") if isinstance(given, str) else None
+    if preset in CAVITATION_PRESETS:
+        if preset == "gas-saturated":
+            # a liquid equilibrated with gas at the ambient pressure releases it as soon as the
+            # pressure falls below that saturation pressure (Henry's law): p_cav = p_amb, Pi = 0
+            return ambient, "gas-saturated: the ambient pressure, where dissolved gas comes out"
+        if fluid.vapour_pressure is None:
+            if "cavitation_pressure" in raw:
+                raise SceneError(f"fluid.cavitation_pressure = 'vapour' but the fluid "
+                                 f"{fluid.name!r} has no vapour_pressure: give fluid."
+                                 "vapour_pressure, or the cavitation pressure itself")
+            return None, (f"unknown: the fluid {fluid.name!r} has no vapour_pressure (give "
+                          "fluid.cavitation_pressure or fluid.vapour_pressure)")
+        p_cav, how = fluid.vapour_pressure, f"the vapour pressure of {fluid.name}"
+    else:
+        if isinstance(given, str) and not any(ch.isdigit() for ch in given):
+            raise SceneError(f"fluid.cavitation_pressure must be a pressure (e.g. '2.3 kPa') or "
+                             f"one of {list(CAVITATION_PRESETS)}, got {given!r}")
+        p_cav = to_si(given, FieldSpec("[pressure]", "2.3 kPa", lo_open=False, si_unit="Pa"),
+                      "fluid.cavitation_pressure")
+        how = "given in the scene"
+    if p_cav > ambient:
+        raise SceneError(f"the cavitation pressure {format_quantity(p_cav, 'Pa')} ({how}) is "
+                         f"above the ambient pressure {format_quantity(ambient, 'Pa')}: the liquid "
+                         "would boil or degas at rest; raise fluid.ambient_pressure")
+    return p_cav, how
 
 
 def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
@@ -134,7 +182,10 @@ def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
     if body1.wall:  # keep the sphere first: a wall is body2 by convention
         body1, body2 = Body("body1", body2.radius, body2.solid), Body("body2", body1.radius,
                                                                         body1.solid)
-    fluid, ambient = _fluid(data, table)
+    fluid, ambient, p_cav, how = _fluid(data, table)
+    cavitation = data.get("cavitation", "auto")
+    if cavitation not in CAVITATION_CHOICES:
+        raise SceneError(f"cavitation must be one of {list(CAVITATION_CHOICES)}, got {cavitation!r}")
     if "v0" not in data:
         raise SceneError("missing the field 'v0' (approach speed, e.g. v0 = '10 cm/s')")
     v0 = to_si(data["v0"], _SPEED, "v0")
@@ -151,4 +202,5 @@ def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
     if not isinstance(title, str):
         raise SceneError(f"title must be a string, got {title!r}")
     return Scene(title=title, body1=body1, body2=body2, fluid=fluid, v0=v0, x0=x0,
-                 ambient_pressure=ambient)
+                 ambient_pressure=ambient, cavitation_pressure=p_cav,
+                 cavitation_pressure_source=how, cavitation=cavitation)

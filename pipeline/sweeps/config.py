@@ -306,7 +306,10 @@ def _axis(where: str, name: str, spec) -> tuple:
     for v in values:
         check(name, float(v))
     values = np.sort(values)
-    if np.any(np.diff(values) <= 1e-9 * np.abs(values[1:])):
+    lo, hi = values[:-1], values[1:]
+    with np.errstate(invalid="ignore"):  # inf - inf: two infs are the same value
+        same = np.where(np.isinf(hi), hi == lo, hi - lo <= 1e-9 * np.abs(hi))
+    if np.any(same):
         raise ConfigError(f"{where}: grid.{name} has repeated values")
     return tuple(float(v) for v in values)
 
