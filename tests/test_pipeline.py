@@ -711,20 +711,8 @@ def test_journal_lines_hold_the_physics_and_replay_matches_every_axis(tmp_path):
         assert float(ds.v_r.sel(St=St, eps=eps)) == pytest.approx(St / (St + 10.0))
 
 
-@pytest.fixture
-def third_axis(monkeypatch):
-    """A test-only third Physics field ``Pi`` (the solver never sees it: fake solves only)."""
-    from solver.physics import Group, Physics
-
-    pi = Group("Pi", "test-only group", "test group", 0.0, 1.0)
-    names, group = Physics.names, Physics.group
-    monkeypatch.setattr(Physics, "names", staticmethod(lambda: (*names(), "Pi")))
-    monkeypatch.setattr(Physics, "group",
-                        staticmethod(lambda name: pi if name == "Pi" else group(name)))
-    return pi
-
-
-def test_a_three_axis_store_end_to_end(tmp_path, third_axis, capsys, monkeypatch):
+def test_a_three_axis_store_end_to_end(tmp_path, capsys, monkeypatch):
+    """The real third axis: the cavitation number Pi (fake solves only)."""
     from pipeline.cli import main
     from pipeline.plots.sweep_maps import _suffix
     from pipeline.sweeps.analysis import critical_stokes_csv, planes
