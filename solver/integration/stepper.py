@@ -428,6 +428,10 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                 for i in range(n):
                     dh[i] = res[n] + kdp[i]
                 open_cavity = r_cav > 0.0
+                refilled = False
+                if jfo:
+                    for i in range(n - 1):
+                        refilled = refilled or (active0[i] and not active[i])
                 for i in range(n - 1):
                     open_cavity = open_cavity or active[i]
                 if floor and open_cavity:
@@ -436,6 +440,13 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                     # errors control the step (measured: every rejection came from these kinks)
                     for i in range(n):
                         res[i] = 0.0
+                if refilled:
+                    # JFO: where a cavity closes the pressure jumps (the void's closing rate is
+                    # finite up to the instant it vanishes), and the gap with it through W = K P:
+                    # no step size makes the extrapolation of the gap across it accurate. X and V
+                    # stay continuous; they control this step, and the history restarts after it
+                    for i in range(n):
+                        dh[i] = 0.0
                 err = _norm(res[:n], res[n], res[n + 1], dh, y[:n], y[n], y[n + 1], h, 1.0, p_abs) / rtol
             else:
                 err = 0.0
