@@ -128,9 +128,6 @@ def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 
     if not (math.isfinite(x_ref_x0) and x_ref_x0 >= 1.0):
         raise ValueError(f"x_ref_x0 = {x_ref_x0!r}: the reference separation must be finite and "
                          "at least the start x0 (x_ref_x0 >= 1)")
-    if physics.cavitation == "jfo":
-        raise ValueError("cavitation model 'jfo' (mass-conserving) is not built yet; use "
-                         "'reynolds' (docs/model.md, \"Cavitation\")")
     wall = time.perf_counter()
     x_switch = rigid.handover_separation(physics.x_start, physics.St, numerics.switch)
     if x_switch is None:
@@ -292,7 +289,8 @@ def _coupled(physics, accuracy, numerics, x_switch, x_ref_x0=1.0):
     result.series = _concat(blocks)
     result.tau_release = t_c[-1] * tau_per_t
     result.ln_x_e_x1 = ln_x_e
-    result.e_wet = _wet_restitution(physics, x_c, v_c, x_ref_x0 * x_start)
+    result.e_wet = _wet_restitution(physics, x_c, v_c, x_ref_x0 * x_start,
+                                    cols["cavity_radius"] + cols["void_volume"])
     _coupled_observables(result, cols, tau_per_t, ln_x_e, v_c[-1])
     if blocks[-1]["phase"][0] == 2:  # the departure's cavity (with a floor) may be the widest
         widest = max(float(np.max(b["cavity_radius"])) for b in blocks if b["phase"][0] == 2)
@@ -306,11 +304,12 @@ def _coupled(physics, accuracy, numerics, x_switch, x_ref_x0=1.0):
     return result
 
 
-def _wet_restitution(physics, x_c, v_c, x_ref):
+def _wet_restitution(physics, x_c, v_c, x_ref, cavity=None):
     """``e_wet`` at ``x_ref`` from the coupled phase's end: the rigid departure (rigid.restitution)
     from the release state; when the release lies beyond ``x_ref`` (the deformation relaxed only
     after the spheres passed it), from the last row inside ``x_ref`` on the way out, so the
-    departure crosses ``x_ref`` on the rigid path of a state whose deformation is ``O(release)``."""
+    departure crosses ``x_ref`` on the rigid path of a state whose deformation is ``O(release)``.
+    ``cavity`` (JFO): positive on the rows with a cavity open."""
     j = len(x_c) - 1
     if x_c[j] > x_ref and v_c[j] < 0.0:
         inside = np.nonzero((x_c <= x_ref) & (v_c < 0.0))[0]
@@ -318,6 +317,21 @@ def _wet_restitution(physics, x_c, v_c, x_ref):
             j = int(inside[-1])
     if physics.cavitation == "reynolds":
         return cavitation.restitution(x_c[j], v_c[j], physics, x_ref)
+    if physics.cavitation == "jfo":
+        # the coupled phase ran until the film is full again (RELAXED_FULL), from where the
+        # classic rigid departure is exact; when it ends beyond x_ref the spheres passed x_ref
+        # inside the coupled phase (possibly with a cavity): its speed there, interpolated
+        st_ref = rigid.impact_stokes(physics.St, physics.x_start, x_ref) / physics.St
+        last = len(x_c) - 1
+        if not np.any(cavity[j:] > 0.0):  # full from row j on: the classic departure, as above
+            return rigid.departure_speed(x_c[j], v_c[j], physics.St, x_ref) / st_ref
+        if x_c[last] > x_ref and v_c[last] < 0.0:
+            out = np.nonzero((x_c[1:] > x_ref) & (x_c[:-1] <= x_ref) & (v_c[1:] < 0.0))[0]
+            if out.size:
+                k = int(out[-1])
+                frac = (x_ref - x_c[k]) / (x_c[k + 1] - x_c[k])
+                return float(-(v_c[k] + frac * (v_c[k + 1] - v_c[k]))) / st_ref
+        return rigid.departure_speed(x_c[last], v_c[last], physics.St, x_ref) / st_ref
     return rigid.restitution(x_c[j], v_c[j], physics, x_ref)
 
 

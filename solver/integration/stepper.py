@@ -26,9 +26,10 @@ model's terms come from model/film.py; this module knows nothing of the physics 
 import numpy as np
 
 from .._jit import jit
-from ..model.film import (cavity_edge, constrain, energy_rates, face_fluxes, film_force, gap, jacobian,
-                          residual, update_cavity, void_work)
-from ..physics import CAVITATION
+from ..model.film import (cavity_edge, cell_content, constrain, content_jacobian, content_residual,
+                          energy_rates, face_fluxes, film_force, gap, jfo_void, update_cavity,
+                          update_cavity_jfo, void_work)
+from ..physics import CAVITATION, PI, ST
 from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
 from .events import reached
 from .linalg import lu_factor, lu_solve, matvec
@@ -145,6 +146,14 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
     active_lu = np.zeros(n - 1, dtype=np.bool_)  # ... of the factorised Jacobian
     active0 = np.zeros(n - 1, dtype=np.bool_)  # ... of the last accepted state
     h_onset = np.zeros(n - 1)  # gap where each cell cavitated (void volume)
+    # JFO (mass-conserving): the liquid fraction of each cell (1 where full, and always 1 for the
+    # classic and Reynolds films, whose content theta H is then H bit for bit); the slot of a
+    # cavitated cell in y holds P = -Pi, its unknown is theta
+    jfo = phys[CAVITATION] == 2.0
+    theta = np.ones(n - 1)  # of the current iterate
+    theta0 = np.ones(n - 1)  # ... of the last two accepted states
+    theta1 = np.ones(n - 1)
+    dtheta = np.zeros(n - 1)
     worked = 0.0  # void work so far
 
     rows = 256
@@ -201,9 +210,12 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
         row[_P_MIN] = pmin
         r_cav = cavity_edge(s, y0[:n], active0, phys)
         v_void = 0.0
-        for i in range(n - 1):
-            if active0[i]:
-                v_void += area[i] * (h[i] - h_onset[i])
+        if jfo:
+            v_void = jfo_void(area, theta0, h, active0)
+        else:
+            for i in range(n - 1):
+                if active0[i]:
+                    v_void += area[i] * (h[i] - h_onset[i])
         row[_R_CAV] = r_cav
         row[_V_VOID] = v_void
         row[_W_VOID] = worked
@@ -218,7 +230,12 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                 p_abs = max(p_abs, PRESSURE_FLOOR * p_seen)
         if status != RUNNING:
             break
-        if reached(stop_kind, stop_params, counters[0], x, v, wmax, r_cav):
+        r_event = r_cav
+        if jfo:  # a cavity of axis cells alone can have a zero edge radius: still a cavity
+            for i in range(n - 1):
+                if active0[i]:
+                    r_event = max(r_event, 1e-300)
+        if reached(stop_kind, stop_params, counters[0], x, v, wmax, r_event):
             status = OK
             break
 
@@ -242,8 +259,10 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                 a2 = -(om**2) / (1.0 + 2.0 * om)
                 b = (1.0 + om) / (1.0 + 2.0 * om)
             bh = b * dt
-            for i in range(n):
-                h_hist[i] = a1 * h0[i] + a2 * h1[i]
+            for i in range(n - 1):  # the cells' content (H itself unless JFO)
+                h_hist[i] = a1 * cell_content(theta0[i], h0[i])[0] \
+                    + a2 * cell_content(theta1[i], h1[i])[0]
+            h_hist[n - 1] = a1 * h0[n - 1] + a2 * h1[n - 1]
             x_hist = a1 * y0[n] + a2 * y1[n]
             v_hist = a1 * y0[n + 1] + a2 * y1[n + 1]
             # predictor: polynomial through the available history
@@ -263,12 +282,18 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                 y_pred[:] = y0
                 err_fac = 0.0
             y[:] = y_pred
+            if jfo:  # each attempt starts from the accepted cavity, its cells at the floor
+                for i in range(n - 1):
+                    active[i] = active0[i]
+                    theta[i] = theta0[i]
+                    if active[i]:
+                        y[i] = -phys[PI]
 
             fresh = False
             if (not lu_valid) or abs(bh / bh_lu - 1.0) > 0.3:
                 gap(s, influence, y[n], y[:n], w, h)
-                jacobian(s, s_face, area, weight, influence, phys, bh, y[:n], h, active, jac,
-                         dres_dh)
+                content_jacobian(s, s_face, area, weight, influence, phys, bh, y[:n], theta, h,
+                                 active, jac, dres_dh)
                 active_lu[:] = active
                 counters[4] += 1
                 counters[3] += 1
@@ -299,11 +324,19 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                         bad = True
                 if bad:
                     break
-                residual(s, s_face, area, weight, phys, bh, h_hist, x_hist, v_hist, y[n], y[n + 1],
-                         y[:n], h, q, res)
+                content_residual(s, s_face, area, weight, phys, bh, h_hist, x_hist, v_hist, y[n],
+                                 y[n + 1], y[:n], theta, h, q, res)
                 if floor:
                     if it == 1 or pending:
-                        update_cavity(y[:n], res, phys, active)
+                        if jfo:
+                            # the switched slots moved P to the floor: the rows follow
+                            if update_cavity_jfo(y[:n], theta, phys, active):
+                                gap(s, influence, y[n], y[:n], w, h)
+                                content_residual(s, s_face, area, weight, phys, bh, h_hist,
+                                                 x_hist, v_hist, y[n], y[n + 1], y[:n], theta, h,
+                                                 q, res)
+                        else:
+                            update_cavity(y[:n], res, phys, active)
                     same = True
                     for i in range(n - 1):
                         if active[i] != active_lu[i]:
@@ -316,8 +349,8 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                         set_changes += 1
                         if set_changes > MAX_SET_CHANGES:
                             break
-                        jacobian(s, s_face, area, weight, influence, phys, bh, y[:n], h, active,
-                                 jac, dres_dh)
+                        content_jacobian(s, s_face, area, weight, influence, phys, bh, y[:n],
+                                         theta, h, active, jac, dres_dh)
                         active_lu[:] = active
                         counters[4] += 1
                         counters[3] += 1
@@ -328,10 +361,18 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                         it = 1
                         if not lu_valid:
                             break
-                    constrain(y[:n], res, active, phys)
+                    if not jfo:
+                        constrain(y[:n], res, active, phys)
                 for k in range(m):
                     res[k] = -res[k]
                 lu_solve(jac, piv, res)
+                if jfo:  # a cavitated cell's slot updates theta (kept >= 0: a dry cell)
+                    for i in range(n - 1):
+                        dtheta[i] = 0.0
+                        if active[i]:
+                            dtheta[i] = res[i]
+                            theta[i] = max(theta[i] + res[i], 0.0)
+                            res[i] = 0.0
                 for k in range(m):
                     y[k] += res[k]
                 counters[2] += 1
@@ -341,6 +382,9 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                 for i in range(n):
                     dh[i] = h[i] - dh[i]
                 norm = _norm(res[:n], res[n], res[n + 1], dh, y[:n], y[n], y[n + 1], h, rtol, p_abs)
+                if jfo:  # the fractions' updates, absolute
+                    for i in range(n - 1):
+                        norm = max(norm, abs(dtheta[i]) / rtol)
                 if not np.isfinite(norm):
                     break
                 done = False
@@ -384,6 +428,10 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                 for i in range(n):
                     dh[i] = res[n] + kdp[i]
                 open_cavity = r_cav > 0.0
+                refilled = False
+                if jfo:
+                    for i in range(n - 1):
+                        refilled = refilled or (active0[i] and not active[i])
                 for i in range(n - 1):
                     open_cavity = open_cavity or active[i]
                 if floor and open_cavity:
@@ -392,6 +440,13 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                     # errors control the step (measured: every rejection came from these kinks)
                     for i in range(n):
                         res[i] = 0.0
+                if refilled:
+                    # JFO: where a cavity closes the pressure jumps (the void's closing rate is
+                    # finite up to the instant it vanishes), and the gap with it through W = K P:
+                    # no step size makes the extrapolation of the gap across it accurate. X and V
+                    # stay continuous; they control this step, and the history restarts after it
+                    for i in range(n):
+                        dh[i] = 0.0
                 err = _norm(res[:n], res[n], res[n + 1], dh, y[:n], y[n], y[n + 1], h, 1.0, p_abs) / rtol
             else:
                 err = 0.0
@@ -426,7 +481,14 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
         strain_new, diss_new = energy_rates(s, s_face, weight, phys, y0[n], y0[:n], w, h, q)
         dissipated += 0.5 * (diss_rate + diss_new) * dt
         if floor:
-            worked += void_work(area, h0, h1, q, q_prev, dt, active, phys)
+            if jfo:  # Pi dV_void exactly (film.jfo_void)
+                worked += 2.0 * phys[PI] * (jfo_void(area, theta, h0, active)
+                                            - jfo_void(area, theta0, h1, active0)) \
+                    / (3.0 * phys[ST])
+            else:
+                worked += void_work(area, h0, h1, q, q_prev, dt, active, phys)
+            theta1[:] = theta0
+            theta0[:] = theta
             for i in range(n - 1):
                 if active[i] and not active0[i]:
                     h_onset[i] = h1[i]
