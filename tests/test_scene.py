@@ -458,13 +458,19 @@ def test_glycerol_and_air_examples_keep_the_classic_film(capsys):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["--cavitation", "jfo"], "'jfo'"),
     (["--fluid", "air", "--cavitation", "reynolds"], "needs a cavitation pressure"),
 ])
 def test_cli_cavitation_override_errors_exit_2_with_one_line(tmp_path, capsys, argv, message):
     assert main(["scene", write(tmp_path, SCENE), "--accuracy", "fast", *argv]) == 2
     err = capsys.readouterr().err.strip()
     assert message in err and "Traceback" not in err and len(err.splitlines()) == 1
+
+
+def test_cli_cavitation_override_selects_the_model(tmp_path, capsys):
+    assert main(["scene", write(tmp_path, SCENE), "--accuracy", "fast", "--cavitation", "jfo",
+                 "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["cavitation"] == "jfo" and d["dimensionless"]["cavitation"] == "jfo"
 
 
 # ---- materials ------------------------------------------------------------------------------------
