@@ -83,6 +83,21 @@ def _norm(dp, dx, dv, dh, p, x, v, h, rtol, p_abs):
 
 
 @jit
+def _factorise(s, s_face, area, weight, influence, phys, bh, y, theta, h, active, active_lu, jac,
+               dres_dh, piv, counters):
+    """A fresh Jacobian at the iterate ``y`` (fluid fractions ``theta``, gap ``h``) with the
+    cavitated cells ``active``, LU-factorised in place; counted. False if the matrix is
+    singular."""
+    n = s.size
+    content_jacobian(s, s_face, area, weight, influence, phys, bh, y[:n], theta, h, active, jac,
+                     dres_dh)
+    active_lu[:] = active
+    counters[4] += 1
+    counters[3] += 1
+    return lu_factor(jac, piv)
+
+
+@jit
 def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, t_init,
               dissipated_init, rtol, dt_init, dt_min, max_steps, stop_kind, stop_params,
               save_profiles):
@@ -292,12 +307,8 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
             fresh = False
             if (not lu_valid) or abs(bh / bh_lu - 1.0) > 0.3:
                 gap(s, influence, y[n], y[:n], w, h)
-                content_jacobian(s, s_face, area, weight, influence, phys, bh, y[:n], theta, h,
-                                 active, jac, dres_dh)
-                active_lu[:] = active
-                counters[4] += 1
-                counters[3] += 1
-                lu_valid = lu_factor(jac, piv)
+                lu_valid = _factorise(s, s_face, area, weight, influence, phys, bh, y, theta, h,
+                                      active, active_lu, jac, dres_dh, piv, counters)
                 bh_lu = bh
                 fresh = True
                 if not lu_valid:
@@ -349,12 +360,9 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                         set_changes += 1
                         if set_changes > MAX_SET_CHANGES:
                             break
-                        content_jacobian(s, s_face, area, weight, influence, phys, bh, y[:n],
-                                         theta, h, active, jac, dres_dh)
-                        active_lu[:] = active
-                        counters[4] += 1
-                        counters[3] += 1
-                        lu_valid = lu_factor(jac, piv)
+                        lu_valid = _factorise(s, s_face, area, weight, influence, phys, bh, y,
+                                              theta, h, active, active_lu, jac, dres_dh, piv,
+                                              counters)
                         bh_lu = bh
                         fresh = True
                         first = True
