@@ -1,7 +1,9 @@
-"""The cavitating film (Reynolds floor) next to the classic one: speed and accuracy per preset.
+"""The cavitating film (Reynolds and JFO floors) next to the classic one: speed and accuracy per
+preset, and the two cavitation models against each other.
 
 1. Speed: median wall time per collision (one core, compiled code warm) of the classic film and
-   of the floor at Pi = 1e-4 (the liquid scenes) and Pi = 1e-2, on the same scenes and presets.
+   of both floor models at Pi = 1e-4 (the liquid scenes) and Pi = 1e-2, on the same scenes and
+   presets.
 2. Accuracy: per scene, a reference from three resolutions beyond the presets (grid cells x2 and
    time tolerance /8 per level, as benchmarks/bench_accuracy.py), Richardson-extrapolated with
    the observed order; each preset's error against it.
@@ -24,6 +26,7 @@ from pathlib import Path
 HERE = Path(__file__).parent
 SPEED_SCENES = [(st, ep) for ep in (1e-2, 1e-6) for st in (5.0, 10.0, 30.0, 100.0)]
 FLOORS = (math.inf, 1e-2, 1e-4)
+MODELS = ("reynolds", "jfo")
 PRESETS = ("fast", "standard", "fine")
 REPEATS = 3
 ACCURACY_SCENES = [(10.0, 1e-2, 1e-4), (30.0, 1e-6, 1e-4), (10.0, 1e-2, 1e-2), (100.0, 1e-4, 1e-3)]
@@ -35,29 +38,29 @@ if "--quick" in sys.argv:  # smoke run of the script itself
     HERE = Path("/tmp")
 
 
-def _physics(st, eps, pi):
+def _physics(st, eps, pi, model):
     from solver import Physics
 
-    return Physics(St=st, eps=eps, Pi=pi)
+    return Physics(St=st, eps=eps, Pi=pi, cavitation=model)
 
 
 def timed(args):
-    st, eps, pi, preset = args
+    st, eps, pi, model, preset = args
     from solver import collide
 
-    collide(_physics(st, eps, pi), accuracy=preset, save_profiles=False)  # grid, compile
+    collide(_physics(st, eps, pi, model), accuracy=preset, save_profiles=False)  # grid, compile
     walls = []
     for _ in range(REPEATS):
-        c = collide(_physics(st, eps, pi), accuracy=preset, save_profiles=False)
+        c = collide(_physics(st, eps, pi, model), accuracy=preset, save_profiles=False)
         walls.append(c.wall_s)
     return statistics.median(walls), c.status
 
 
 def solve(args):
-    st, eps, pi, preset, overrides = args
+    st, eps, pi, model, preset, overrides = args
     from solver import collide
 
-    c = collide(_physics(st, eps, pi), accuracy=preset, save_profiles=False, **overrides)
+    c = collide(_physics(st, eps, pi, model), accuracy=preset, save_profiles=False, **overrides)
     return {k: float(getattr(c, k)) for k in KEYS} | {"status": c.status, "wall_s": c.wall_s}
 
 
@@ -80,19 +83,24 @@ def main():
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     t0 = time.time()
     with ProcessPoolExecutor(2) as pool:
-        pool.submit(timed, (5.0, 1e-2, 1e-4, "fast")).result()  # compile once per worker...
-        speed_jobs = [(st, ep, pi, pr) for pr in PRESETS for pi in FLOORS for st, ep in SPEED_SCENES]
+        pool.submit(timed, (5.0, 1e-2, 1e-4, "jfo", "fast")).result()  # compile once
+        speed_jobs = [(st, ep, pi, model, pr) for pr in PRESETS for pi in FLOORS
+                      for model in (MODELS if math.isfinite(pi) else ("off",))
+                      for st, ep in SPEED_SCENES]
         speed = list(pool.map(timed, speed_jobs))
-        ref_jobs = [(st, ep, pi, "fine", lv) for st, ep, pi in ACCURACY_SCENES for lv in LEVELS]
+        cases = [(st, ep, pi, model) for st, ep, pi in ACCURACY_SCENES for model in MODELS]
+        ref_jobs = [(*case, "fine", lv) for case in cases for lv in LEVELS]
         refs = list(pool.map(solve, ref_jobs))
-        preset_jobs = [(st, ep, pi, pr, {}) for st, ep, pi in ACCURACY_SCENES for pr in PRESETS]
+        preset_jobs = [(*case, pr, {}) for case in cases for pr in PRESETS]
         presets = list(pool.map(solve, preset_jobs))
     res = {"speed": [], "accuracy": [], "seconds": 0.0}
-    for (st, ep, pi, pr), (wall, status) in zip(speed_jobs, speed):
-        res["speed"].append(dict(St=st, eps=ep, Pi=pi, preset=pr, wall_s=wall, status=status))
-    for k, (st, ep, pi) in enumerate(ACCURACY_SCENES):
+    for (st, ep, pi, model, pr), (wall, status) in zip(speed_jobs, speed):
+        res["speed"].append(dict(St=st, eps=ep, Pi=pi, model=model, preset=pr, wall_s=wall,
+                                 status=status))
+    for k, (st, ep, pi, model) in enumerate(cases):
         levels = refs[3 * k: 3 * k + 3]
-        row = dict(St=st, eps=ep, Pi=pi, reference={}, order={}, ref_error={}, presets={})
+        row = dict(St=st, eps=ep, Pi=pi, model=model, reference={}, order={}, ref_error={},
+                   presets={})
         for key in KEYS:
             ref, order, err = richardson([lv[key] for lv in levels])
             row["reference"][key], row["order"][key], row["ref_error"][key] = ref, order, err
@@ -108,17 +116,22 @@ def main():
 
 
 def write_report(res):
-    lines = ["# Cavitation (Reynolds floor) next to the classic film", "",
+    lines = ["# Cavitation (Reynolds and JFO floors) next to the classic film", "",
              "`python benchmarks/bench_cavitation.py` regenerates this file (`make bench`). One "
              "scene at a time per core, compiled code warm, OPENBLAS_NUM_THREADS=1; median of "
              f"{REPEATS} runs.", "", "## Speed: median wall time per collision [ms]", "",
-             "| preset | classic | Pi = 1e-2 | Pi = 1e-4 | ratio Pi=1e-4 / classic |",
-             "|---|---|---|---|---|"]
+             "| preset | classic | Reynolds Pi = 1e-2 | Reynolds Pi = 1e-4 | JFO Pi = 1e-2 | "
+             "JFO Pi = 1e-4 | Reynolds / classic (Pi = 1e-4) | JFO / classic (Pi = 1e-4) |",
+             "|---|---|---|---|---|---|---|---|"]
     for pr in PRESETS:
-        med = {pi: statistics.median(r["wall_s"] for r in res["speed"]
-                                     if r["preset"] == pr and r["Pi"] == pi) for pi in FLOORS}
-        lines.append(f"| {pr} | {med[math.inf] * 1e3:.1f} | {med[1e-2] * 1e3:.1f} | "
-                     f"{med[1e-4] * 1e3:.1f} | {med[1e-4] / med[math.inf]:.2f} |")
+        def med(pi, model):
+            return statistics.median(r["wall_s"] for r in res["speed"] if r["preset"] == pr
+                                     and r["Pi"] == pi and r["model"] == model)
+        c = med(math.inf, "off")
+        lines.append(f"| {pr} | {c * 1e3:.1f} | {med(1e-2, 'reynolds') * 1e3:.1f} | "
+                     f"{med(1e-4, 'reynolds') * 1e3:.1f} | {med(1e-2, 'jfo') * 1e3:.1f} | "
+                     f"{med(1e-4, 'jfo') * 1e3:.1f} | {med(1e-4, 'reynolds') / c:.2f} | "
+                     f"{med(1e-4, 'jfo') / c:.2f} |")
     bad = [r for r in res["speed"] if r["status"] != "ok"]
     lines += ["", f"Scenes: St in {{5, 10, 30, 100}} x eps in {{1e-2, 1e-6}}; "
               f"{len(bad)} of {len(res['speed'])} runs not ok.", "",
@@ -126,15 +139,24 @@ def write_report(res):
               "Reference: three levels beyond `fine` (cells x2, rtol /8 per level, switch 1e-4, "
               "release 3.1e-5), Richardson-extrapolated; `order` is the observed order, `ref err` "
               "the extrapolation's own correction. Errors relative to max(|ref|, 1e-3).", ""]
-    head = "| St | eps | Pi | quantity | reference | order | ref err | fast | standard | fine |"
-    lines += [head, "|---" * 10 + "|"]
+    head = ("| St | eps | Pi | model | quantity | reference | order | ref err | fast | standard "
+            "| fine |")
+    lines += [head, "|---" * 11 + "|"]
     for row in res["accuracy"]:
         for key in KEYS:
             p = row["presets"]
-            lines.append(f"| {row['St']:g} | {row['eps']:g} | {row['Pi']:g} | {key} | "
+            lines.append(f"| {row['St']:g} | {row['eps']:g} | {row['Pi']:g} | {row['model']} | "
+                         f"{key} | "
                          f"{row['reference'][key]:.6g} | {row['order'][key]:.2f} | "
                          f"{row['ref_error'][key]:.1e} | {p['fast'][key]:.1e} | "
                          f"{p['standard'][key]:.1e} | {p['fine'][key]:.1e} |")
+    lines += ["", "## JFO against Reynolds (the references)", "",
+              "| St | eps | Pi | quantity | Reynolds | JFO | JFO - Reynolds |", "|---" * 7 + "|"]
+    refs = {(r["St"], r["eps"], r["Pi"], r["model"]): r["reference"] for r in res["accuracy"]}
+    for st, ep, pi in ACCURACY_SCENES:
+        for key in KEYS:
+            a, b = refs[(st, ep, pi, "reynolds")][key], refs[(st, ep, pi, "jfo")][key]
+            lines.append(f"| {st:g} | {ep:g} | {pi:g} | {key} | {a:.6g} | {b:.6g} | {b - a:+.3g} |")
     lines += ["", f"Run time of this benchmark: {res['seconds'] / 60:.1f} min.", ""]
     text = "\n".join(lines)
     (HERE / "cavitation.md").write_text(text)
