@@ -80,7 +80,8 @@ GROUPS = (
 ST, EPS, PI, CAVITATION = 0, 1, 2, 3
 # the models' codes in that array (0: the classic film, no floor)
 CAVITATION_MODELS = ("off", "reynolds", "jfo")
-# the model "auto" resolves to where Pi is finite (docs/model.md, "Cavitation": why)
+# the model "auto" resolves to where Pi is finite (docs/model.md, "Cavitation": why this one for
+# now, measured against JFO in benchmarks/cavitation.md)
 DEFAULT_CAVITATION = "reynolds"
 
 

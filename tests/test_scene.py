@@ -5,6 +5,8 @@ import math
 
 import pytest
 
+from solver.physics import DEFAULT_CAVITATION
+
 from pipeline.cli import main
 from pipeline.scenes.materials import MaterialError, load_table
 from pipeline.scenes import checks
@@ -203,10 +205,11 @@ def test_cavitation_switches_on_where_the_classic_tension_crosses_the_floor(tabl
     s, c, d = r.scene, r.collision, r.to_dict()
     assert s.ambient_pressure == 101325.0 and s.cavitation_pressure == 2339.0
     # Pi = (p_amb - p_v) / p*: one formula, float rounding only
-    assert c.physics.cavitation == "reynolds" and d["cavitation"] == "reynolds"
+    assert c.physics.cavitation == DEFAULT_CAVITATION and d["cavitation"] == DEFAULT_CAVITATION
     assert d["Pi"] == pytest.approx((101325.0 - 2339.0) / s.pressure_scale, rel=1e-12)
     assert d["cavitation_pressure_Pa"] == 2339.0 and d["cavitated"] is True
-    assert d["cavitation_reason"].startswith(f"reynolds cavitation at Pi = {d['Pi']:.3g}: ")
+    assert d["cavitation_reason"].startswith(
+        f"{DEFAULT_CAVITATION} cavitation at Pi = {d['Pi']:.3g}: ")
     assert "below the cavitation pressure 2.339 kPa (the vapour pressure of water)" in d["cavitation_reason"]
     # the floor holds: the absolute pressure never falls below p_v (the solver's P >= -Pi, to
     # its round-off)
@@ -426,16 +429,17 @@ EXAMPLES = __import__("pathlib").Path(__file__).resolve().parent.parent / "examp
 def test_shipped_water_examples_switch_cavitation_on_and_say_why(name, capsys):
     assert main(["scene", str(EXAMPLES / name), "--json", "--accuracy", "fast"]) == 0
     d = json.loads(capsys.readouterr().out)
-    assert d["cavitation"] == "reynolds" and d["cavitated"] is True
+    assert d["cavitation"] == DEFAULT_CAVITATION and d["cavitated"] is True
     # the liquid scenes sit at Pi ~ 1e-4 to 6e-4 (issue 10)
     assert 1e-4 < d["Pi"] < 1e-3
     reason = d["cavitation_reason"]
-    assert reason.startswith("reynolds cavitation at Pi = ")
+    assert reason.startswith(f"{DEFAULT_CAVITATION} cavitation at Pi = ")
     assert "the vapour pressure of water" in reason and "MPa" in reason
     assert "cavitation" not in [w["check"] for w in d["warnings"]]
     assert main(["scene", str(EXAMPLES / name), "--accuracy", "fast"]) == 0
     out = capsys.readouterr().out
-    assert "physics: reynolds cavitation at Pi = " in out and "largest cavity radius" in out
+    assert f"physics: {DEFAULT_CAVITATION} cavitation at Pi = " in out
+    assert "largest cavity radius" in out
 
 
 def test_glycerol_and_air_examples_keep_the_classic_film(capsys):
