@@ -39,7 +39,7 @@ EXIT_INTERNAL = 70  # EX_SOFTWARE of sysexits.h
 EXIT_INTERRUPTED = 130  # 128 + SIGINT
 EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE
 
-BUG_REPORT = "the project's issue tracker (issues new), with the command and the traceback above"
+BUG_REPORT = "the project's issue tracker, with the command and the traceback above"
 
 
 class EhdError(Exception):

@@ -24,8 +24,9 @@ holds every plane, those values in its first columns.
 Maps are drawn in log10 coordinates (linear axes labelled in powers of ten): cell edges are the
 midpoints of neighbouring log10 grid values, and contours are interpolated in log coordinates
 (matplotlib's ``shading="nearest"`` would take arithmetic edges, and ``contour`` on log axes
-interpolates in data coordinates: shared/stack-notes.md). Failed scenes are cross-hatched in red
-on white (visible on any colour map) and counted in the legend; scenes not run are left grey.
+interpolates in data coordinates, so a level between decades lands in the wrong place). Failed
+scenes are cross-hatched in red on white (visible on any colour map) and counted in the legend;
+scenes not run are left grey.
 """
 
 from __future__ import annotations
