@@ -51,7 +51,9 @@ def _numerics_overrides(args) -> dict:
             "rtol": args.rtol, "max_steps": args.max_steps}
 
 
-def _fmt(v, spec=".6g"):
+def format_value(v, spec=".6g"):
+    """A value of a report row: numbers with ``spec`` (non-finite as ``inf``/``nan``), flags as
+    yes/no, missing as "-", anything else as text."""
     if v is None:
         return "-"
     if isinstance(v, bool):
@@ -79,7 +81,7 @@ def _print_scene(d: dict) -> None:
     rows = report_rows(d)
     width = max(len(k) for k, _ in rows)
     for k, v in rows:
-        print(f"{k:<{width}}  {_fmt(v)}")
+        print(f"{k:<{width}}  {format_value(v)}")
     if d["status"] != "ok":
         print(f"failure: {d['message']}")
     elif d.get("message"):

@@ -97,13 +97,9 @@ def _q(value, unit, spec=".4g"):
 
 
 def _g(value, spec=".4g"):
-    if value is None:
-        return "-"
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, str):
-        return value
-    return format(value, spec)
+    from ..cli import format_value
+
+    return format_value(value, spec)
 
 
 def format_report(d: dict) -> str:
