@@ -442,10 +442,12 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                         refilled = refilled or (active0[i] and not active[i])
                 for i in range(n - 1):
                     open_cavity = open_cavity or active[i]
-                if floor and open_cavity:
+                if floor and (open_cavity or refilled):
                     # while a cavity is open the pressure is not smooth in time wherever its edge
-                    # crosses a node (the cells there and their neighbours); the gap, X and V
-                    # errors control the step (measured: every rejection came from these kinks)
+                    # crosses a node (the cells there and their neighbours), and a cavity that
+                    # closes in this step makes it jump; the gap, X and V errors control the step
+                    # (measured: every rejection came from these kinks; counting the jump of the
+                    # last cell of an axis cavity as an error underflowed the step)
                     for i in range(n):
                         res[i] = 0.0
                 if refilled:
