@@ -226,8 +226,8 @@ def _coupled(physics, accuracy, numerics, x_switch, x_ref_x0=1.0):
     p_init = 3.0 * v_switch / (x_switch + grid.s) ** 2  # rigid pressure; K p = asymptotic W
     time_scale = x_switch / max(v_switch, 1e-3)
     stop_kind, stop_params = rigid.release_event(numerics.release, stokes)
-    if physics.cavitation == "jfo":  # its cavity has a memory: rigid only once the film is full
-        stop_kind = RELAXED_FULL
+    if physics.cavitation == "jfo" and not _floor_departure(physics):
+        stop_kind = RELAXED_FULL  # its cavity has a memory: rigid only once the film is full
     code, counters, rows, p_hist, w_hist = stepper.integrate(
         grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, physics.as_array(),
         x_switch, v_switch, p_init, t_switch, 1.0 - v_switch**2, numerics.rtol,
@@ -271,7 +271,7 @@ def _coupled(physics, accuracy, numerics, x_switch, x_ref_x0=1.0):
     # cavity closes (model/cavitation.py), then the classic closed form
     t_rel, x_rel, v_rel = t_c[-1], x_c[-1], v_c[-1]
     lost = cols["dissipated"][-1] + cols["void_work"][-1]  # energy lost by the release
-    if physics.cavitation == "reynolds" and v_rel < 0.0:
+    if _floor_departure(physics) and v_rel < 0.0:
         x_rel, u_rel, t_rel, path = cavitation.departure(x_rel, -v_rel, t_rel, stokes, physics.Pi)
         v_rel = -u_rel
         blocks.append(_floor_block(path, physics, tau_per_t, lost, v_c[-1]))
@@ -304,6 +304,14 @@ def _coupled(physics, accuracy, numerics, x_switch, x_ref_x0=1.0):
     return result
 
 
+def _floor_departure(physics):
+    """Whether the departure after the release is the floor's rigid ODE (model/cavitation.py):
+    exact for the Reynolds condition, which has no memory, and for any model at ``Pi = 0``, where
+    the film pulls with no force at all (nothing refills, the spheres never stop). A JFO cavity
+    with ``Pi > 0`` has a memory: the coupled phase goes on until the film is full again."""
+    return physics.cavitation == "reynolds" or (physics.cavitation == "jfo" and physics.Pi == 0.0)
+
+
 def _wet_restitution(physics, x_c, v_c, x_ref, cavity=None):
     """``e_wet`` at ``x_ref`` from the coupled phase's end: the rigid departure (rigid.restitution)
     from the release state; when the release lies beyond ``x_ref`` (the deformation relaxed only
@@ -315,7 +323,7 @@ def _wet_restitution(physics, x_c, v_c, x_ref, cavity=None):
         inside = np.nonzero((x_c <= x_ref) & (v_c < 0.0))[0]
         if inside.size:
             j = int(inside[-1])
-    if physics.cavitation == "reynolds":
+    if _floor_departure(physics):
         return cavitation.restitution(x_c[j], v_c[j], physics, x_ref)
     if physics.cavitation == "jfo":
         # the coupled phase ran until the film is full again (RELAXED_FULL), from where the

@@ -80,9 +80,10 @@ GROUPS = (
 ST, EPS, PI, CAVITATION = 0, 1, 2, 3
 # the models' codes in that array (0: the classic film, no floor)
 CAVITATION_MODELS = ("off", "reynolds", "jfo")
-# the model "auto" resolves to where Pi is finite (docs/model.md, "Cavitation": why this one for
-# now, measured against JFO in benchmarks/cavitation.md)
-DEFAULT_CAVITATION = "reynolds"
+# the model "auto" resolves to where Pi is finite: the mass-conserving one, which the measured
+# difference decides (docs/model.md, "Cavitation": the two agree while a cavity grows and differ
+# where it refills, which only JFO conserves; benchmarks/cavitation.md)
+DEFAULT_CAVITATION = "jfo"
 
 
 @dataclass(frozen=True)

@@ -32,7 +32,7 @@ LEVELS = ((32, 1.4, 0.4), (64, 1.2, 0.2), (128, 1.1, 0.1), (256, 1.05, 0.05))
 def rigid_separation(x, u, pi, n_inner=64, stretch=1.2, max_rel=0.3, bh=1.0):
     """Film pressure of rigid spheres at gap ``x`` separating at ``u``, with the floor ``-pi``
     (one implicit step ``bh`` from the gap ``x - u bh``)."""
-    physics = Physics(St=10.0, eps=1e-4, Pi=pi)
+    physics = Physics(St=10.0, eps=1e-4, Pi=pi, cavitation="reynolds")
     phys = physics.as_array()
     grid = scene_grid(physics.St, x, resolve("standard", n_inner=n_inner, stretch=stretch,
                                              max_rel=max_rel, axis_ratio=1.0), pi)
@@ -110,7 +110,7 @@ def test_onset_is_exactly_where_the_axis_tension_reaches_the_floor():
 
 def test_no_floor_limit_is_the_classic_model():
     classic = collide(Physics(St=10.0, eps=0.01))
-    huge = collide(Physics(St=10.0, eps=0.01, Pi=1e6))  # the tension peaks at |P| ~ 3.4
+    huge = collide(Physics(St=10.0, eps=0.01, Pi=1e6, cavitation="reynolds"))  # |P| <= ~3.4
     assert huge.cavitation == "reynolds" and not huge.cavitated
     # the floor never binds, so every step decision is the classic one: identical numbers
     for name in ("v_r", "h_m_x1", "ln_x_e_x1", "peak_force", "p_min", "energy_error"):
@@ -127,7 +127,8 @@ def test_zero_floor_carries_no_tension():
 
 
 def test_energy_closure_with_the_void_work_falls_with_the_tolerance():
-    errors = [collide(Physics(St=10.0, eps=0.01, Pi=1e-3), rtol=rtol).energy_error
+    errors = [collide(Physics(St=10.0, eps=0.01, Pi=1e-3, cavitation="reynolds"),
+                      rtol=rtol).energy_error
               for rtol in (1e-4, 1e-5, 1e-6)]
     # measured 9.2e-4, 3.0e-4, ~6e-5: the closure (viscous + void work) converges with the time
     # step; without the void term it stalled at 1.5e-3
@@ -137,8 +138,8 @@ def test_energy_closure_with_the_void_work_falls_with_the_tolerance():
 def test_departure_with_a_floor_continues_the_coupled_solve():
     # releasing the coupled phase 10x later must not move ln x_e beyond the release error: the
     # floor's rigid departure (scalar ODE) takes over where the coupled solve would have gone on
-    base = collide(Physics(St=10.0, eps=0.01, Pi=1e-3))
-    later = collide(Physics(St=10.0, eps=0.01, Pi=1e-3), release=3e-5)
+    base = collide(Physics(St=10.0, eps=0.01, Pi=1e-3, cavitation="reynolds"))
+    later = collide(Physics(St=10.0, eps=0.01, Pi=1e-3, cavitation="reynolds"), release=3e-5)
     assert base.ok and later.ok
     # measured difference 2e-4 (first order in release, as for the classic model's 1e-3 level)
     assert abs(base.ln_x_e_x1 - later.ln_x_e_x1) < 2e-3 * abs(base.ln_x_e_x1)

@@ -155,7 +155,7 @@ def test_cavitation_sweep_file_has_a_Pi_axis_with_the_classic_limit():
     # inf (TOML's inf) is a grid value like any other: the classic film on the same axes
     s = load_sweep(REPO / "sweeps" / "cavitation.toml")
     assert s.axis_names == ("St", "eps", "Pi") and s.axes["Pi"][-1] == math.inf
-    assert s.axes["Pi"][0] == 1e-5 and s.fixed["cavitation"] == "reynolds"
+    assert s.axes["Pi"][0] == 1e-5 and s.fixed["cavitation"] == "jfo"
     with pytest.raises(ConfigError, match="repeated"):
         parse_sweep(sweep_text([1.0], [1e-2]).replace("[numerics]", "Pi = [inf, inf]\n[numerics]"))
 
