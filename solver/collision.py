@@ -228,7 +228,7 @@ def _coupled(physics, accuracy, numerics, x_switch, x_ref_x0=1.0):
     stop_kind, stop_params = rigid.release_event(numerics.release, stokes)
     if physics.cavitation == "jfo" and not _floor_departure(physics):
         stop_kind = RELAXED_FULL  # its cavity has a memory: rigid only once the film is full
-    code, counters, rows, p_hist, w_hist = stepper.integrate(
+    code, counters, rows, p_hist, w_hist, theta_hist = stepper.integrate(
         grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, physics.as_array(),
         x_switch, v_switch, p_init, t_switch, 1.0 - v_switch**2, numerics.rtol,
         1e-3 * time_scale, 1e-12 * time_scale, numerics.max_steps, stop_kind, stop_params,
@@ -258,6 +258,8 @@ def _coupled(physics, accuracy, numerics, x_switch, x_ref_x0=1.0):
         result.profile_tau = t_c * tau_per_t
         result.pressure = p_hist
         result.deformation = w_hist
+        if physics.cavitation == "jfo":
+            result.fluid_fraction = theta_hist
         result.profile_x = x_c
     if name != "ok":
         result.v_r = result.dimple_depth_x1 = math.nan

@@ -85,6 +85,8 @@ class Collision:
     profile_tau: np.ndarray | None = field(default=None, repr=False)  # (rows,)
     pressure: np.ndarray | None = field(default=None, repr=False)  # (rows, N) P
     deformation: np.ndarray | None = field(default=None, repr=False)  # (rows, N) W
+    # (rows, N-1) fluid fraction theta of the cells (the last node is the boundary), JFO only
+    fluid_fraction: np.ndarray | None = field(default=None, repr=False)
     profile_x: np.ndarray | None = field(default=None, repr=False)  # (rows,) X at profile times
 
     # ---- the physics ----------------------------------------------------------------------------
@@ -196,4 +198,10 @@ class Collision:
             ds["W"] = (("profile_tau", "R"), self.deformation,
                        {"long_name": "total surface deformation", "units": "x1"})
             ds["H"] = (("profile_tau", "R"), self.gap, {"long_name": "film thickness", "units": "x1"})
+            if self.fluid_fraction is not None:
+                theta = np.ones_like(self.pressure)  # the boundary node is full
+                theta[:, :-1] = self.fluid_fraction
+                ds["theta"] = (("profile_tau", "R"), theta,
+                               {"long_name": "fluid fraction of the gap (JFO cavity < 1)",
+                                "units": "1"})
         return ds

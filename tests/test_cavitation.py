@@ -319,3 +319,15 @@ def test_whole_collisions_converge_under_refinement(st, eps, pi, model):
     # the widest cavity is a maximum over time of an edge that jumps node to node: its
     # differences alternate in sign, but shrink (measured by 3x and 8x)
     assert abs(c - b) < 0.5 * abs(b - a), (a, b, c)
+
+
+def test_jfo_returns_the_fluid_fraction_profiles():
+    c = collide(Physics(St=10.0, eps=0.01, Pi=1e-3))  # JFO, the default model
+    theta, p = c.fluid_fraction, c.pressure[:, :-1]
+    assert c.cavitation == "jfo" and theta.shape == p.shape
+    assert np.all((theta >= 0.0) & (theta <= 1.0)) and theta.min() < 0.5
+    # complementarity (P + Pi)(1 - theta) = 0: a cell holds less liquid than its gap only at the
+    # floor (to the round-off of the fixed slot, 1e-12 of Pi)
+    assert not np.any((theta < 1.0) & (p > -1e-3 * (1 - 1e-9)))
+    assert "theta" in c.to_xarray()
+    assert collide(Physics(St=10.0, eps=0.01, Pi=1e-3, cavitation="reynolds")).fluid_fraction is None

@@ -115,6 +115,9 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
         One row per accepted step (the first is the initial state); columns ``SERIES``.
     pressure, deformation : (rows, N) float
         Profiles at each row when ``save_profiles``, else (0, N).
+    fluid_fraction : (rows, N-1) float
+        The cells' fluid fraction ``theta`` at each row (1 in full cells and for every film but
+        JFO) when ``save_profiles``, else (0, N-1).
     """
     n = s.size
     m = n + 2
@@ -176,6 +179,7 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
     n_prof = rows if save_profiles else 0
     p_hist = np.empty((n_prof, n))
     w_hist = np.empty((n_prof, n))
+    theta_hist = np.empty((n_prof, n - 1))
     counters = np.zeros(5, dtype=np.int64)
 
     # initial row
@@ -196,6 +200,7 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
             if save_profiles:
                 p_hist = _grow(p_hist, rows)
                 w_hist = _grow(w_hist, rows)
+                theta_hist = _grow(theta_hist, rows)
         x = y0[n]
         v = y0[n + 1]
         imin = 0
@@ -237,6 +242,7 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
         if save_profiles:
             p_hist[n_rows] = y0[:n]
             w_hist[n_rows] = w
+            theta_hist[n_rows] = theta0
         n_rows += 1
 
         if floor:
@@ -515,5 +521,5 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
             factor = 1.0
         dt *= factor
 
-    return status, counters, series[:n_rows], p_hist[: min(n_rows, p_hist.shape[0])], \
-        w_hist[: min(n_rows, w_hist.shape[0])]
+    kept = min(n_rows, p_hist.shape[0])
+    return status, counters, series[:n_rows], p_hist[:kept], w_hist[:kept], theta_hist[:kept]
