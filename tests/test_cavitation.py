@@ -17,9 +17,8 @@ import pytest
 from solver import Physics, collide
 from solver.collision import scene_grid
 from solver.model import cavitation
-from solver.model.film import (cavity_edge, constrain, content_jacobian, content_residual,
-                               film_force, jacobian, residual, update_cavity_jfo,
-                               update_cavity)
+from solver.model.film import (cavity_edge, constrain, film_force, jacobian, residual,
+                               update_cavity, update_cavity_jfo)
 from solver.settings import resolve
 
 # (X, U, Pi) -> F of the issue; re-derived here as -3U/(X + s_c) with the cavity from its equation
@@ -45,11 +44,11 @@ def rigid_separation(x, u, pi, n_inner=64, stretch=1.2, max_rel=0.3, bh=1.0):
     jac, work = np.empty((n + 2, n + 2)), np.empty((n, 3))
     for _ in range(100):
         residual(grid.s, grid.s_face, grid.area, grid.force_weight, phys, bh, h_hist, x, -u, x,
-                 -u, p, h, q, res)
+                 -u, p, np.ones(n - 1), h, q, res)
         changed = update_cavity(p, res, phys, active)
         constrain(p, res, active, phys)
         jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, np.zeros((n, n)), phys, bh, p,
-                 h, active, jac, work)
+                 np.ones(n - 1), h, active, jac, work)
         step = np.linalg.solve(jac[:n, :n], -res[:n])
         p += step
         if not changed and np.max(np.abs(step)) < 1e-13 * np.max(np.abs(p)):
@@ -199,14 +198,14 @@ def jfo_steps(xs, pi, dt=1.0, n_inner=64, stretch=1.2, max_rel=0.3):
         c_hist = theta * h_old[:n - 1]
         u = (x - h_old[0]) / dt
         for _ in range(200):
-            content_residual(grid.s, grid.s_face, grid.area, grid.force_weight, phys, dt, c_hist,
-                             x, -u, x, -u, p, theta, h, q, res)
+            residual(grid.s, grid.s_face, grid.area, grid.force_weight, phys, dt, c_hist, x, -u,
+                     x, -u, p, theta, h, q, res)
             changed = update_cavity_jfo(p, theta, phys, active)
             if changed:
-                content_residual(grid.s, grid.s_face, grid.area, grid.force_weight, phys, dt,
-                                 c_hist, x, -u, x, -u, p, theta, h, q, res)
-            content_jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, zero_k, phys, dt,
-                             p, theta, h, active, jac, work)
+                residual(grid.s, grid.s_face, grid.area, grid.force_weight, phys, dt, c_hist, x, -u, x,
+                 -u, p, theta, h, q, res)
+            jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, zero_k, phys, dt, p,
+                     theta, h, active, jac, work)
             step = np.linalg.solve(jac[:n, :n], -res[:n])
             theta[active] += step[:n - 1][active]
             step[:n - 1][active] = 0.0
@@ -216,8 +215,8 @@ def jfo_steps(xs, pi, dt=1.0, n_inner=64, stretch=1.2, max_rel=0.3):
                 break
         else:
             raise AssertionError("the JFO active set did not settle")
-        content_residual(grid.s, grid.s_face, grid.area, grid.force_weight, phys, dt, c_hist, x,
-                         -u, x, -u, p, theta, h, q, res)
+        residual(grid.s, grid.s_face, grid.area, grid.force_weight, phys, dt, c_hist, x, -u, x,
+                 -u, p, theta, h, q, res)
         states.append((p.copy(), theta.copy(), active.copy(), h.copy(), q.copy()))
         h_old = h
     return grid, states, physics

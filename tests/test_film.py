@@ -12,7 +12,7 @@ import pytest
 from solver import Physics
 from solver.collision import scene_grid
 from solver.integration.linalg import lu_factor, lu_solve, matvec
-from solver.model.film import content_jacobian, content_residual, gap, jacobian, residual
+from solver.model.film import gap, jacobian, residual
 from solver.physics import PI
 from solver.settings import resolve
 
@@ -30,13 +30,34 @@ def _state(rng, grid, phys):
     return x, v, p
 
 
-def _residual(grid, phys, bh, hist, y):
+def _residual(grid, phys, bh, hist, y, active):
+    """The step's residual at the unknowns ``y``; with the JFO slots: ``y[i]`` is ``theta_i`` in a
+    cavitated cell (``P_i`` fixed at ``-Pi`` there), ``P_i`` elsewhere (no cell cavitated: the
+    classic film)."""
     n = grid.s.size
+    p, theta = y[:n].copy(), np.ones(n - 1)
+    theta[active] = y[:n - 1][active]
+    p[:n - 1][active] = -phys[PI]
     w, h, q, res = np.empty(n), np.empty(n), np.empty(n - 1), np.empty(n + 2)
-    gap(grid.s, grid.influence, y[n], y[:n], w, h)
+    gap(grid.s, grid.influence, y[n], p, w, h)
     residual(grid.s, grid.s_face, grid.area, grid.force_weight, phys, bh, hist[0], hist[1],
-             hist[2], y[n], y[n + 1], y[:n], h, q, res)
+             hist[2], y[n], y[n + 1], p, theta, h, q, res)
     return res
+
+
+def _central_differences(residual_of, y, p):
+    """Central differences of ``residual_of(y)`` in every unknown. Step 3e-4 of each unknown's
+    scale (floor: 1e-3 of the largest pressure, for the tiny far-field pressures; theta slots are
+    O(1)): measured, the difference error is round-off ~ eps |res| / step below that (1.6e-6 at
+    6e-6) and truncation ~ step^2 above it (1e-8 at 1e-3)."""
+    fd = np.empty((y.size, y.size))
+    for k in range(y.size):
+        step = 3e-4 * max(abs(y[k]), 1e-3 * np.max(np.abs(p)))
+        yp, ym = y.copy(), y.copy()
+        yp[k] += step
+        ym[k] -= step
+        fd[:, k] = (residual_of(yp) - residual_of(ym)) / (2.0 * step)
+    return fd
 
 
 @pytest.mark.parametrize("seed", range(6))
@@ -53,21 +74,12 @@ def test_jacobian_matches_central_differences(seed):
     w, h = np.empty(n), np.empty(n)
     gap(grid.s, grid.influence, x, p, w, h)
     jac = np.empty((n + 2, n + 2))
-    jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, phys, bh, p, h,
-             np.zeros(n - 1, dtype=bool), jac, np.empty((n, 3)))
-    fd = np.empty_like(jac)
-    for k in range(n + 2):
-        # step 3e-4 of each unknown's scale (floor: 1e-3 of the largest pressure, for the tiny
-        # far-field pressures): measured, the difference error is round-off ~ eps |res| / step
-        # below that (1.6e-6 at 6e-6) and truncation ~ step^2 above it (1e-8 at 1e-3)
-        step = 3e-4 * max(abs(y[k]), 1e-3 * np.max(np.abs(p)))
-        yp, ym = y.copy(), y.copy()
-        yp[k] += step
-        ym[k] -= step
-        fd[:, k] = (_residual(grid, phys, bh, hist, yp) - _residual(grid, phys, bh, hist, ym)) \
-            / (2.0 * step)
+    full = np.zeros(n - 1, dtype=bool)
+    jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, phys, bh, p,
+             np.ones(n - 1), h, full, jac, np.empty((n, 3)))
+    fd = _central_differences(lambda yy: _residual(grid, phys, bh, hist, yy, full), y, p)
     scale = np.max(np.abs(jac), axis=1, keepdims=True)  # each row at its own scale
-    # 1e-6: above the differences' own error (~3e-8 at this step, comment above), far below
+    # 1e-6: above the differences' own error (~3e-8 at their step), far below
     # the 1e-2..1 relative error of a wrong or missing term (a 1 % error in one derivative fails)
     assert np.max(np.abs(jac - fd) / scale) < 1e-6
 
@@ -92,20 +104,6 @@ def test_compiled_linear_algebra_matches_numpy():
     assert not lu_factor(singular, np.empty(4, dtype=np.int32))
 
 
-def _jfo_residual(grid, phys, bh, hist, y, active):
-    """The residual with the JFO slots: ``y[i]`` is ``theta_i`` in a cavitated cell (``P_i`` fixed
-    at ``-Pi`` there), ``P_i`` elsewhere."""
-    n = grid.s.size
-    p, theta = y[:n].copy(), np.ones(n - 1)
-    theta[active] = y[:n - 1][active]
-    p[:n - 1][active] = -phys[PI]
-    w, h, q, res = np.empty(n), np.empty(n), np.empty(n - 1), np.empty(n + 2)
-    gap(grid.s, grid.influence, y[n], p, w, h)
-    content_residual(grid.s, grid.s_face, grid.area, grid.force_weight, phys, bh, hist[0],
-                     hist[1], hist[2], y[n], y[n + 1], p, theta, h, q, res)
-    return res
-
-
 @pytest.mark.parametrize("seed", range(4))
 def test_jfo_jacobian_with_cavitated_cells_matches_central_differences(seed):
     rng = np.random.default_rng(100 + seed)
@@ -127,17 +125,9 @@ def test_jfo_jacobian_with_cavitated_cells_matches_central_differences(seed):
     w, h = np.empty(n), np.empty(n)
     gap(grid.s, grid.influence, x, p, w, h)
     jac = np.empty((n + 2, n + 2))
-    content_jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, phys, bh,
-                     p, theta, h, active, jac, np.empty((n, 3)))
-    fd = np.empty_like(jac)
-    for k in range(n + 2):
-        # the step of the classic test above (theta slots are O(1): 3e-4 of their value)
-        step = 3e-4 * max(abs(y[k]), 1e-3 * np.max(np.abs(p)))
-        yp, ym = y.copy(), y.copy()
-        yp[k] += step
-        ym[k] -= step
-        fd[:, k] = (_jfo_residual(grid, phys, bh, hist, yp, active)
-                    - _jfo_residual(grid, phys, bh, hist, ym, active)) / (2.0 * step)
+    jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, phys, bh, p, theta,
+             h, active, jac, np.empty((n, 3)))
+    fd = _central_differences(lambda yy: _residual(grid, phys, bh, hist, yy, active), y, p)
     scale = np.max(np.abs(jac), axis=1, keepdims=True)
     # 1e-6: as in the classic test above (difference error ~3e-8, a wrong term fails at 1e-2)
     assert np.max(np.abs(jac - fd) / scale) < 1e-6

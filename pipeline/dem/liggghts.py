@@ -113,9 +113,9 @@ def snippet(types: list[str], e_max, c, mu, youngs, poisson, v_char) -> str:
         "# atom types: " + ", ".join(f"{i + 1} = {t}" for i, t in enumerate(types)),
         "pair_style gran model hooke tangential history viscous on",
         "pair_coeff * *",
-        f"fix m1 all property/global youngsModulus peratomtype "
+        "fix m1 all property/global youngsModulus peratomtype "
         + " ".join(f"{y:.6g}" for y in youngs),
-        f"fix m2 all property/global poissonsRatio peratomtype "
+        "fix m2 all property/global poissonsRatio peratomtype "
         + " ".join(f"{p:.6g}" for p in poisson),
         f"fix m3 all property/global characteristicVelocity scalar {v_char:.6g}",
         f"fix m4 all property/global FluidViscosity peratomtypepair {n} {matrix(mu)}",

@@ -26,7 +26,7 @@ model's terms come from model/film.py; this module knows nothing of the physics 
 import numpy as np
 
 from .._jit import jit
-from ..model.film import (cavity_edge, cell_content, constrain, content_jacobian, content_residual,
+from ..model.film import (cavity_edge, cell_content, constrain, jacobian, residual,
                           energy_rates, face_fluxes, film_force, gap, jfo_void, update_cavity,
                           update_cavity_jfo, void_work)
 from ..physics import CAVITATION, PI, ST
@@ -89,8 +89,7 @@ def _factorise(s, s_face, area, weight, influence, phys, bh, y, theta, h, active
     cavitated cells ``active``, LU-factorised in place; counted. False if the matrix is
     singular."""
     n = s.size
-    content_jacobian(s, s_face, area, weight, influence, phys, bh, y[:n], theta, h, active, jac,
-                     dres_dh)
+    jacobian(s, s_face, area, weight, influence, phys, bh, y[:n], theta, h, active, jac, dres_dh)
     active_lu[:] = active
     counters[4] += 1
     counters[3] += 1
@@ -341,17 +340,16 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                         bad = True
                 if bad:
                     break
-                content_residual(s, s_face, area, weight, phys, bh, h_hist, x_hist, v_hist, y[n],
-                                 y[n + 1], y[:n], theta, h, q, res)
+                residual(s, s_face, area, weight, phys, bh, h_hist, x_hist, v_hist, y[n],
+                         y[n + 1], y[:n], theta, h, q, res)
                 if floor:
                     if it == 1 or pending:
                         if jfo:
                             # the switched slots moved P to the floor: the rows follow
                             if update_cavity_jfo(y[:n], theta, phys, active):
                                 gap(s, influence, y[n], y[:n], w, h)
-                                content_residual(s, s_face, area, weight, phys, bh, h_hist,
-                                                 x_hist, v_hist, y[n], y[n + 1], y[:n], theta, h,
-                                                 q, res)
+                                residual(s, s_face, area, weight, phys, bh, h_hist, x_hist,
+                                         v_hist, y[n], y[n + 1], y[:n], theta, h, q, res)
                         else:
                             update_cavity(y[:n], res, phys, active)
                     same = True

@@ -229,22 +229,14 @@ def face_fluxes(s, s_face, p, h, phys, q_out):
 
 
 @jit
-def residual(s, s_face, area, weight, phys, bh, h_hist, x_hist, v_hist, x, v, p, h, q, res):
-    """Scaled residual of one implicit step with the film equation in every cell:
-    ``H - H_hist = bh dq/ds``, the far-field boundary row, ``X - X_hist = -bh V`` and
-    ``V - V_hist = -bh F/(3 St)``. ``q`` receives the face fluxes. ``constrain`` then replaces
-    the rows of cavitated cells. (Full cells: ``content_residual`` with ``theta = 1``.)"""
-    content_residual(s, s_face, area, weight, phys, bh, h_hist, x_hist, v_hist, x, v, p,
-                     np.ones(s.size - 1), h, q, res)
-
-
-@jit
-def content_residual(s, s_face, area, weight, phys, bh, c_hist, x_hist, v_hist, x, v, p, theta, h,
-                     q, res):
-    """``residual`` with each cell's liquid content ``cell_content(theta_i, H_i)`` in place of
-    ``H_i``: ``theta H - C_hist = bh dq/ds`` (``C_hist`` the BDF combination of the content at the
-    accepted states; ``theta = 1`` gives the classic rows bit for bit, ``1 * H = H``). The JFO
-    film keeps these rows in its cavitated cells, where the unknown is ``theta``."""
+def residual(s, s_face, area, weight, phys, bh, c_hist, x_hist, v_hist, x, v, p, theta, h, q, res):
+    """Scaled residual of one implicit step with the film equation in every cell: the cell's
+    liquid content ``cell_content(theta_i, H_i)`` against its history, ``theta H - C_hist =
+    bh dq/ds`` (``C_hist`` the BDF combination of the content at the accepted states; full cells
+    have ``theta = 1``, and ``1 * H = H`` bit for bit), the far-field boundary row,
+    ``X - X_hist = -bh V`` and ``V - V_hist = -bh F/(3 St)``. ``q`` receives the face fluxes.
+    ``constrain`` then replaces the rows of Reynolds-cavitated cells; the JFO film keeps these
+    rows in its cavitated cells, where the unknown is ``theta``."""
     n = s.size
     face_fluxes(s, s_face, p, h, phys, q)
     for i in range(n - 1):
@@ -294,15 +286,7 @@ def constrain(p, res, active, phys):
 
 
 @jit
-def jacobian(s, s_face, area, weight, influence, phys, bh, p, h, active, jac, dres_dh):
-    """Jacobian of ``residual`` (every cell full, ``theta = 1``): ``content_jacobian``."""
-    content_jacobian(s, s_face, area, weight, influence, phys, bh, p, np.ones(s.size - 1), h,
-                     active, jac, dres_dh)
-
-
-@jit
-def content_jacobian(s, s_face, area, weight, influence, phys, bh, p, theta, h, active, jac,
-                     dres_dh):
+def jacobian(s, s_face, area, weight, influence, phys, bh, p, theta, h, active, jac, dres_dh):
     """Jacobian of ``residual`` with respect to ``(P, X, V)`` into ``jac`` (N+2, N+2), from the
     terms' partial derivatives.
 
