@@ -241,6 +241,26 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _interrupted(name: str) -> int:
+    _quiet_dask()
+    _flush_quietly()
+    print(f"{name}: interrupted; everything finished so far is kept", file=sys.stderr)
+    return EXIT_INTERRUPTED
+
+
+def _caused_by_interrupt(exc: BaseException) -> bool:
+    """Ctrl-C that arrived inside compiled code comes back wrapped: numba re-raises it as a
+    ``SystemError`` ("returned a result with an exception set") whose cause is the
+    ``KeyboardInterrupt``."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
+
+
 def main(argv=None) -> int:
     """Run one ``ehd`` command: the error boundary of them all (see the module docstring)."""
     args = _parser().parse_args(argv)
@@ -254,19 +274,18 @@ def main(argv=None) -> int:
         print(f"{name}: error: {exc.line()}", file=sys.stderr)
         return exc.exit_code
     except KeyboardInterrupt:
-        _quiet_dask()
-        _flush_quietly()
-        print(f"{name}: interrupted; everything finished so far is kept", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return _interrupted(name)
     except BrokenPipeError:
         # the reader went away (``ehd ... | head``): no traceback, and the interpreter's final
         # flush must not raise again, so stdout points to /dev/null (Python docs, SIGPIPE note)
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return EXIT_BROKEN_PIPE
-    except Exception:
+    except Exception as exc:
         import traceback
 
+        if _caused_by_interrupt(exc):
+            return _interrupted(name)
         _flush_quietly()
         traceback.print_exc()
         print(f"{name}: internal error: this is a bug in ehd-collision, not in your input; please "

@@ -240,6 +240,14 @@ CASES = [
      "not a directory"),
     ("paper-figures-out-under-file", _write("afile", "x"), ["paper-figures", "--out", "afile/p"],
      2, "not a directory"),
+    # --- ehd export-dem, ehd restitution (output checked before any solve)
+    ("export-dem-input-missing", NO_SETUP, ["export-dem", "none.toml"], 2, "no such store"),
+    ("export-dem-out-is-file", _write("afile", "x"),
+     ["export-dem", str(REPO / "examples" / "glass_beads_water.toml"), "--out", "afile"], 2,
+     "not a directory"),
+    ("restitution-out-under-file", _write("afile", "x"),
+     ["restitution", str(REPO / "examples" / "glass_beads_water.toml"), "--out", "afile/r"], 2,
+     "not a directory"),
     # --- ehd status
     ("status-store-missing", NO_SETUP, ["status", "none.zarr"], 2, "no sweep store"),
     ("status-store-empty", NO_SETUP, ["status", ""], 2, "empty path"),
@@ -537,3 +545,21 @@ def test_docs_list_every_exit_code_and_model_code():
     from pipeline.sweeps.layout import STORE_SCHEMA
 
     assert f"Store schema {STORE_SCHEMA}" in doc and f"`store_schema` ({STORE_SCHEMA})" in doc
+
+
+def test_ctrl_c_inside_compiled_code_is_an_interrupt_not_a_bug(monkeypatch, capsys):
+    """numba hands a Ctrl-C that arrives in compiled code back as a SystemError caused by the
+    KeyboardInterrupt: still exit 130 and one line, as for an interrupt anywhere else."""
+    import pipeline.cli as cli
+
+    def interrupted_in_numba(args):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise SystemError("CPUDispatcher returned a result with an exception set") from exc
+
+    monkeypatch.setattr(cli, "cmd_run", interrupted_in_numba)
+    assert cli.main(["run", "--St", "5", "--eps", "0.01"]) == EXIT_INTERRUPTED
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and err.strip().splitlines() == [
+        "ehd run: interrupted; everything finished so far is kept"]

@@ -57,10 +57,11 @@ def _print_rows(rows, skipped):
 
 
 def cmd_export_dem(args) -> int:
-    from pipeline.cli import UsageError
+    from pipeline.cli import UsageError, check_output_dir
 
     from .export import scene_rows, store_rows, write_export
 
+    check_output_dir("--out", args.out)  # before any solve
     path = Path(args.path)
     if not path.exists():
         raise UsageError(f"{args.path}: no such store or scene file")
@@ -88,10 +89,11 @@ def cmd_export_dem(args) -> int:
 
 
 def cmd_restitution(args) -> int:
-    from pipeline.cli import UsageError
+    from pipeline.cli import UsageError, check_output_dir
 
     from .export import scene_rows, write_export
 
+    check_output_dir("--out", args.out)  # before any solve
     scene = _scene(args.scene, args.materials)
     if not (args.start > 0 and args.stop > 0 and args.n >= 1):
         raise UsageError("--from and --to must be positive factors and --n >= 1")
