@@ -155,7 +155,12 @@ class Runner:
                     raise self._lost(len(jobs) - len(futures)) from None
                 yield futures.pop(fut), (exc if exc is not None else fut.result())
         finally:
-            for fut in futures:  # interrupted: do not leave scenes running on a shared cluster
+            if futures:  # interrupted: do not leave scenes running on a shared cluster
+                # quiet first: each cancel runs a callback on the client's event loop thread that
+                # logs the cancelled future with a traceback (tornado "Exception in callback"),
+                # racing the quieting done later on the way out (a flaky Ctrl-C test caught it)
+                _quiet_dask()
+            for fut in futures:
                 fut.cancel()
 
 
