@@ -173,15 +173,15 @@ def _save_dataset(ds, path: str) -> None:
 
 def _add_physics_flags(p: argparse.ArgumentParser) -> None:
     """One flag per dimensionless group (``solver.physics.GROUPS``): ``--St``, ``--eps`` (required),
-    ``--Pi``, ``--cavitation`` (with their defaults)."""
+    ``--Pi``, ``--cavitation``, ``--beta``, ``--viscosity``... (with their defaults)."""
     for group in GROUPS:
         default = "" if group.default is None else f"; default {group.default}"
         if group.choices:
-            p.add_argument(f"--{group.name}", dest=group.name, choices=group.choices,
+            p.add_argument(group.option, dest=group.name, choices=group.choices,
                            default=group.default, help=f"{group.long_name}{default}")
             continue
         lb = "[" if group.closed_lo else "("
-        p.add_argument(f"--{group.name}", dest=group.name, type=float,
+        p.add_argument(group.option, dest=group.name, type=float,
                        required=group.default is None, default=group.default,
                        metavar=group.name.upper(),
                        help=f"{group.long_name}, in {lb}{group.lo:g}, {group.hi:g}]{default}")

@@ -21,7 +21,8 @@ from dataclasses import asdict, dataclass, fields, replace
 import numpy as np
 
 __all__ = ["Physics", "Group", "GROUPS", "ST", "EPS", "PI", "CAVITATION", "CAVITATION_MODELS",
-           "DEFAULT_CAVITATION"]
+           "DEFAULT_CAVITATION", "BETA", "VISCOSITY", "ROELANDS_Z", "ROELANDS_PR", "DENSITY",
+           "DH_C1", "DH_C2", "VISCOSITY_LAWS", "DENSITY_LAWS"]
 
 
 @dataclass(frozen=True)
@@ -38,6 +39,12 @@ class Group:
     default: float | str | None = None  # value when a sweep file omits the group (None: required)
     allow_inf: bool = False  # +inf is a valid value (the physics switched off)
     choices: tuple = ()  # a named choice instead of a number (e.g. a model)
+    flag: str = ""  # the command-line flag, when not ``--name``
+
+    @property
+    def option(self) -> str:
+        """The command-line flag of the group, e.g. ``--St`` or ``--viscosity``."""
+        return "--" + (self.flag or self.name)
 
     def check(self, value):
         """``value`` as a float (or one of ``choices``), or ValueError naming the group and its
@@ -75,9 +82,34 @@ GROUPS = (
     Group("cavitation", "cavitation model: off, reynolds (Swift-Stieber) or jfo (mass-conserving "
           "Elrod-Adams); auto: the default model where Pi is finite", "cavitation model",
           math.nan, math.nan, default="auto", choices=("auto", "off", "reynolds", "jfo")),
+    # the liquid thickens under pressure: d ln(mu)/dp = alpha at p = 0 (0: constant viscosity)
+    Group("beta", "piezoviscous number alpha mu a v0 / x1^2 (alpha = d ln mu / dp at p = 0)",
+          "piezoviscous number", 0.0, 50.0, closed_lo=True, default=0.0),
+    Group("viscosity_law", "viscosity against pressure: constant, barus (exp(beta P)) or "
+          "roelands; auto: barus where beta > 0", "viscosity law", math.nan, math.nan,
+          default="auto", choices=("auto", "constant", "barus", "roelands"), flag="viscosity"),
+    # Roelands: ln(mu/mu0) = (beta P_R / Z) ((1 + P/P_R)^Z - 1), slope beta at P = 0; defaults:
+    # a mineral oil's Z = 0.6 and p_R = 1.96e8 Pa at the pressure scale p* = 5e8 Pa
+    Group("roelands_Z", "Roelands pressure-viscosity index Z", "Roelands index", 0.0, 2.0,
+          default=0.6),
+    Group("roelands_PR", "Roelands reference pressure p_R x1^2 / (mu a v0)",
+          "Roelands reference pressure", 0.0, 1.0e6, default=0.392),
+    Group("density_law", "density against pressure: constant or dowson-higginson "
+          "(1 + c1 P / (1 + c2 P))", "density law", math.nan, math.nan, default="constant",
+          choices=("constant", "dowson-higginson"), flag="density"),
+    # Dowson-Higginson: rho/rho0 = 1 + c1 P / (1 + c2 P); defaults: 0.6e-9 and 1.7e-9 1/Pa
+    # at p* = 5e8 Pa
+    Group("dh_c1", "Dowson-Higginson c1 p* (0.6e-9 1/Pa times the pressure scale)",
+          "Dowson-Higginson c1", 0.0, 100.0, closed_lo=True, default=0.3),
+    Group("dh_c2", "Dowson-Higginson c2 p* (1.7e-9 1/Pa times the pressure scale)",
+          "Dowson-Higginson c2", 0.0, 100.0, closed_lo=True, default=0.85),
 )
 # positions in Physics.as_array(), read by the compiled kernels
 ST, EPS, PI, CAVITATION = 0, 1, 2, 3
+BETA, VISCOSITY, ROELANDS_Z, ROELANDS_PR, DENSITY, DH_C1, DH_C2 = 4, 5, 6, 7, 8, 9, 10
+# the laws' codes in that array (0: constant, the classic film)
+VISCOSITY_LAWS = ("constant", "barus", "roelands")
+DENSITY_LAWS = ("constant", "dowson-higginson")
 # the models' codes in that array (0: the classic film, no floor)
 CAVITATION_MODELS = ("off", "reynolds", "jfo")
 # the model "auto" resolves to where Pi is finite: the mass-conserving one, which the measured
@@ -104,6 +136,23 @@ class Physics:
         The cavitation model. "auto" (the default) becomes ``DEFAULT_CAVITATION`` where ``Pi`` is
         finite and "off" where it is inf; "off" ignores ``Pi``. A finite ``Pi`` is needed for a
         model to act: with ``Pi = inf`` the model is "off".
+    beta : float
+        Piezoviscous number ``alpha mu0 a v0 / x1^2``: the slope of ``ln(mu/mu0)`` against the
+        dimensionless pressure at ``P = 0`` (docs/model.md, "Pressure-dependent viscosity and
+        density"). In [0, 50]; 0 (the default) is the constant viscosity of the classic film.
+    viscosity_law : {"auto", "constant", "barus", "roelands"}
+        ``mu/mu0`` against ``P``: "barus" ``exp(beta P)``, "roelands" (with ``roelands_Z`` and
+        ``roelands_PR``). "auto" (the default) is "barus" where ``beta > 0``; with ``beta = 0``
+        every law is "constant". Applied to compression only: ``mu = mu0`` where ``P <= 0``.
+    roelands_Z, roelands_PR : float
+        Roelands index ``Z`` in (0, 2] and reference pressure ``p_R / p*`` in (0, 1e6]
+        (defaults: a mineral oil at ``p* = 5e8 Pa``).
+    density_law : {"constant", "dowson-higginson"}
+        ``rho/rho0`` against ``P``: "dowson-higginson" ``1 + c1 P / (1 + c2 P)`` (compression
+        only, as the viscosity); with ``dh_c1 = 0`` it is "constant".
+    dh_c1, dh_c2 : float
+        Dowson-Higginson constants times the pressure scale, in [0, 100] (defaults
+        ``0.6e-9, 1.7e-9 1/Pa`` at ``p* = 5e8 Pa``).
 
     Raises
     ------
@@ -116,6 +165,13 @@ class Physics:
     eps: float
     Pi: float = math.inf
     cavitation: str = "auto"
+    beta: float = 0.0
+    viscosity_law: str = "auto"
+    roelands_Z: float = 0.6
+    roelands_PR: float = 0.392
+    density_law: str = "constant"
+    dh_c1: float = 0.3
+    dh_c2: float = 0.85
 
     def __post_init__(self):
         for group in GROUPS:
@@ -126,6 +182,14 @@ class Physics:
         elif model == "auto":
             model = DEFAULT_CAVITATION
         object.__setattr__(self, "cavitation", model)
+        law = self.viscosity_law
+        if self.beta == 0.0:
+            law = "constant"
+        elif law == "auto":
+            law = "barus"
+        object.__setattr__(self, "viscosity_law", law)
+        if self.density_law == "dowson-higginson" and self.dh_c1 == 0.0:
+            object.__setattr__(self, "density_law", "constant")
 
     # ---- the declaration, for code that iterates over the groups ----------------------------
     @staticmethod
@@ -158,8 +222,10 @@ class Physics:
     def as_array(self) -> np.ndarray:
         """The groups as a flat float array in ``names()`` order (what the kernels read); a
         choice is its index (``CAVITATION_MODELS``)."""
-        return np.array([self.St, self.eps, self.Pi, CAVITATION_MODELS.index(self.cavitation)],
-                        dtype=float)
+        return np.array([self.St, self.eps, self.Pi, CAVITATION_MODELS.index(self.cavitation),
+                         self.beta, VISCOSITY_LAWS.index(self.viscosity_law), self.roelands_Z,
+                         self.roelands_PR, DENSITY_LAWS.index(self.density_law), self.dh_c1,
+                         self.dh_c2], dtype=float)
 
     def replace(self, **changes) -> "Physics":
         return replace(self, **changes)
@@ -170,7 +236,12 @@ class Physics:
         """True when no physics beyond Davis, Serayssol & Hinch (1986) is switched on, so every
         analytic shortcut of the classic model (rigid phases, hand-over, release, master curve)
         is exact."""
-        return self.cavitation == "off"
+        return self.cavitation == "off" and self.isoviscous
+
+    @property
+    def isoviscous(self) -> bool:
+        """True when the liquid's viscosity and density do not depend on pressure."""
+        return self.viscosity_law == "constant" and self.density_law == "constant"
 
     @property
     def x_start(self) -> float:
