@@ -22,7 +22,7 @@ import numpy as np
 
 __all__ = ["Physics", "Group", "GROUPS", "ST", "EPS", "PI", "CAVITATION", "CAVITATION_MODELS",
            "DEFAULT_CAVITATION", "BETA", "VISCOSITY", "ROELANDS_Z", "ROELANDS_PR", "DENSITY",
-           "DH_C1", "DH_C2", "VISCOSITY_LAWS", "DENSITY_LAWS"]
+           "DH_C1", "DH_C2", "TENSION", "TENSION_CHOICES", "VISCOSITY_LAWS", "DENSITY_LAWS"]
 
 
 @dataclass(frozen=True)
@@ -88,6 +88,11 @@ GROUPS = (
     Group("viscosity_law", "viscosity against pressure: constant, barus (exp(beta P)) or "
           "roelands; auto: barus where beta > 0", "viscosity law", math.nan, math.nan,
           default="auto", choices=("auto", "constant", "barus", "roelands"), flag="viscosity"),
+    # a liquid in tension keeps its ambient viscosity (the default) or, for comparison, the law's
+    Group("viscosity_in_tension", "viscosity where the gauge pressure is negative: ambient (mu0, "
+          "the default; a liquid cavitates long before the law's thinning) or law (the law's "
+          "formula read at P < 0, for comparison)", "viscosity in tension", math.nan, math.nan,
+          default="ambient", choices=("ambient", "law")),
     # Roelands: ln(mu/mu0) = (beta P_R / Z) ((1 + P/P_R)^Z - 1), slope beta at P = 0; defaults:
     # a mineral oil's Z = 0.6 and p_R = 1.96e8 Pa at the pressure scale p* = 5e8 Pa
     Group("roelands_Z", "Roelands pressure-viscosity index Z", "Roelands index", 0.0, 2.0,
@@ -106,10 +111,11 @@ GROUPS = (
 )
 # positions in Physics.as_array(), read by the compiled kernels
 ST, EPS, PI, CAVITATION = 0, 1, 2, 3
-BETA, VISCOSITY, ROELANDS_Z, ROELANDS_PR, DENSITY, DH_C1, DH_C2 = 4, 5, 6, 7, 8, 9, 10
+BETA, VISCOSITY, TENSION, ROELANDS_Z, ROELANDS_PR, DENSITY, DH_C1, DH_C2 = 4, 5, 6, 7, 8, 9, 10, 11
 # the laws' codes in that array (0: constant, the classic film)
 VISCOSITY_LAWS = ("constant", "barus", "roelands")
 DENSITY_LAWS = ("constant", "dowson-higginson")
+TENSION_CHOICES = ("ambient", "law")
 # the models' codes in that array (0: the classic film, no floor)
 CAVITATION_MODELS = ("off", "reynolds", "jfo")
 # the model "auto" resolves to where Pi is finite: the mass-conserving one, which the measured
@@ -143,7 +149,12 @@ class Physics:
     viscosity_law : {"auto", "constant", "barus", "roelands"}
         ``mu/mu0`` against ``P``: "barus" ``exp(beta P)``, "roelands" (with ``roelands_Z`` and
         ``roelands_PR``). "auto" (the default) is "barus" where ``beta > 0``; with ``beta = 0``
-        every law is "constant". Applied to compression only: ``mu = mu0`` where ``P <= 0``.
+        every law is "constant".
+    viscosity_in_tension : {"ambient", "law"}
+        "ambient" (the default): the law applies to compression only, ``mu = mu0`` where
+        ``P <= 0`` (the Barus formula would thin a liquid in tension by orders of magnitude, which
+        real liquids do not: they cavitate first). "law": the formula at every pressure, to
+        measure what that choice changes. The density law is always compression-only.
     roelands_Z, roelands_PR : float
         Roelands index ``Z`` in (0, 2] and reference pressure ``p_R / p*`` in (0, 1e6]
         (defaults: a mineral oil at ``p* = 5e8 Pa``).
@@ -167,6 +178,7 @@ class Physics:
     cavitation: str = "auto"
     beta: float = 0.0
     viscosity_law: str = "auto"
+    viscosity_in_tension: str = "ambient"
     roelands_Z: float = 0.6
     roelands_PR: float = 0.392
     density_law: str = "constant"
@@ -223,7 +235,8 @@ class Physics:
         """The groups as a flat float array in ``names()`` order (what the kernels read); a
         choice is its index (``CAVITATION_MODELS``)."""
         return np.array([self.St, self.eps, self.Pi, CAVITATION_MODELS.index(self.cavitation),
-                         self.beta, VISCOSITY_LAWS.index(self.viscosity_law), self.roelands_Z,
+                         self.beta, VISCOSITY_LAWS.index(self.viscosity_law),
+                         TENSION_CHOICES.index(self.viscosity_in_tension), self.roelands_Z,
                          self.roelands_PR, DENSITY_LAWS.index(self.density_law), self.dh_c1,
                          self.dh_c2], dtype=float)
 
