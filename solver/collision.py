@@ -23,7 +23,7 @@ import numpy as np
 from .integration import stepper
 from .integration.grid import reference_grid, scaled_grid
 from .integration.events import RELAXED_FULL
-from .model import cavitation, rigid
+from .model import cavitation, liquid, rigid
 from .observables import SERIES, STATUS, failure_message
 from .physics import Physics
 from .result import JSON_KEYS, SOLVER_VERSION, Collision
@@ -39,6 +39,12 @@ __all__ = ["collide", "Collision", "SOLVER_VERSION", "hertz_overlap", "JSON_KEYS
 START_STRAIN_LIMIT = 0.1
 
 DIMPLE_DEPTH = 1e-3  # x1 units: a central gap this much above the minimum counts as a dimple
+
+# A film whose viscosity rises this much over the approach is reported as solidified: it flows
+# 1e4 times slower than at ambient pressure, so over a contact of O(10) x1/v0 the liquid trapped
+# at the axis moves less than 1e-3 of what the classic film moves there: a frozen ("glassy")
+# lens the spheres turn round on (docs/model.md, "Pressure-dependent viscosity and density")
+SOLID_VISCOSITY_RATIO = 1e4
 
 
 def hertz_overlap(stokes):
@@ -129,7 +135,7 @@ def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 
         raise ValueError(f"x_ref_x0 = {x_ref_x0!r}: the reference separation must be finite and "
                          "at least the start x0 (x_ref_x0 >= 1)")
     wall = time.perf_counter()
-    x_switch = rigid.handover_separation(physics.x_start, physics.St, numerics.switch)
+    x_switch = handover_separation(physics, numerics)
     if x_switch is None:
         result = _rigid_only(physics, accuracy, numerics)
     else:
@@ -137,6 +143,19 @@ def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 
     result.x_ref_x0 = x_ref_x0
     result.wall_s = time.perf_counter() - wall
     return result
+
+
+def handover_separation(physics, numerics):
+    """Where the coupled phase takes over on approach: the first separation on the rigid path
+    where the deformation ``W(0)/X`` reaches ``switch`` (rigid.handover_separation) or the
+    liquid's pressure dependence changes the rigid film by as much (rigid.law_onset_separation:
+    up to there the classic rigid approach is exact to ``switch``); None when the spheres come to
+    rest before either (the scene is rigid throughout)."""
+    found = [x for x in (
+        rigid.handover_separation(physics.x_start, physics.St, numerics.switch),
+        rigid.law_onset_separation(physics.x_start, physics.St, rigid.law_slopes(physics)[0],
+                                   numerics.switch)) if x is not None]
+    return max(found) if found else None
 
 
 def _rigid_path(x_from, v_from, t_from, stokes, x):
@@ -157,7 +176,7 @@ def _rigid_block(t, x, v, tau_per_t, phase, dissipated):
         "W0": 3.0 * v * x**-1.5 * rigid.I0, "H_min": x, "R_H_min": zeros,
         "E_k": v * v, "E_s": zeros, "dissipated": dissipated,
         "P_max": np.maximum(p_axis, 0.0), "P_min": np.minimum(p_axis, 0.0),
-        "cavity_radius": zeros, "void_volume": zeros, "void_work": zeros,
+        "cavity_radius": zeros, "void_volume": zeros, "void_work": zeros, "E_c": zeros,
         "phase": np.full(n, phase, dtype=np.int8),
     }
 
@@ -178,7 +197,7 @@ def _floor_block(path, physics, tau_per_t, lost, v_release):
 
 
 _COUPLED_COLUMNS = ("T", "X", "V", "F", "W0", "H_min", "R_H_min", "E_k", "E_s", "dissipated",
-                    "P_max", "P_min", "cavity_radius", "void_volume", "void_work")
+                    "P_max", "P_min", "cavity_radius", "void_volume", "void_work", "E_c")
 
 
 def _concat(blocks):
@@ -208,6 +227,12 @@ def include_rigid_peaks(result, x_start, x_switch):
     those of the analytic rigid approach before the hand-over at ``x_switch`` (0: rigid only)."""
     head = rigid.approach_peaks(x_start, result.St, x_switch)
     tau_per_t = result.physics.tau_per_t
+    if not head["p_max"] <= result.p_max_approach:  # also when the result holds NaN
+        result.p_max_approach = head["p_max"]
+        result.h_axis_at_peak_pressure_x1 = head["x_p_max"]  # rigid: H(0) = X
+    result.viscosity_ratio_max_approach = float(
+        liquid.viscosity_ratio(result.p_max_approach, result.physics.as_array()))
+    result.solidified = bool(result.viscosity_ratio_max_approach >= SOLID_VISCOSITY_RATIO)
     for name, head_name, t_name in (("peak_force", "peak_force", "tau_peak_force"),
                                     ("w0_max_x1", "w0_max", "tau_max_deformation"),
                                     ("p_max", "p_max", None)):
@@ -225,7 +250,7 @@ def _coupled(physics, accuracy, numerics, x_switch, x_ref_x0=1.0):
     grid = scene_grid(stokes, x_switch, numerics, physics.Pi if not physics.classic else math.inf)
     p_init = 3.0 * v_switch / (x_switch + grid.s) ** 2  # rigid pressure; K p = asymptotic W
     time_scale = x_switch / max(v_switch, 1e-3)
-    stop_kind, stop_params = rigid.release_event(numerics.release, stokes)
+    stop_kind, stop_params = rigid.release_event(numerics.release, stokes, physics)
     if physics.cavitation == "jfo" and not _floor_departure(physics):
         stop_kind = RELAXED_FULL  # its cavity has a memory: rigid only once the film is full
     code, counters, rows, p_hist, w_hist, theta_hist = stepper.integrate(
@@ -373,6 +398,14 @@ def _coupled_observables(result, cols, tau_per_t, ln_x_e, v_rel):
         result.tau_v_zero = math.inf  # rigid creep to rest: v reaches 0 only as t -> inf
         ia = int(np.argmin(h_min))
         result.h_m_approach_x1 = float(_parabolic_peak(tau, h_min, ia)[1])
+    # the liquid's largest viscosity over the approach (until v first reaches 0; the pressure
+    # spike where a trapped lens collapses later does not converge under refinement), and the
+    # central gap when the approach's film pressure peaks
+    j_app = int(below[0]) + 1 if below.size else len(tau)
+    i = int(np.argmax(cols["P_max"][:j_app]))
+    t_pk, p_pk = _parabolic_peak(tau[:j_app], cols["P_max"][:j_app], i)
+    result.p_max_approach = float(p_pk)
+    result.h_axis_at_peak_pressure_x1 = float(np.interp(t_pk, tau, cols["H0"]))
     i = int(np.argmin(x_c))
     result.x_min_x1 = float(_parabolic_peak(tau, x_c, i)[1])
     if v_rel > 0.0:  # still approaching when released: rigid creep down to x_e
@@ -393,7 +426,7 @@ def _coupled_observables(result, cols, tau_per_t, ln_x_e, v_rel):
     result.dimple = bool(deep.size > 0)
     if deep.size:
         result.tau_dimple = float(tau[deep[0]])
-    total = cols["E_k"] + cols["E_s"] + cols["dissipated"] + cols["void_work"]
+    total = cols["E_k"] + cols["E_s"] + cols["E_c"] + cols["dissipated"] + cols["void_work"]
     result.energy_error = float(np.max(np.abs(total - total[0])))
     cavity = np.nonzero(cols["cavity_radius"] > 0.0)[0]
     result.cavitated = bool(cavity.size > 0)

@@ -147,5 +147,8 @@ class MasterCurve:
         result.e_wet = rigid.restitution_from_rest(values["ln_x_e_x1"], physics,
                                                    x_ref_x0 * x_start)
         include_rigid_peaks(result, x_start, x_switch)
+        # not carried by the curve: the approach's pressure peak lies in its coupled phase
+        result.p_max_approach = result.h_axis_at_peak_pressure_x1 = math.nan
+        result.viscosity_ratio_max_approach = 1.0  # the classic film
         result.wall_s = time.perf_counter() - wall
         return result

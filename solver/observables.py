@@ -103,6 +103,14 @@ OBSERVABLES = (
                "x0/v0", "  tau at cavitation onset"),
     Observable("void_volume_max", "float", "largest void volume Int_cav (H - H_onset) ds",
                "2 pi a x1^2", "  largest void volume /(2 pi a x1^2)"),
+    Observable("viscosity_ratio_max_approach", "float", "largest viscosity over ambient mu/mu0 "
+               "until v first reaches 0 (at the approach's peak film pressure)", "1",
+               "peak viscosity ratio on approach mu/mu0"),
+    Observable("h_axis_at_peak_pressure_x1", "float", "central gap H(0) when the film pressure "
+               "peaks on approach (the trapped lens of a piezoviscous film)", "x1",
+               "  central gap at peak pressure /x1"),
+    Observable("solidified", "flag", "the film solidified on approach: its viscosity rose "
+               "beyond 1e4 mu0", "1", "  solidified (mu > 1e4 mu0)"),
     Observable("start_strain_energy", "float", "strain energy where the coupled phase starts, "
                "over the kinetic energy", "1"),
     Observable("steps", "count", "accepted time steps of the coupled solve", "1", "steps",
@@ -169,5 +177,6 @@ SERIES = (
     Column("cavity_radius", "radius of the outermost cavitated node (0: no cavity)", "sqrt(a x1)"),
     Column("void_volume", "void volume Int_cav (H - H_onset) ds", "2 pi a x1^2"),
     Column("void_work", "work done against the cavitation floor so far", "m v0^2/2"),
+    Column("E_c", "energy stored in the compressed liquid", "m v0^2/2"),
 )
 SERIES_INDEX = {c.name: k for k, c in enumerate(SERIES)}

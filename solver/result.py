@@ -21,7 +21,7 @@ from .settings import Numerics
 __all__ = ["Collision", "JSON_KEYS", "SOLVER_VERSION"]
 
 # Bump with any change that can alter numbers: stamped into every result and store.
-SOLVER_VERSION = "1.4.0"
+SOLVER_VERSION = "1.5.0"
 
 JSON_KEYS = (*Physics.names(), *LABELS, *(o.name for o in OBSERVABLES), "x_ref_x0",
              "solver_version")
@@ -72,6 +72,10 @@ class Collision:
     tau_cavitation_onset: float = math.nan  # first time a cell cavitates
     void_volume_max: float = 0.0  # largest Int_cav (H - H_onset) ds
     start_strain_energy: float = 0.0  # E_s / E_k where the coupled phase starts
+    p_max_approach: float = math.nan  # largest film pressure until v first reaches 0
+    viscosity_ratio_max_approach: float = math.nan  # mu/mu0 at p_max_approach
+    h_axis_at_peak_pressure_x1: float = math.nan  # H(0) when the approach's pressure peaks
+    solidified: bool | None = False  # viscosity_ratio_max_approach >= SOLID_VISCOSITY_RATIO
     steps: int = 0
     rejected_steps: int = 0
     newton_iterations: int = 0
@@ -98,14 +102,12 @@ class Collision:
     def eps(self) -> float:
         return self.physics.eps
 
-    @property
-    def Pi(self) -> float:
-        return self.physics.Pi
-
-    @property
-    def cavitation(self) -> str:
-        """The cavitation model used ("off": the classic film)."""
-        return self.physics.cavitation
+    def __getattr__(self, name):
+        """Every physics field (``Pi``, ``cavitation``, ``beta``, ``viscosity_law``...) as read
+        from ``physics``, after its defaults are resolved ("auto" becomes the model used)."""
+        if name != "physics" and name in Physics.names():
+            return getattr(self.physics, name)
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     @property
     def x0_over_x1(self) -> float:

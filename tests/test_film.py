@@ -45,14 +45,14 @@ def _residual(grid, phys, bh, hist, y, active):
     return res
 
 
-def _central_differences(residual_of, y, p):
+def _central_differences(residual_of, y, p, rel_step=3e-4):
     """Central differences of ``residual_of(y)`` in every unknown. Step 3e-4 of each unknown's
     scale (floor: 1e-3 of the largest pressure, for the tiny far-field pressures; theta slots are
     O(1)): measured, the difference error is round-off ~ eps |res| / step below that (1.6e-6 at
     6e-6) and truncation ~ step^2 above it (1e-8 at 1e-3)."""
     fd = np.empty((y.size, y.size))
     for k in range(y.size):
-        step = 3e-4 * max(abs(y[k]), 1e-3 * np.max(np.abs(p)))
+        step = rel_step * max(abs(y[k]), 1e-3 * np.max(np.abs(p)))
         yp, ym = y.copy(), y.copy()
         yp[k] += step
         ym[k] -= step
@@ -128,6 +128,62 @@ def test_jfo_jacobian_with_cavitated_cells_matches_central_differences(seed):
     jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, phys, bh, p, theta,
              h, active, jac, np.empty((n, 3)))
     fd = _central_differences(lambda yy: _residual(grid, phys, bh, hist, yy, active), y, p)
+    scale = np.max(np.abs(jac), axis=1, keepdims=True)
+    # 1e-6: as in the classic test above (difference error ~3e-8, a wrong term fails at 1e-2)
+    assert np.max(np.abs(jac - fd) / scale) < 1e-6
+
+
+PIEZO_CASES = {  # the liquid's laws (model/liquid.py), each with the film's other options
+    "barus": dict(beta=3.0),
+    "barus-in-tension": dict(beta=3.0, viscosity_in_tension="law"),
+    "roelands": dict(beta=3.0, viscosity_law="roelands", roelands_Z=0.6, roelands_PR=0.4),
+    "dowson-higginson": dict(density_law="dowson-higginson", dh_c1=0.3, dh_c2=0.85),
+    "barus+dowson-higginson": dict(beta=5.0, density_law="dowson-higginson"),
+    "roelands+dh+jfo": dict(beta=2.0, viscosity_law="roelands", density_law="dowson-higginson",
+                            Pi=0.05, cavitation="jfo"),
+}
+
+
+@pytest.mark.parametrize("case", list(PIEZO_CASES))
+def test_pressure_dependent_jacobian_matches_central_differences(case):
+    """The flux through the Kirchhoff difference and the content ``rho theta H``: each derivative
+    against central differences, on states whose pressures reach ``beta P ~ 9-15``."""
+    rng = np.random.default_rng(sorted(PIEZO_CASES).index(case))
+    physics = Physics(St=float(rng.uniform(0.5, 50.0)), eps=1e-4, **PIEZO_CASES[case])
+    phys = physics.as_array()
+    grid = scene_grid(physics.St, 5.0, resolve("fast", n_inner=8))
+    n = grid.s.size
+    x, v, p = _state(rng, grid, phys)
+    p *= 3.0 / max(np.max(np.abs(p)), 1e-12)  # |P| up to 3: beta P up to 15, a glassy film
+    # the laws have a kink at P = 0 (compression only): keep every pressure further from it than
+    # the differences' step (at most 3e-4 * 3), which would otherwise straddle the kink
+    p = np.where(p < 0.0, np.minimum(p, -0.01), np.maximum(p, 0.01))
+    active = np.zeros(n - 1, dtype=bool)
+    theta = np.ones(n - 1)
+    if physics.cavitation == "jfo":
+        active[rng.choice(n - 1, size=(n - 1) // 4, replace=False)] = True
+        theta[active] = rng.uniform(0.2, 0.95, active.sum())
+        p[:n - 1][active] = -physics.Pi
+    w, h = np.empty(n), np.empty(n)
+    gap(grid.s, grid.influence, x, p, w, h)
+    if np.min(h) <= 0.05:
+        x += 0.1 - np.min(h)
+        gap(grid.s, grid.influence, x, p, w, h)
+    bh = 10.0 ** rng.uniform(-4.0, 0.0)
+    hist = (x + grid.s + rng.uniform(0.0, 0.1, n), x + 0.01, v + 0.01)
+    y = np.concatenate([p, [x, v]])
+    y[:n - 1][active] = theta[active]
+    jac = np.empty((n + 2, n + 2))
+    jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, phys, bh, p, theta,
+             h, active, jac, np.empty((n, 3)))
+    # the mobility exp(-beta P) makes the residual's third derivatives large (a plain difference
+    # was 7e-6 off at its step, converging to the Jacobian as step^2): Richardson extrapolation
+    # of two steps cancels that term
+    def differences(rel_step):
+        return _central_differences(lambda yy: _residual(grid, phys, bh, hist, yy, active), y, p,
+                                    rel_step)
+
+    fd = (4.0 * differences(1.5e-4) - differences(3e-4)) / 3.0
     scale = np.max(np.abs(jac), axis=1, keepdims=True)
     # 1e-6: as in the classic test above (difference error ~3e-8, a wrong term fails at 1e-2)
     assert np.max(np.abs(jac - fd) / scale) < 1e-6

@@ -89,7 +89,7 @@ def test_cli_run_flags_come_from_the_physics_groups(capsys):
         main(["run", "--help"])
     help_text = " ".join(capsys.readouterr().out.split())  # argparse wraps lines
     for group in GROUPS:
-        assert f"--{group.name}" in help_text and group.long_name in help_text
+        assert group.option in help_text and group.long_name in help_text
 
 
 def test_cli_run_report_has_a_row_for_each_labelled_observable(capsys):

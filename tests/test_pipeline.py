@@ -27,6 +27,10 @@ from pipeline.sweeps.config import ConfigError, cache_key, parse_sweep
 from pipeline.sweeps.journal import pending_journal
 from pipeline.sweeps.layout import FLOATS as FLOAT_FIELDS
 from pipeline.sweeps.layout import MODEL_CODES, STATUS_CODES, VARIABLES
+from solver.physics import GROUPS, Physics
+
+# the fixed physics of a sweep that sets only St and eps: every other group at its default
+_DEFAULTS = {g.name: g.default for g in GROUPS if g.name not in ("St", "eps")}
 from pipeline.sweeps.run import EXIT_FAILED, run_sweep
 from pipeline.sweeps.store import StoreBusy, StoreMismatch, SweepStore
 
@@ -126,7 +130,7 @@ def test_paper_sweep_file_meets_the_issue():
     assert np.allclose(np.diff(np.log(St)), np.log(St[1] / St[0]))  # log-spaced
     assert {1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8} <= set(eps)
     # the groups with defaults are fixed at them: the classic film (Pi = inf)
-    assert s.axis_names == ("St", "eps") and s.fixed == {"Pi": math.inf, "cavitation": "auto"}
+    assert s.axis_names == ("St", "eps") and s.fixed == _DEFAULTS
     assert s.accuracy == "standard" and str(s.store) == "results/paper.zarr"
     q = load_sweep(REPO / "sweeps" / "quick.toml")
     assert q.n_scenes <= 30
@@ -304,7 +308,7 @@ def test_store_schema_and_attrs(tmp_path):
     assert a["solver_version"] == SOLVER_VERSION and a["accuracy"] == "fast"
     assert a["cache_key"] == sweep.cache_key() and a["numerics"] == sweep.numerics()
     assert a["axes"] == ["St", "eps"] and a["store_schema"] == 4
-    assert a["fixed_physics"] == {"Pi": "inf", "cavitation": "auto"}  # JSON holds inf as "inf"
+    assert a["fixed_physics"] == {**_DEFAULTS, "Pi": "inf"}  # JSON holds inf as "inf"
     assert a["sweep_file"] == text
     assert {"python", "numpy", "numba", "dask", "xarray", "zarr"} <= set(a["package_versions"])
     assert a["created"].startswith("20")
@@ -611,12 +615,13 @@ def test_a_fixed_eps_and_an_St_axis_run_end_to_end(tmp_path, capsys):
                               store=str(tmp_path / "one.zarr"))
     sweep = parse_sweep(text)
     assert sweep.axis_names == ("St",)
-    assert sweep.fixed == {"eps": 1e-2, "Pi": math.inf, "cavitation": "auto"}
+    assert sweep.fixed == {"eps": 1e-2, **_DEFAULTS}
     assert sweep.n_scenes == 4
     summary = run(sweep)
     assert summary.done == 4 and sorted(CALLS) == [(s, 1e-2) for s in (1.0, 3.0, 10.0, 30.0)]
     ds = open_results(sweep.store).load()
-    assert ds.status.dims == ("St",) and ds.attrs["fixed_physics"] == {"eps": 1e-2, "Pi": "inf", "cavitation": "auto"}
+    assert ds.status.dims == ("St",) and ds.attrs["fixed_physics"] == {"eps": 1e-2, **_DEFAULTS,
+                                                                     "Pi": "inf"}
     assert ds.attrs["axes"] == ["St"]
     assert ds.status.encoding["chunks"] == (4,)  # one axis: one chunk
     (row,) = critical_stokes(ds)  # the fixed eps is a plane one row high
@@ -640,7 +645,7 @@ def test_axes_in_either_order_give_the_same_sweep():
 
 
 @pytest.mark.parametrize("grid, physics, words", [
-    ("St = [1.0]\nbeta = [0.1]", "eps = 1e-2", ["unknown physics field", "beta", "valid", "'St'"]),
+    ("St = [1.0]\ngamma = [0.1]", "eps = 1e-2", ["unknown physics field", "gamma", "valid", "'St'"]),
     ("St = [1.0]\ncavitation = ['off']", "eps = 1e-2", ["cavitation", "model", "[physics]"]),
     ("St = [1.0]", "eps = 1e-2\ncavitation = 'bubbly'", ["cavitation", "one of"]),
     ("St = [1.0]\nPi = [-1.0]", "eps = 1e-2", ["Pi", "valid range"]),
@@ -701,7 +706,7 @@ def test_journal_lines_hold_the_physics_and_replay_matches_every_axis(tmp_path):
         st._dirty.clear()  # killed before the merge
         st._close_journal()
     lines = [json.loads(line) for line in Path(str(sweep.store) + ".journal").read_text().splitlines()]
-    assert [list(r["physics"]) for r in lines] == [["St", "eps", "Pi", "cavitation"]] * 3
+    assert [list(r["physics"]) for r in lines] == [list(Physics.names())] * 3
     assert {(r["physics"]["St"], r["physics"]["eps"]) for r in lines} == \
         {(1.0, 1e-3), (1.0, 1e-2), (3.0, 1e-3)}
     CALLS.clear()

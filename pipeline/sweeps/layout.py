@@ -27,7 +27,7 @@ from solver.physics import Physics
 __all__ = ["STORE_SCHEMA", "VARIABLES", "FLOATS", "FLAGS", "COUNTS", "DIAGNOSTIC", "SCALING",
            "STATUS_CODES", "MODEL_CODES", "empty_dataset", "zarr_warnings"]
 
-STORE_SCHEMA = 4  # bump when variables or their meaning change (an old store is then refused)
+STORE_SCHEMA = 5  # bump when variables or their meaning change (an old store is then refused)
 
 _DTYPE = {"float": "f8", "flag": "i1", "count": "i4"}
 # name: (dtype, long_name, units), generated from the registry; flags are int8 0/1 with fill -1

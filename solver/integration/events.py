@@ -11,9 +11,12 @@ from .._jit import jit
 __all__ = ["RELAXED", "RELAXED_FULL", "reached"]
 
 # The deformation has relaxed and the remaining motion can only relax it further: from here the
-# rigid departure is exact (docs/model.md, "Rigid solution"). params = (release, V_peak):
-# stop once X > 0, max|W| < release X, and the spheres separate (V < 0) or are past the rigid
-# deformation peak (V < V_peak).
+# rigid departure is exact (docs/model.md, "Rigid solution"). params = (release, V_peak,
+# slope_compression, slope_tension, law_tol): stop once X > 0, max|W| < release X, the spheres
+# separate (V < 0) or are past the rigid deformation peak (V < V_peak), and the liquid's law
+# changes the rigid film by less than law_tol (slope times the rigid axis pressure |3V/X^2|,
+# compression or tension; both slopes 0 for the classic film, docs/model.md "Pressure-dependent
+# viscosity and density").
 RELAXED = 1
 # The same, and no cavity left: for a film whose cavity has a memory (JFO), the rigid departure is
 # exact only once the film is full again.
@@ -27,6 +30,9 @@ def reached(kind, params, steps, x, v, w_absmax, cavity_radius):
     the cavity, 0 without)."""
     relaxed = (steps > 0 and x > 0.0 and w_absmax < params[0] * x
                and (v < 0.0 or v < params[1]))
+    slope = params[2] if v > 0.0 else params[3]
+    if slope > 0.0:
+        relaxed = relaxed and slope * 3.0 * abs(v) / (x * x) < params[4]
     if kind == RELAXED:
         return relaxed
     if kind == RELAXED_FULL:

@@ -26,7 +26,7 @@ model's terms come from model/film.py; this module knows nothing of the physics 
 import numpy as np
 
 from .._jit import jit
-from ..model.film import (cavity_edge, cell_content, constrain, jacobian, residual,
+from ..model.film import (cavity_edge, cell_content, compression_work, constrain, jacobian, residual,
                           energy_rates, face_fluxes, film_force, gap, jfo_void, update_cavity,
                           update_cavity_jfo, void_work)
 from ..physics import CAVITATION, PI, ST
@@ -56,7 +56,7 @@ _E_K, _E_S, _DISS = SERIES_INDEX["E_k"], SERIES_INDEX["E_s"], SERIES_INDEX["diss
 _H0, _W_ABSMAX = SERIES_INDEX["H0"], SERIES_INDEX["W_absmax"]
 _P_MAX, _P_MIN = SERIES_INDEX["P_max"], SERIES_INDEX["P_min"]
 _R_CAV, _V_VOID = SERIES_INDEX["cavity_radius"], SERIES_INDEX["void_volume"]
-_W_VOID = SERIES_INDEX["void_work"]
+_W_VOID, _E_C = SERIES_INDEX["void_work"], SERIES_INDEX["E_c"]
 
 
 @jit
@@ -238,6 +238,7 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
         row[_R_CAV] = r_cav
         row[_V_VOID] = v_void
         row[_W_VOID] = worked
+        row[_E_C] = compression_work(area, y0[:n], h, theta0, phys)
         if save_profiles:
             p_hist[n_rows] = y0[:n]
             w_hist[n_rows] = w
@@ -280,8 +281,8 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                 b = (1.0 + om) / (1.0 + 2.0 * om)
             bh = b * dt
             for i in range(n - 1):  # the cells' content (H itself unless JFO)
-                h_hist[i] = a1 * cell_content(theta0[i], h0[i])[0] \
-                    + a2 * cell_content(theta1[i], h1[i])[0]
+                h_hist[i] = a1 * cell_content(theta0[i], h0[i], y0[i], phys)[0] \
+                    + a2 * cell_content(theta1[i], h1[i], y1[i], phys)[0]
             h_hist[n - 1] = a1 * h0[n - 1] + a2 * h1[n - 1]
             x_hist = a1 * y0[n] + a2 * y1[n]
             v_hist = a1 * y0[n + 1] + a2 * y1[n + 1]

@@ -31,14 +31,18 @@ import numpy as np
 
 from .._jit import jit
 from ..integration.linalg import matvec
-from ..physics import CAVITATION, PI, ST
+from ..physics import CAVITATION, DENSITY, PI, ST
+from .liquid import compression_energy, density, kirchhoff_difference, volume_difference
 
 
 # ---- the terms ------------------------------------------------------------------------------------
 @jit
 def face_flux(s_lo, s_hi, s_f, p_lo, p_hi, h_lo, h_hi, phys):
     """Flux ``q_f`` through the face at ``s_f`` between nodes ``lo`` and ``hi``, and its partial
-    derivatives.
+    derivatives. The pressure difference that drives it is ``Int rho_bar/mu_bar dP``
+    (model/liquid.py: ``kirchhoff_difference``), ``P_hi - P_lo`` for the classic film: with it
+    the film is isoviscous in the Kirchhoff variable, and the face stays exact for the rigid
+    Barus film as it is for the classic one.
 
     Returns
     -------
@@ -46,23 +50,24 @@ def face_flux(s_lo, s_hi, s_f, p_lo, p_hi, h_lo, h_hi, phys):
     """
     ds3 = 3.0 * (s_hi - s_lo)
     sum_h = h_lo + h_hi
-    q = s_f * h_lo * h_lo * h_hi * h_hi / (ds3 * sum_h) * (p_hi - p_lo)
+    dp, ddp_lo, ddp_hi = kirchhoff_difference(p_lo, p_hi, phys)
+    q = s_f * h_lo * h_lo * h_hi * h_hi / (ds3 * sum_h) * dp
     k = s_f / ds3
-    c = k * h_lo * h_lo * h_hi * h_hi / sum_h  # the conductance dq/dP_hi
-    dp = p_hi - p_lo
+    c = k * h_lo * h_lo * h_hi * h_hi / sum_h  # the conductance dq/d(dp)
     dq_dh_lo = dp * k * h_hi * h_hi * h_lo * (h_lo + 2.0 * h_hi) / (sum_h * sum_h)
     dq_dh_hi = dp * k * h_lo * h_lo * h_hi * (h_hi + 2.0 * h_lo) / (sum_h * sum_h)
-    return q, -c, c, dq_dh_lo, dq_dh_hi
+    return q, c * ddp_lo, c * ddp_hi, dq_dh_lo, dq_dh_hi
 
 
 @jit
-def face_dissipation(s_lo, s_hi, s_f, p_lo, p_hi, h_lo, h_hi, q):
-    """``Int q dP/ds ds`` over the face interval for the face flux ``q``: with ``q ~ s`` and ``H``
-    linear in ``s`` as in ``face_flux`` it is ``q dP s_bar / s_f``, ``s_bar`` the mean of ``s``
-    under ``H^-3`` (exact for the rigid film; the plain ``q dP`` overestimates it on stretched
-    cells)."""
+def face_dissipation(s_lo, s_hi, s_f, p_lo, p_hi, h_lo, h_hi, q, phys):
+    """``Int J dP/ds ds`` over the face interval for the face's mass flux ``q`` (``J = q/rho_bar``
+    the volume flux): with ``q ~ s`` and ``H`` linear in ``s`` as in ``face_flux`` it is
+    ``q Int dP/rho_bar s_bar / s_f``, ``s_bar`` the mean of ``s`` under ``H^-3`` (exact for the
+    rigid classic film; the plain ``q dP`` overestimates it on stretched cells). The viscosity
+    does not enter: the volume flux is the same through the whole face interval."""
     s_bar = s_lo + (s_hi - s_lo) * h_lo / (h_lo + h_hi)
-    return q * (p_hi - p_lo) * s_bar / s_f
+    return q * volume_difference(p_lo, p_hi, phys) * s_bar / s_f
 
 
 @jit
@@ -111,11 +116,27 @@ def cell_constraint(p, phys):
 
 
 @jit
-def cell_content(theta, h):
-    """Liquid content of a cell per unit area, ``theta H`` (``theta`` the fraction of the gap the
-    liquid fills: 1 in a full cell, and in every cell of the classic and Reynolds films, where the
-    content is exactly ``H``), and its partial derivatives in ``theta`` and ``H``."""
-    return theta * h, h, theta
+def cell_content(theta, h, p, phys):
+    """Liquid content of a cell per unit area, ``rho_bar theta H`` (``theta`` the fraction of the
+    gap the liquid fills: 1 in a full cell, and in every cell of the classic and Reynolds films;
+    ``rho_bar`` its density at the cell's pressure, model/liquid.py: 1 at constant density, where
+    the content is exactly ``H``), and its partial derivatives in ``theta``, ``H`` and ``P``."""
+    rho, drho = density(p, phys)
+    return rho * theta * h, rho * h, rho * theta, drho * theta * h
+
+
+@jit
+def compression_work(area, p, h, theta, phys):
+    """Energy stored in the compressed liquid, ``E_c = (2/(3 St)) Int rho_bar theta H e(P) ds``
+    (``e`` per unit mass, model/liquid.py: ``compression_energy``), relative to the initial kinetic
+    energy; 0 at constant density (docs/model.md, "Energy")."""
+    if phys[DENSITY] == 0.0:
+        return 0.0
+    total = 0.0
+    for i in range(theta.size):  # the cells (the last node is the far-field boundary)
+        total += area[i] * cell_content(theta[i], h[i], p[i], phys)[0] \
+            * compression_energy(p[i], phys)
+    return 2.0 * total / (3.0 * phys[ST])
 
 
 @jit
@@ -241,7 +262,7 @@ def residual(s, s_face, area, weight, phys, bh, c_hist, x_hist, v_hist, x, v, p,
     face_fluxes(s, s_face, p, h, phys, q)
     for i in range(n - 1):
         dq = q[i] - (q[i - 1] if i > 0 else 0.0)
-        res[i] = cell_content(theta[i], h[i])[0] - c_hist[i] - bh / area[i] * dq
+        res[i] = cell_content(theta[i], h[i], p[i], phys)[0] - c_hist[i] - bh / area[i] * dq
     res[n - 1] = far_field_row(p[n - 2], p[n - 1], h[n - 2], h[n - 1])[0]
     res[n] = x - x_hist + bh * v
     res[n + 1] = v - v_hist + bh * film_force(weight, p) / (3.0 * phys[ST])
@@ -315,7 +336,9 @@ def jacobian(s, s_face, area, weight, influence, phys, bh, p, theta, h, active, 
             dres_dh[f + 1, 0] += g * dq_dhi
             dres_dh[f + 1, 1] += g * dq_dhj
     for i in range(n - 1):
-        dres_dh[i, 1] += cell_content(theta[i], h[i])[2]
+        _, _, dc_dh, dc_dp = cell_content(theta[i], h[i], p[i], phys)
+        dres_dh[i, 1] += dc_dh
+        jac[i, i] += dc_dp
     _, dr_dpi, dr_dpo, dr_dhi, dr_dho = far_field_row(p[n - 2], p[n - 1], h[n - 2], h[n - 1])
     jac[n - 1, n - 1] += dr_dpo
     jac[n - 1, n - 2] += dr_dpi
@@ -349,7 +372,7 @@ def jacobian(s, s_face, area, weight, influence, phys, bh, p, theta, h, active, 
         for i in range(n - 1):
             if active[i]:
                 jac[:, i] = 0.0
-                jac[i, i] = cell_content(theta[i], h[i])[1]
+                jac[i, i] = cell_content(theta[i], h[i], p[i], phys)[1]
 
 
 @jit
@@ -361,6 +384,7 @@ def energy_rates(s, s_face, weight, phys, x, p, w, h, q):
     strain = strain_energy(weight, s[n - 1], p, w, phys)
     diss = 0.0
     for f in range(n - 1):
-        diss += face_dissipation(s[f], s[f + 1], s_face[f], p[f], p[f + 1], h[f], h[f + 1], q[f])
+        diss += face_dissipation(s[f], s[f + 1], s_face[f], p[f], p[f + 1], h[f], h[f + 1], q[f],
+                                 phys)
     diss += far_field_dissipation(x, s[n - 1], p[n - 1], h[n - 1])
     return strain, 2.0 * diss / (3.0 * phys[ST])

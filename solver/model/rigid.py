@@ -41,6 +41,9 @@ __all__ = [
     "handover_separation",
     "deformation_ratio",
     "exact_for",
+    "departs_rigidly",
+    "law_slopes",
+    "law_onset_separation",
     "release_event",
     "approach_peaks",
     "start_deformation_ratio",
@@ -129,10 +132,11 @@ def restitution(x_from, v_from, physics, x_ref):
     ``x_ref`` from the release state ``(X1, V1)`` over the approach speed there,
     ``e_wet = ln(x_e / x_ref) / St_ref`` (``St_ref = impact_stokes``; 0 when the spheres stick).
 
-    The one place where the departure after the coupled phase is modelled: exact for the classic
-    film (``exact_for``). A film with a pressure floor (cavitation) or a pressure-dependent
-    viscosity departs differently; its departure goes here, selected by ``exact_for``."""
-    if not exact_for(physics):
+    The one place where the departure after the coupled phase is modelled: exact for a film
+    without a floor (``departs_rigidly``; a pressure-dependent liquid is released only where its
+    law no longer matters, ``release_event``). A film with a pressure floor (cavitation) departs
+    differently (model/cavitation.py)."""
+    if not departs_rigidly(physics):
         raise NotImplementedError(f"no departure model for non-classic physics {physics}")
     x_start = physics.x_start
     speed = departure_speed(x_from, v_from, physics.St, x_ref)
@@ -142,7 +146,7 @@ def restitution(x_from, v_from, physics, x_ref):
 def restitution_from_rest(ln_x_e, physics, x_ref):
     """``restitution`` from the rest separation alone (the master curve's ``ln_x_e_x1``): the
     same closed form, ``x_e`` fixing the whole rigid departure."""
-    if not exact_for(physics):
+    if not departs_rigidly(physics):
         raise NotImplementedError(f"no departure model for non-classic physics {physics}")
     speed = departure_speed_from_rest(ln_x_e, physics.St, x_ref)
     return speed / (impact_stokes(physics.St, physics.x_start, x_ref) / physics.St)
@@ -159,12 +163,53 @@ def exact_for(physics) -> bool:
     return physics.classic
 
 
-def release_event(release, stokes):
+def departs_rigidly(physics) -> bool:
+    """Whether the departure after ``release_event`` is this module's closed form: for every
+    film without a cavitation floor (the event waits until a pressure-dependent liquid's law no
+    longer matters)."""
+    return physics.cavitation == "off"
+
+
+def law_slopes(physics):
+    """How strongly the liquid's laws change the film per unit pressure, in compression and in
+    tension: ``d ln(rho/mu) / dP`` at ``P = 0`` in magnitude (``beta`` and ``c1``; 0 for the
+    classic film; the tension slope is 0 unless the viscosity law is read in tension)."""
+    viscous = physics.beta if physics.viscosity_law != "constant" else 0.0
+    dense = physics.dh_c1 if physics.density_law != "constant" else 0.0
+    tension = viscous if physics.viscosity_in_tension == "law" else 0.0
+    return viscous + dense, tension
+
+
+def release_event(release, stokes, physics=None):
     """The coupled phase's terminal event (integration/events.py): the deformation has relaxed
     below ``release`` (max|W|/X) and the rigid motion can only relax it further, separating or past
     the rigid deformation peak ``V < 0.4/St`` (``W(0)/X ~ V X^-2.5`` falls once ``St V < 0.4``).
-    From there this module's departure ``X_e = X exp(-St V)`` is exact."""
-    return RELAXED, np.array([release, 0.4 / stokes])
+    With a pressure-dependent liquid (``physics``), also its law changes the rigid film by less
+    than ``release`` (``law_slopes`` times ``|3V/X^2|``). From there this module's departure
+    ``X_e = X exp(-St V)`` is exact (to ``release``)."""
+    slopes = law_slopes(physics) if physics is not None else (0.0, 0.0)
+    return RELAXED, np.array([release, 0.4 / stokes, slopes[0], slopes[1], release])
+
+
+def law_onset_separation(x_start, stokes, slope, tol):
+    """First separation on the rigid path from ``(x_start, 1)`` where the liquid's law changes the
+    film by ``tol``: ``slope * P(0) = tol`` with the axis pressure ``P(0) = 3V/X^2``
+    (``law_slopes``). Up to there the classic rigid approach is exact to ``tol``. Returns
+    ``None`` when the path never gets there (``slope = 0``: the classic film)."""
+    if slope <= 0.0:
+        return None
+    log_c = math.log(3.0 * slope / tol) - 2.0 * math.log(x_start)
+
+    def log_ratio(u):  # ln(slope P(0) / tol) at u = ln(X0/X), V = 1 - u/St
+        return log_c + math.log1p(-u / stokes) + 2.0 * u
+
+    if log_ratio(0.0) >= 0.0:
+        return x_start
+    u_peak = stokes - 0.5  # P(0) = 3V/X^2 peaks there (approach_peaks)
+    if u_peak <= 0.0 or log_ratio(u_peak) < 0.0:
+        return None
+    u = optimize.brentq(log_ratio, 0.0, u_peak, xtol=1e-14, rtol=1e-14)
+    return x_start * math.exp(-u)
 
 
 def approach_peaks(x_start, stokes, x_end):
@@ -188,7 +233,7 @@ def approach_peaks(x_start, stokes, x_end):
     x_p, v_p, t_p = at(stokes - 0.5)
     return {"peak_force": v_f / x_f, "t_peak_force": t_f,
             "w0_max": 3.0 * v_w * x_w**-1.5 * I0, "t_max_deformation": t_w,
-            "p_max": 3.0 * v_p / (x_p * x_p), "t_p_max": t_p}
+            "p_max": 3.0 * v_p / (x_p * x_p), "t_p_max": t_p, "x_p_max": x_p}
 
 
 def handover_separation(x_start, stokes, threshold):

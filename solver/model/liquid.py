@@ -1,0 +1,172 @@
+"""The liquid's constitutive laws: viscosity and density against the film pressure.
+
+Dimensionless (docs/model.md, "Pressure-dependent viscosity and density"): ``mu_bar = mu/mu0``
+and ``rho_bar = rho/rho0`` as functions of the gauge pressure ``P`` in ``p* = mu0 a v0 / x1^2``,
+read from the physics array (solver/physics.py: ``BETA``, ``VISCOSITY``...):
+
+- viscosity: constant; Barus ``ln mu_bar = beta P``; Roelands
+  ``ln mu_bar = (beta P_R / Z) ((1 + P/P_R)^Z - 1)`` (slope ``beta`` at ``P = 0``);
+- density: constant; Dowson-Higginson ``rho_bar = 1 + c1 P / (1 + c2 P)``.
+
+Both apply to compression only: where ``P <= 0`` the liquid keeps its ambient viscosity and
+density (a real liquid cavitates long before the Barus formula's thinning in tension matters;
+``viscosity_in_tension = "law"`` reads the viscosity law at ``P < 0`` too, for comparison).
+
+What the film needs from them (model/film.py):
+
+- ``kirchhoff_difference``: ``Int rho_bar/mu_bar dP`` between two nodes, the pressure difference
+  that drives the face flux (the generalised Kirchhoff transform). ``g = ln mu_bar - ln rho_bar``
+  is taken linear in ``P`` between the nodes, so the integral is an exponential fit: exact for
+  Barus with constant density (``g = beta P``), second order otherwise; evaluated from the node
+  with the smaller ``g`` through ``expm1``, without the cancellation that ruins the reduced
+  pressure ``(1 - exp(-beta P))/beta`` as an unknown once ``beta P ~ 30``;
+- ``density``, for the cells' liquid content ``rho_bar theta H``;
+- ``volume_difference`` (``Int dP / rho_bar``) and ``compression_energy``: the energy terms.
+"""
+
+import math
+
+import numpy as np
+
+from .._jit import jit
+from ..physics import BETA, DENSITY, DH_C1, DH_C2, ROELANDS_PR, ROELANDS_Z, TENSION, VISCOSITY
+
+# codes in the physics array (solver/physics.py: VISCOSITY_LAWS, DENSITY_LAWS, TENSION_CHOICES)
+CONSTANT, BARUS, ROELANDS = 0.0, 1.0, 2.0
+DOWSON_HIGGINSON = 1.0
+LAW_IN_TENSION = 1.0
+# Roelands read in tension ("law") is undefined at P <= -P_R; it is held at this fraction of it
+ROELANDS_TENSION_LIMIT = 0.99
+
+
+@jit
+def isoviscous(phys):
+    """True when neither viscosity nor density depends on pressure (the classic film)."""
+    return phys[VISCOSITY] == CONSTANT and phys[DENSITY] == CONSTANT
+
+
+@jit
+def log_viscosity(p, phys):
+    """``ln mu_bar`` at the pressure ``p`` and its derivative in ``p``."""
+    law = phys[VISCOSITY]
+    if law == CONSTANT:
+        return 0.0, 0.0
+    if p <= 0.0 and phys[TENSION] != LAW_IN_TENSION:
+        return 0.0, 0.0
+    beta = phys[BETA]
+    if law == BARUS:
+        return beta * p, beta
+    z = phys[ROELANDS_Z]
+    p_r = phys[ROELANDS_PR]
+    base = 1.0 + max(p, -ROELANDS_TENSION_LIMIT * p_r) / p_r
+    slope = beta * base ** (z - 1.0) if p > -ROELANDS_TENSION_LIMIT * p_r else 0.0
+    return beta * p_r / z * (base**z - 1.0), slope
+
+
+@jit
+def density(p, phys):
+    """``rho_bar`` at the pressure ``p`` and its derivative in ``p``."""
+    if phys[DENSITY] == CONSTANT or p <= 0.0:
+        return 1.0, 0.0
+    c1 = phys[DH_C1]
+    c2 = phys[DH_C2]
+    den = 1.0 + c2 * p
+    return 1.0 + c1 * p / den, c1 / (den * den)
+
+
+@jit
+def _mobility_log(p, phys):
+    """``g = ln mu_bar - ln rho_bar`` (``rho_bar/mu_bar = exp(-g)``) and ``dg/dp``."""
+    g, dg = log_viscosity(p, phys)
+    if phys[DENSITY] != CONSTANT:
+        rho, drho = density(p, phys)
+        g -= math.log(rho)
+        dg -= drho / rho
+    return g, dg
+
+
+@jit
+def _fitted(a, b, phys):
+    """``Int_a^b exp(-g) dP`` with ``g`` linear between ``a`` and ``b`` (on one side of 0), and its
+    derivatives in ``a`` and ``b``.
+
+    ``Int = (b - a) exp(-m) phi(d)``, ``m`` the smaller of ``g(a), g(b)``, ``d = |g(b) - g(a)|``,
+    ``phi(d) = (1 - e^-d)/d``; with ``psi(d) = (1 - e^-d (1 + d))/d^2`` the derivative of the
+    mean ``exp(-m) phi`` is ``-exp(-m) psi`` in the larger ``g`` and ``-exp(-m)(phi - psi)`` in
+    the smaller."""
+    ga, dga = _mobility_log(a, phys)
+    gb, dgb = _mobility_log(b, phys)
+    m = min(ga, gb)
+    d = abs(gb - ga)
+    scale = math.exp(-m)
+    if d < 1e-3:  # series: the next terms are d^4/120 and d^4/144 (relative 1e-14 here)
+        phi = 1.0 - d / 2.0 + d * d / 6.0 - d * d * d / 24.0
+        psi = 0.5 - d / 3.0 + d * d / 8.0 - d * d * d / 30.0
+    else:
+        phi = -math.expm1(-d) / d
+        psi = (1.0 - math.exp(-d) * (1.0 + d)) / (d * d)
+    mean = scale * phi
+    d_hi = -scale * psi  # d mean / d g of the node with the larger g
+    d_lo = -scale * (phi - psi)
+    if ga <= gb:
+        dmean_da, dmean_db = d_lo, d_hi
+    else:
+        dmean_da, dmean_db = d_hi, d_lo
+    span = b - a
+    return span * mean, -mean + span * dmean_da * dga, mean + span * dmean_db * dgb
+
+
+@jit
+def kirchhoff_difference(p_lo, p_hi, phys):
+    """``Int_{p_lo}^{p_hi} rho_bar / mu_bar dP``, the pressure difference that drives the flux
+    between two nodes, and its derivatives in ``p_lo`` and ``p_hi``: ``p_hi - p_lo`` exactly for
+    the classic film. A face whose pressures straddle 0 is split there (the laws have a kink at 0:
+    compression only)."""
+    if isoviscous(phys):
+        return p_hi - p_lo, -1.0, 1.0
+    if (p_lo < 0.0 < p_hi) or (p_hi < 0.0 < p_lo):
+        first, d_lo, _ = _fitted(p_lo, 0.0, phys)
+        second, _, d_hi = _fitted(0.0, p_hi, phys)
+        return first + second, d_lo, d_hi
+    return _fitted(p_lo, p_hi, phys)
+
+
+@jit
+def _specific_volume_integral(p, phys):
+    """``Int_0^p dP / rho_bar``: ``p`` where the density is constant; for Dowson-Higginson
+    (``rho_bar = (1 + b p)/(1 + c2 p)``, ``b = c1 + c2``) ``(c2/b) p + (c1/b^2) ln(1 + b p)``."""
+    if phys[DENSITY] == CONSTANT or p <= 0.0:
+        return p
+    c1 = phys[DH_C1]
+    b = c1 + phys[DH_C2]
+    return phys[DH_C2] / b * p + c1 / (b * b) * math.log1p(b * p)
+
+
+@jit
+def volume_difference(p_lo, p_hi, phys):
+    """``Int_{p_lo}^{p_hi} dP / rho_bar``: the work per unit *volume* of liquid that crosses a
+    face, which makes the face's dissipation from its mass flux (``p_hi - p_lo`` at constant
+    density)."""
+    if phys[DENSITY] == CONSTANT:
+        return p_hi - p_lo
+    return _specific_volume_integral(p_hi, phys) - _specific_volume_integral(p_lo, phys)
+
+
+@jit
+def compression_energy(p, phys):
+    """Energy stored per unit mass of liquid (in ``p*/rho0``) compressed to ``p``:
+    ``e = Int_0^p P rho_bar' / rho_bar^2 dP`` (docs/model.md, "Energy"), 0 at constant density;
+    for Dowson-Higginson ``(c1/b^2) (ln(1 + b p) - b p / (1 + b p))``, ``b = c1 + c2``."""
+    if phys[DENSITY] == CONSTANT or p <= 0.0:
+        return 0.0
+    c1 = phys[DH_C1]
+    b = c1 + phys[DH_C2]
+    y = b * p
+    return c1 / (b * b) * (math.log1p(y) - y / (1.0 + y))
+
+
+@jit
+def viscosity_ratio(p, phys):
+    """``mu/mu0`` at the pressure ``p`` (inf beyond the double range)."""
+    g = log_viscosity(p, phys)[0]
+    return math.exp(g) if g < 709.0 else np.inf

@@ -1,0 +1,125 @@
+"""The liquid's laws (solver/model/liquid.py) against closed forms, quadrature and high precision.
+
+The face's pressure difference ``Int rho/mu dP`` is the one new discretised term of a
+pressure-dependent film: exact for Barus at constant density (its exponential fit is the closed
+form), free of the cancellation that ruins the reduced pressure as an unknown, and second order
+for the other laws.
+"""
+
+import math
+from decimal import Decimal, getcontext
+
+import numpy as np
+import pytest
+from scipy import integrate
+
+from solver import Physics
+from solver.model.liquid import (compression_energy, density, kirchhoff_difference,
+                                 log_viscosity, viscosity_ratio, volume_difference)
+
+
+def _phys(**kw):
+    return Physics(St=1.0, eps=1e-4, **kw).as_array()
+
+
+def _quad_difference(a, b, phys):
+    """``Int_a^b rho/mu dP`` by adaptive quadrature (split at the kink P = 0)."""
+    def f(p):
+        return density(p, phys)[0] * math.exp(-log_viscosity(p, phys)[0])
+    points = [0.0] if a < 0.0 < b or b < 0.0 < a else None
+    return integrate.quad(f, a, b, points=points, epsabs=0.0, epsrel=1e-13, limit=200)[0]
+
+
+def test_barus_difference_has_no_cancellation_in_a_glassy_film():
+    """At ``beta P ~ 30`` the reduced pressure ``(1 - exp(-beta P))/beta`` keeps ~1 % of its
+    digits in a face difference; the kernel's ``exp(-beta P_lo) (-expm1(-beta dP))/beta`` keeps
+    them all: checked against the same closed form in 50-digit decimal arithmetic."""
+    getcontext().prec = 50
+    beta = 5.0
+    phys = _phys(beta=beta)
+    for p_lo in (0.2, 3.0, 6.0, 8.0):
+        for dp in (1e-9, 1e-6, 1e-3, 1.0):
+            got = kirchhoff_difference(p_lo, p_lo + dp, phys)[0]
+            b, lo, hi = Decimal(beta), Decimal(p_lo), Decimal(p_lo) + Decimal(dp)
+            exact = float(((-b * lo).exp() - (-b * hi).exp()) / b)
+            # 1e-13: a few ulps through expm1 and exp (relative); the plain difference of reduced
+            # pressures is off by ~1e-16 / (exp(-beta P) dP) relative: 1 at P = 8, dP = 1e-6
+            assert got == pytest.approx(exact, rel=1e-13)
+    naive = (1 - math.exp(-beta * 8.000001)) / beta - (1 - math.exp(-beta * 8.0)) / beta
+    exact = kirchhoff_difference(8.0, 8.000001, phys)[0]
+    assert abs(naive / exact - 1.0) > 1e-3  # what the reduced pressure as an unknown loses
+
+
+@pytest.mark.parametrize("law", [
+    dict(beta=4.0, viscosity_law="roelands", roelands_Z=0.6, roelands_PR=0.4),
+    dict(density_law="dowson-higginson", dh_c1=0.3, dh_c2=0.85),
+    dict(beta=4.0, density_law="dowson-higginson", dh_c1=0.6, dh_c2=1.7),
+])
+def test_difference_is_second_order_for_the_other_laws(law):
+    """The exponential fit of ``ln(mu/rho)`` across a face is exact where the log is linear (Barus
+    at constant density) and second order where it curves: the error of one interval falls 8x
+    when it halves (cubic per interval, so second order over a fixed span)."""
+    phys = _phys(**law)
+    errors = []
+    for width in (0.1, 0.05, 0.025, 0.0125):
+        a = 0.8
+        errors.append(abs(kirchhoff_difference(a, a + width, phys)[0]
+                          - _quad_difference(a, a + width, phys)))
+    orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    # local order 3 (cubic error per interval); 2.7: allows the next term at the widest interval
+    assert np.all(orders > 2.7), orders
+
+
+def test_barus_difference_is_exact_and_splits_at_the_kink():
+    phys = _phys(beta=2.5)
+    for a, b in ((0.1, 3.0), (3.0, 0.1), (-2.0, 1.5), (1.5, -2.0), (-1.0, -0.3)):
+        # 1e-12: the closed form against quadrature to 1e-13 (relative)
+        assert kirchhoff_difference(a, b, phys)[0] == pytest.approx(_quad_difference(a, b, phys),
+                                                                   rel=1e-12)
+    # in tension the liquid keeps mu0 (viscosity_in_tension = "ambient"): the plain difference
+    assert kirchhoff_difference(-1.0, -0.3, phys)[0] == 0.7
+    tension = _phys(beta=2.5, viscosity_in_tension="law")
+    assert kirchhoff_difference(-1.0, -0.3, tension)[0] == pytest.approx(
+        (math.exp(2.5) - math.exp(0.75)) / 2.5, rel=1e-13)
+
+
+def test_small_beta_is_the_classic_film():
+    """``beta -> 0``: the difference tends to ``dP`` (relative change ``~beta P``), and at
+    ``beta = 0`` it is ``dP`` bit for bit."""
+    for beta in (1e-6, 1e-9, 1e-12):
+        phys = _phys(beta=beta)
+        got = kirchhoff_difference(0.5, 2.0, phys)[0]
+        # the relative change is beta times the mean pressure (1.25), to first order
+        assert abs(got / 1.5 - 1.0) == pytest.approx(1.25 * beta, rel=1e-3)
+    assert kirchhoff_difference(0.5, 2.0, _phys())[0] == 1.5
+
+
+def test_roelands_slope_at_zero_is_beta():
+    phys = _phys(beta=3.0, viscosity_law="roelands", roelands_Z=0.6, roelands_PR=0.4)
+    g, slope = log_viscosity(1e-9, phys)
+    assert slope == pytest.approx(3.0, rel=1e-8)  # (1 + P/P_R)^(Z-1) at P = 1e-9
+    # grows more slowly than Barus above p_R (Z < 1)
+    assert log_viscosity(2.0, phys)[0] < 3.0 * 2.0
+    assert viscosity_ratio(2.0, _phys(beta=3.0)) == pytest.approx(math.exp(6.0), rel=1e-14)
+
+
+def test_energy_terms_match_their_integrals():
+    phys = _phys(density_law="dowson-higginson", dh_c1=0.6, dh_c2=1.7)
+
+    def rho(p):
+        return density(p, phys)[0]
+
+    def drho(p):
+        return density(p, phys)[1]
+
+    for p in (0.01, 0.5, 3.0, 20.0):
+        e = integrate.quad(lambda x: x * drho(x) / rho(x) ** 2, 0.0, p, epsrel=1e-13)[0]
+        # 1e-10: closed form against quadrature (1e-13), relative; the closed form's log1p and
+        # the subtraction lose up to ~1e-11 at small p (the value is ~c1 p^2/2)
+        assert compression_energy(p, phys) == pytest.approx(e, rel=1e-10)
+        vol = integrate.quad(lambda x: 1.0 / rho(x), 0.0, p, epsrel=1e-13)[0]
+        assert volume_difference(0.0, p, phys) == pytest.approx(vol, rel=1e-12)
+    assert compression_energy(-1.0, phys) == 0.0  # compression only
+    assert density(-1.0, phys) == (1.0, 0.0)
+    # Dowson-Higginson tends to 1 + c1/c2 at infinite pressure
+    assert density(1e12, phys)[0] == pytest.approx(1.0 + 0.6 / 1.7, rel=1e-9)
