@@ -26,7 +26,7 @@ from pipeline.sweeps.analysis import critical_stokes
 from pipeline.sweeps.config import ConfigError, cache_key, parse_sweep
 from pipeline.sweeps.journal import pending_journal
 from pipeline.sweeps.layout import FLOATS as FLOAT_FIELDS
-from pipeline.sweeps.layout import MODEL_CODES, STATUS_CODES, VARIABLES
+from pipeline.sweeps.layout import MODEL_CODES, STATUS_CODES, STORE_SCHEMA, VARIABLES
 from solver.physics import GROUPS, Physics
 
 # the fixed physics of a sweep that sets only St and eps: every other group at its default
@@ -307,7 +307,7 @@ def test_store_schema_and_attrs(tmp_path):
 
     assert a["solver_version"] == SOLVER_VERSION and a["accuracy"] == "fast"
     assert a["cache_key"] == sweep.cache_key() and a["numerics"] == sweep.numerics()
-    assert a["axes"] == ["St", "eps"] and a["store_schema"] == 4
+    assert a["axes"] == ["St", "eps"] and a["store_schema"] == STORE_SCHEMA
     assert a["fixed_physics"] == {**_DEFAULTS, "Pi": "inf"}  # JSON holds inf as "inf"
     assert a["sweep_file"] == text
     assert {"python", "numpy", "numba", "dask", "xarray", "zarr"} <= set(a["package_versions"])
