@@ -17,13 +17,14 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
 from .integration import stepper
 from .integration.grid import reference_grid, scaled_grid
 from .integration.events import RELAXED_FULL
-from .model import cavitation, liquid, rigid
+from .model import cavitation, liquid, piezoviscous, rigid
 from .observables import SERIES, STATUS, failure_message
 from .physics import Physics
 from .result import JSON_KEYS, SOLVER_VERSION, Collision
@@ -135,18 +136,18 @@ def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 
         raise ValueError(f"x_ref_x0 = {x_ref_x0!r}: the reference separation must be finite and "
                          "at least the start x0 (x_ref_x0 >= 1)")
     wall = time.perf_counter()
-    x_switch = handover_separation(physics, numerics)
-    if x_switch is None:
-        result = _rigid_only(physics, accuracy, numerics)
+    head = rigid_head(physics, numerics)
+    if head.rests:
+        result = _rigid_only(physics, accuracy, numerics, head)
     else:
-        result = _coupled(physics, accuracy, numerics, x_switch, x_ref_x0)
+        result = _coupled(physics, accuracy, numerics, head, x_ref_x0)
     result.x_ref_x0 = x_ref_x0
     result.wall_s = time.perf_counter() - wall
     return result
 
 
 def handover_separation(physics, numerics):
-    """Where the coupled phase takes over on approach: the first separation on the rigid path
+    """Where the coupled phase takes over on the classic rigid approach: the first separation
     where the deformation ``W(0)/X`` reaches ``switch`` (rigid.handover_separation) or the
     liquid's pressure dependence changes the rigid film by as much (rigid.law_onset_separation:
     up to there the classic rigid approach is exact to ``switch``); None when the spheres come to
@@ -156,6 +157,65 @@ def handover_separation(physics, numerics):
         rigid.law_onset_separation(physics.x_start, physics.St, rigid.law_slopes(physics)[0],
                                    numerics.switch)) if x is not None]
     return max(found) if found else None
+
+
+@dataclass
+class RigidHead:
+    """The rigid approach from the start ``(x0, V = 1, T = 0)`` until the coupled phase takes
+    over, or until rest (``rests``: the scene is rigid throughout; ``v = 0``, ``t = inf``, ``x`` the
+    rest separation)."""
+
+    x: float
+    v: float
+    t: float
+    rests: bool
+    event: str  # "handover", "glass" (Barus: near the glass gap) or "rest"
+    block: dict  # its time series (phase 0), without the end state when a coupled phase follows
+    peaks: dict  # rigid.approach_peaks keys, and x_p_max (the gap at the largest pressure)
+    pressure: object  # P(s) of the film at the end state, the coupled phase's start
+
+
+def rigid_head(physics, numerics) -> RigidHead:
+    """The rigid approach of ``physics``: the classic closed form (rigid.py) up to
+    ``handover_separation``, or for the Barus liquid at constant density its own rigid film
+    (model/piezoviscous.py, a scalar ODE with a closed-form force), up to the hand-over on the
+    Barus ``W(0)/X`` or near the glass gap."""
+    stokes, x_start, tau_per_t = physics.St, physics.x_start, physics.tau_per_t
+    if physics.viscosity_law == "barus" and piezoviscous.exact_for(physics):
+        path = piezoviscous.approach(x_start, 1.0, 0.0, stokes, physics.beta, numerics.switch)
+        rests = path.event == "rest"
+        # the path without its end when a coupled phase follows (the phase starts there), and
+        # without the rest (reached after infinite time)
+        keep = np.isfinite(path.t)
+        if not rests:
+            keep[-1] = False
+        block = _rigid_block(path.t[keep], path.x[keep], path.v[keep], tau_per_t, 0,
+                             1.0 - path.v[keep] ** 2)
+        block["F"] = path.force[keep]
+        block["W0"] = path.w0[keep]
+        block["P_max"] = path.p_axis[keep]
+        beta, x, v = physics.beta, path.x_end, path.v_end
+        return RigidHead(x, v, path.t_end, rests, path.event, block, path.peaks,
+                         lambda s: piezoviscous.rigid_pressure(s, x, v, beta))
+    x_switch = handover_separation(physics, numerics)
+    if x_switch is None:
+        ln_x_stop = rigid.rest_separation(x_start, 1.0, stokes)
+        u = np.linspace(0.0, 0.999 * stokes, 200) if stokes < 30 else np.linspace(0.0, 30.0, 200)
+        x = x_start * np.exp(-u)
+        t, v = _rigid_path(x_start, 1.0, 0.0, stokes, x)
+        block = _rigid_block(t, x, v, tau_per_t, 0, 1.0 - v * v)
+        return RigidHead(math.exp(ln_x_stop), 0.0, math.inf, True, "rest", block,
+                         rigid.approach_peaks(x_start, stokes, 0.0), None)
+    v_switch = float(rigid.velocity(x_switch, x_start, 1.0, stokes))
+    t_switch = float(rigid.elapsed_time(x_switch, x_start, 1.0, stokes))
+    block = None
+    if x_switch < x_start:
+        x_head = x_start * np.exp(-np.linspace(0.0, math.log(x_start / x_switch), 60))[:-1]
+        t_head, v_head = _rigid_path(x_start, 1.0, 0.0, stokes, x_head)
+        block = _rigid_block(t_head, x_head, v_head, tau_per_t, 0, 1.0 - v_head**2)
+    return RigidHead(x_switch, v_switch, t_switch, False, "handover", block,
+                     rigid.approach_peaks(x_start, stokes, x_switch),
+                     lambda s: 3.0 * v_switch / (x_switch + s) ** 2)
 
 
 def _rigid_path(x_from, v_from, t_from, stokes, x):
@@ -204,28 +264,24 @@ def _concat(blocks):
     return {k: np.concatenate([b[k] for b in blocks]) for k in blocks[0]}
 
 
-def _rigid_only(physics, accuracy, numerics):
-    """The scene never deforms enough to need the coupled solution: everything is analytic."""
-    stokes, x_start = physics.St, physics.x_start
-    ln_x_stop = rigid.rest_separation(x_start, 1.0, stokes)
-    u = np.linspace(0.0, 0.999 * stokes, 200) if stokes < 30 else np.linspace(0.0, 30.0, 200)
-    x = x_start * np.exp(-u)
-    t, v = _rigid_path(x_start, 1.0, 0.0, stokes, x)
-    series = _rigid_block(t, x, v, physics.tau_per_t, 0, 1.0 - v * v)
+def _rigid_only(physics, accuracy, numerics, head):
+    """The scene never deforms enough to need the coupled solution: its rigid approach, exact,
+    comes to rest at ``head.x``."""
+    x_stop = head.x
     result = Collision(
         physics=physics, accuracy=accuracy, numerics=numerics, model="rigid", status="ok",
         message="deformation stays below the hand-over threshold: rigid solution (exact)",
-        v_r=0.0, e_wet=0.0, h_m_x1=math.exp(ln_x_stop), h_m_approach_x1=math.exp(ln_x_stop),
-        ln_x_e_x1=ln_x_stop, tau_v_zero=math.inf, tau_max_rebound=math.nan,
-        x_min_x1=math.exp(ln_x_stop), energy_error=0.0, p_min=0.0, series=series)
-    include_rigid_peaks(result, x_start, 0.0)
+        v_r=0.0, e_wet=0.0, h_m_x1=x_stop, h_m_approach_x1=x_stop, ln_x_e_x1=math.log(x_stop),
+        tau_v_zero=math.inf, tau_max_rebound=math.nan, x_min_x1=x_stop, energy_error=0.0,
+        p_min=0.0, series=head.block)
+    include_rigid_peaks(result, head.peaks)
     return result
 
 
-def include_rigid_peaks(result, x_start, x_switch):
+def include_rigid_peaks(result, head):
     """Peaks are the larger of the coupled phase's (already in ``result``; NaN when none) and
-    those of the analytic rigid approach before the hand-over at ``x_switch`` (0: rigid only)."""
-    head = rigid.approach_peaks(x_start, result.St, x_switch)
+    ``head``, those of the rigid approach before the hand-over (rigid.approach_peaks keys, and
+    ``x_p_max``)."""
     tau_per_t = result.physics.tau_per_t
     if not head["p_max"] <= result.p_max_approach:  # also when the result holds NaN
         result.p_max_approach = head["p_max"]
@@ -242,13 +298,12 @@ def include_rigid_peaks(result, x_start, x_switch):
                 setattr(result, t_name, head["t_" + t_name[4:]] * tau_per_t)
 
 
-def _coupled(physics, accuracy, numerics, x_switch, x_ref_x0=1.0):
+def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
     stokes, x_start, tau_per_t = physics.St, physics.x_start, physics.tau_per_t
-    v_switch = float(rigid.velocity(x_switch, x_start, 1.0, stokes))
-    t_switch = float(rigid.elapsed_time(x_switch, x_start, 1.0, stokes))
+    x_switch, v_switch, t_switch = head.x, head.v, head.t
 
     grid = scene_grid(stokes, x_switch, numerics, physics.Pi if not physics.classic else math.inf)
-    p_init = 3.0 * v_switch / (x_switch + grid.s) ** 2  # rigid pressure; K p = asymptotic W
+    p_init = head.pressure(grid.s)  # the rigid film's pressure; K p = asymptotic W
     time_scale = x_switch / max(v_switch, 1e-3)
     stop_kind, stop_params = rigid.release_event(numerics.release, stokes, physics)
     if physics.cavitation == "jfo" and not _floor_departure(physics):
@@ -264,12 +319,8 @@ def _coupled(physics, accuracy, numerics, x_switch, x_ref_x0=1.0):
     cols["F"] = cols["F"] / 3.0  # force unit 6 pi mu a^2 v0 / x1
     t_c, x_c, v_c = cols["T"], cols["X"], cols["V"]
 
-    # rigid approach (analytic) up to the hand-over
-    blocks = []
-    if x_switch < x_start:
-        x_head = x_start * np.exp(-np.linspace(0.0, math.log(x_start / x_switch), 60))[:-1]
-        t_head, v_head = _rigid_path(x_start, 1.0, 0.0, stokes, x_head)
-        blocks.append(_rigid_block(t_head, x_head, v_head, tau_per_t, 0, 1.0 - v_head**2))
+    # rigid approach (analytic, or the Barus film's scalar ODE) up to the hand-over
+    blocks = [head.block] if head.block is not None and len(head.block["T"]) else []
     coupled = {k: cols[k] for k in _COUPLED_COLUMNS}
     coupled.update(tau=t_c * tau_per_t, phase=np.full(len(t_c), 1, dtype=np.int8))
     blocks.append(coupled)
@@ -323,7 +374,7 @@ def _coupled(physics, accuracy, numerics, x_switch, x_ref_x0=1.0):
         widest = max(float(np.max(b["cavity_radius"])) for b in blocks if b["phase"][0] == 2)
         result.cavity_radius_max = max(result.cavity_radius_max, widest)
         result.cavitated = result.cavitated or widest > 0.0
-    include_rigid_peaks(result, x_start, x_switch)
+    include_rigid_peaks(result, head.peaks)
     if result.start_strain_energy > START_STRAIN_LIMIT:
         result.status = "start_deformed"
         result.message = failure_message("start_deformed", ratio=result.start_strain_energy,

@@ -146,7 +146,7 @@ class MasterCurve:
         result.x_ref_x0 = x_ref_x0
         result.e_wet = rigid.restitution_from_rest(values["ln_x_e_x1"], physics,
                                                    x_ref_x0 * x_start)
-        include_rigid_peaks(result, x_start, x_switch)
+        include_rigid_peaks(result, rigid.approach_peaks(x_start, stokes, x_switch))
         # not carried by the curve: the approach's pressure peak lies in its coupled phase
         result.p_max_approach = result.h_axis_at_peak_pressure_x1 = math.nan
         result.viscosity_ratio_max_approach = 1.0  # the classic film

@@ -183,17 +183,20 @@ REFINE = [dict(n_inner=32 * 2**k, stretch=1.0 + 0.4 / 2**k, max_rel=0.4 / 2**k, 
 def test_whole_collisions_converge_under_refinement(kw):
     runs = [collide(Physics(St=10.0, eps=1e-4, **kw), save_profiles=False, **lv) for lv in REFINE]
     assert all(c.ok for c in runs)
-    for key in ("v_r", "ln_x_e_x1", "h_m_x1", "h_axis_at_peak_pressure_x1"):
+    for key in ("v_r", "ln_x_e_x1", "h_m_x1"):
         a, b, c = (getattr(r, key) for r in runs)
         # observed order: measured 1.9-2.1 at beta 5 over four levels; 1.3 leaves room for the
         # noise of three levels
         assert math.log2(abs((b - a) / (c - b))) > 1.3, (key, a, b, c)
-    # two maxima (over the approach, of node values) whose differences do not shrink
-    # monotonically over these levels (measured with a fourth level: at beta 5 the approach's
-    # closest gap moved 3e-4, 2.7e-4, -4e-5, ln of the viscosity ratio 0.032, 0.017, 0.006; at
-    # beta 2 the latter 0.004, 0.005, 0.003): converged to within these bounds at the finest two
+    # maxima over the approach (of node values) and what is read at them, whose differences do
+    # not shrink monotonically over these levels (measured with a fourth level: at beta 5 the
+    # approach's closest gap moved 3e-4, 2.7e-4, -4e-5, ln of the viscosity ratio 0.032, 0.017,
+    # 0.006; at beta 2 the latter 0.003, -0.002, -0.001 and the central gap at the peak pressure
+    # 3.2e-3, 1.7e-3, 4e-4): converged to within these bounds at the finest two
     b, c = (r.h_m_approach_x1 for r in runs[1:])
     assert abs(c - b) < 1e-3 * c, (b, c)
+    b, c = (r.h_axis_at_peak_pressure_x1 for r in runs[1:])
+    assert abs(c - b) < 3e-3 * c, (b, c)
     b, c = (math.log(r.viscosity_ratio_max_approach) for r in runs[1:])
     assert abs(c - b) < 0.025, (b, c)  # the viscosity ratio to 2.5 %
 
@@ -239,3 +242,21 @@ def test_with_a_floor_that_never_binds_it_is_the_piezoviscous_film():
                                                               rel=1e-9)
     assert both.p_min >= -1e-3 - 1e-12
     assert both.energy_error < 2e-3  # as the JFO film alone (tests/test_cavitation.py)
+
+
+@pytest.mark.parametrize("st, eps, beta", [(30.0, 1e-8, 5.0), (10.0, 1e-6, 2.0), (3.0, 1e-6, 10.0),
+                                           (1.0, 1e-8, 20.0)])
+def test_rigid_barus_approach_agrees_with_a_coupled_phase_from_the_start(st, eps, beta):
+    """The Barus film's rigid approach (model/piezoviscous.py) hands over to the coupled phase,
+    or answers a scene alone (the last two); a coupled phase from the start (hand-over
+    threshold 1e-11) solves the same approach with the full film."""
+    head = collide(Physics(St=st, eps=eps, beta=beta), save_profiles=False)
+    full = collide(Physics(St=st, eps=eps, beta=beta), save_profiles=False, switch=1e-11,
+                   release=5e-12)
+    assert head.ok and full.ok and full.tau_handover == 0.0
+    for name in ("v_r", "h_m_x1", "ln_x_e_x1", "peak_force"):
+        # measured up to 3.8e-3 relative: the rigid answers neglect deformations below the
+        # hand-over's W(0)/X = 1e-3, and the run from the start carries the standard preset's
+        # error over a much longer coupled approach and creep (ln x_e = ln x - St V multiplies
+        # the speed's error by St: 1.1e-3 at St 30); 5e-3
+        assert getattr(head, name) == pytest.approx(getattr(full, name), rel=5e-3, abs=1e-6), name

@@ -324,7 +324,7 @@ class RigidApproach:
     peaks : dict
         The largest force, central deflection and axis pressure on the path, with their times
         (keys as rigid.approach_peaks: ``peak_force``, ``t_peak_force``, ``w0_max``,
-        ``t_max_deformation``, ``p_max``, ``t_p_max``).
+        ``t_max_deformation``, ``p_max``, ``t_p_max``, and ``x_p_max`` the gap at ``p_max``).
     """
 
     t: np.ndarray
@@ -542,6 +542,8 @@ def approach(x_from, v_from, t_from, stokes, beta, switch, glass_margin=GLASS_MA
         best = int(np.argmax(vals))
         peaks[key] = vals[best]
         peaks[t_key] = float(time_at(cands[best]) if cands[best] < u_end else t_s[-1])
+        if key == "p_max":  # the gap there (the rigid film's central gap)
+            peaks["x_p_max"] = x_from * math.exp(-cands[best])
 
     return RigidApproach(
         t=t_s, x=x_s, v=v_s, p_axis=rigid_pressure(0.0, x_s, v_s, beta),
@@ -560,4 +562,5 @@ def _single(x, v, t, beta, event):
         p_axis=arr([p0]), force=arr([force]), w0=arr([w0]), event=event, x_end=float(x),
         v_end=float(v), t_end=float(t),
         peaks={"peak_force": force, "t_peak_force": float(t), "w0_max": w0,
-               "t_max_deformation": float(t), "p_max": p0, "t_p_max": float(t)})
+               "t_max_deformation": float(t), "p_max": p0, "t_p_max": float(t),
+               "x_p_max": float(x)})
