@@ -180,6 +180,10 @@ def _add_physics_flags(p: argparse.ArgumentParser) -> None:
             p.add_argument(group.option, dest=group.name, choices=group.choices,
                            default=group.default, help=f"{group.long_name}{default}")
             continue
+        if group.table:
+            p.add_argument(group.option, dest=group.name, default=group.default,
+                           metavar="P:MU_RATIO,...", help=group.long_name)
+            continue
         lb = "[" if group.closed_lo else "("
         p.add_argument(group.option, dest=group.name, type=float,
                        required=group.default is None, default=group.default,

@@ -22,7 +22,7 @@ import numpy as np
 
 __all__ = ["Physics", "Group", "GROUPS", "ST", "EPS", "PI", "CAVITATION", "CAVITATION_MODELS",
            "DEFAULT_CAVITATION", "BETA", "VISCOSITY", "ROELANDS_Z", "ROELANDS_PR", "DENSITY",
-           "DH_C1", "DH_C2", "TENSION", "TENSION_CHOICES", "VISCOSITY_LAWS", "DENSITY_LAWS"]
+           "DH_C1", "DH_C2", "TABLE", "TENSION", "TENSION_CHOICES", "VISCOSITY_LAWS", "DENSITY_LAWS"]
 
 
 @dataclass(frozen=True)
@@ -40,6 +40,12 @@ class Group:
     allow_inf: bool = False  # +inf is a valid value (the physics switched off)
     choices: tuple = ()  # a named choice instead of a number (e.g. a model)
     flag: str = ""  # the command-line flag, when not ``--name``
+    table: bool = False  # a table of (P, value) points as text "P:value, ..." instead of a number
+
+    @property
+    def numeric(self) -> bool:
+        """A number (a sweep axis may span it), not a named choice or a table."""
+        return not (self.choices or self.table)
 
     @property
     def option(self) -> str:
@@ -50,6 +56,8 @@ class Group:
         """``value`` as a float (or one of ``choices``), or ValueError naming the group and its
         valid range."""
         label = f"{self.name} ({self.symbol})"
+        if self.table:
+            return format_table(parse_table(value, label))
         if self.choices:
             if value not in self.choices:
                 raise ValueError(f"{label} must be one of {list(self.choices)}, got {value!r}")
@@ -71,6 +79,41 @@ class Group:
         return v
 
 
+def parse_table(text, label="viscosity_table"):
+    """Points ``((P_0, r_0), ...)`` of a viscosity table written ``"P:mu/mu0, ..."`` (``""``: no
+    table), or ValueError naming what is wrong: it starts at ``P = 0`` with ``mu/mu0 = 1``, its
+    pressures increase and its ratios are positive and finite."""
+    if not isinstance(text, str):
+        raise ValueError(f"{label} must be text \"P:mu/mu0, P:mu/mu0, ...\", got {text!r}")
+    if not text.strip():
+        return ()
+    points = []
+    for item in text.split(","):
+        try:
+            p, r = (float(v) for v in item.split(":"))
+        except ValueError:
+            raise ValueError(f"{label}: {item.strip()!r} is not a point \"P:mu/mu0\" (two numbers "
+                             "and a colon)") from None
+        if not (math.isfinite(p) and math.isfinite(r) and r > 0.0):
+            raise ValueError(f"{label}: {item.strip()!r} needs a finite P and a finite ratio > 0")
+        points.append((p, r))
+    if len(points) < 2 or points[0] != (0.0, 1.0):
+        raise ValueError(f"{label} must start with the point 0:1 (mu = mu0 at ambient pressure) "
+                         "and have at least one more point")
+    if any(b[0] <= a[0] for a, b in zip(points, points[1:])):
+        raise ValueError(f"{label}: the pressures must increase")
+    if len(points) > MAX_TABLE_POINTS:
+        raise ValueError(f"{label} has {len(points)} points; at most {MAX_TABLE_POINTS}")
+    return tuple(points)
+
+
+def format_table(points) -> str:
+    """The canonical text of a table's points (what a Physics holds, and stores)."""
+    return ", ".join(f"{p:.17g}:{r:.17g}" for p, r in points)
+
+
+MAX_TABLE_POINTS = 64
+
 GROUPS = (
     Group("St", "Stokes number m v0 / (6 pi mu a^2)", "Stokes number", 0.0, 1.0e4),
     # eps << 1 is the model's premise; at 0.1 the start x0 is only 2.5 x1
@@ -85,9 +128,10 @@ GROUPS = (
     # the liquid thickens under pressure: d ln(mu)/dp = alpha at p = 0 (0: constant viscosity)
     Group("beta", "piezoviscous number alpha mu a v0 / x1^2 (alpha = d ln mu / dp at p = 0)",
           "piezoviscous number", 0.0, 50.0, closed_lo=True, default=0.0),
-    Group("viscosity_law", "viscosity against pressure: constant, barus (exp(beta P)) or "
-          "roelands; auto: barus where beta > 0", "viscosity law", math.nan, math.nan,
-          default="auto", choices=("auto", "constant", "barus", "roelands"), flag="viscosity"),
+    Group("viscosity_law", "viscosity against pressure: constant, barus (exp(beta P)), roelands "
+          "or table (viscosity_table); auto: table where one is given, else barus where "
+          "beta > 0", "viscosity law", math.nan, math.nan, default="auto",
+          choices=("auto", "constant", "barus", "roelands", "table"), flag="viscosity"),
     # a liquid in tension keeps its ambient viscosity (the default) or, for comparison, the law's
     Group("viscosity_in_tension", "viscosity where the gauge pressure is negative: ambient (mu0, "
           "the default; a liquid cavitates long before the law's thinning) or law (the law's "
@@ -108,12 +152,18 @@ GROUPS = (
           "Dowson-Higginson c1", 0.0, 100.0, closed_lo=True, default=0.3),
     Group("dh_c2", "Dowson-Higginson c2 p* (1.7e-9 1/Pa times the pressure scale)",
           "Dowson-Higginson c2", 0.0, 100.0, closed_lo=True, default=0.85),
+    # measured mu(p): ln(mu/mu0) linear between the points, extended with the last slope
+    Group("viscosity_table", "measured viscosity against pressure, \"P:mu/mu0, ...\" from 0:1 "
+          "with P increasing (P in mu a v0 / x1^2)", "viscosity table", math.nan, math.nan,
+          default="", table=True, flag="viscosity-table"),
 )
 # positions in Physics.as_array(), read by the compiled kernels
 ST, EPS, PI, CAVITATION = 0, 1, 2, 3
 BETA, VISCOSITY, TENSION, ROELANDS_Z, ROELANDS_PR, DENSITY, DH_C1, DH_C2 = 4, 5, 6, 7, 8, 9, 10, 11
+# the viscosity table: its number of points K there, then K pressures, then K values ln(mu/mu0)
+TABLE = 12
 # the laws' codes in that array (0: constant, the classic film)
-VISCOSITY_LAWS = ("constant", "barus", "roelands")
+VISCOSITY_LAWS = ("constant", "barus", "roelands", "table")
 DENSITY_LAWS = ("constant", "dowson-higginson")
 TENSION_CHOICES = ("ambient", "law")
 # the models' codes in that array (0: the classic film, no floor)
@@ -164,6 +214,11 @@ class Physics:
     dh_c1, dh_c2 : float
         Dowson-Higginson constants times the pressure scale, in [0, 100] (defaults
         ``0.6e-9, 1.7e-9 1/Pa`` at ``p* = 5e8 Pa``).
+    viscosity_table : str
+        Measured ``mu/mu0`` against ``P``, ``"P:mu/mu0, ..."`` starting at ``0:1`` with ``P``
+        increasing (at most 64 points); ``ln(mu/mu0)`` is linear between the points and
+        extended beyond the last with its slope. Used by ``viscosity_law = "table"`` ("auto"
+        where a table is given; ``beta`` is then not used).
 
     Raises
     ------
@@ -184,6 +239,7 @@ class Physics:
     density_law: str = "constant"
     dh_c1: float = 0.3
     dh_c2: float = 0.85
+    viscosity_table: str = ""
 
     def __post_init__(self):
         for group in GROUPS:
@@ -195,7 +251,11 @@ class Physics:
             model = DEFAULT_CAVITATION
         object.__setattr__(self, "cavitation", model)
         law = self.viscosity_law
-        if self.beta == 0.0:
+        if law == "auto" and self.viscosity_table:
+            law = "table"
+        if law == "table" and not self.viscosity_table:
+            raise ValueError("viscosity_law = 'table' needs a viscosity_table (\"P:mu/mu0, ...\")")
+        if self.beta == 0.0 and law != "table":
             law = "constant"
         elif law == "auto":
             law = "barus"
@@ -238,7 +298,11 @@ class Physics:
                          self.beta, VISCOSITY_LAWS.index(self.viscosity_law),
                          TENSION_CHOICES.index(self.viscosity_in_tension), self.roelands_Z,
                          self.roelands_PR, DENSITY_LAWS.index(self.density_law), self.dh_c1,
-                         self.dh_c2], dtype=float)
+                         self.dh_c2, *self._table_array()], dtype=float)
+
+    def _table_array(self) -> list:
+        points = parse_table(self.viscosity_table)
+        return [len(points), *(p for p, _ in points), *(math.log(r) for _, r in points)]
 
     def replace(self, **changes) -> "Physics":
         return replace(self, **changes)

@@ -139,6 +139,7 @@ PIEZO_CASES = {  # the liquid's laws (model/liquid.py), each with the film's oth
     "roelands": dict(beta=3.0, viscosity_law="roelands", roelands_Z=0.6, roelands_PR=0.4),
     "dowson-higginson": dict(density_law="dowson-higginson", dh_c1=0.3, dh_c2=0.85),
     "barus+dowson-higginson": dict(beta=5.0, density_law="dowson-higginson"),
+    "table+dh": dict(viscosity_table="0:1, 0.4:2.5, 1.1:30, 2.5:900", density_law="dowson-higginson"),
     "roelands+dh+jfo": dict(beta=2.0, viscosity_law="roelands", density_law="dowson-higginson",
                             Pi=0.05, cavitation="jfo"),
 }

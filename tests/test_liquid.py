@@ -123,3 +123,42 @@ def test_energy_terms_match_their_integrals():
     assert density(-1.0, phys) == (1.0, 0.0)
     # Dowson-Higginson tends to 1 + c1/c2 at infinite pressure
     assert density(1e12, phys)[0] == pytest.approx(1.0 + 0.6 / 1.7, rel=1e-9)
+
+
+def test_table_is_exact_where_its_log_is_linear_and_barus_as_a_table_is_barus():
+    """A measured table: ``ln(mu/mu0)`` linear between its points, so the face difference, split
+    at the points, is exact; a table of the Barus law is the Barus law."""
+    table = _phys(viscosity_table="0:1, 0.5:3, 1.5:400, 3:2000")
+    points = [(0.0, 0.0), (0.5, math.log(3.0)), (1.5, math.log(400.0)), (3.0, math.log(2000.0))]
+
+    def exact(a, b):  # piecewise Int exp(-g) dP with g linear on each segment
+        total = 0.0
+        for (p0, g0), (p1, g1) in zip(points, points[1:]):
+            lo, hi = max(a, p0), min(b, p1)
+            if hi > lo:
+                slope = (g1 - g0) / (p1 - p0)
+                g_lo, g_hi = g0 + slope * (lo - p0), g0 + slope * (hi - p0)
+                total += (math.exp(-g_lo) - math.exp(-g_hi)) / slope
+        return total
+
+    for a, b in ((0.1, 0.4), (0.2, 2.9), (0.7, 1.2), (1.0, 2.0)):
+        # 1e-13: a few ulps through expm1 per piece (relative)
+        assert kirchhoff_difference(a, b, table)[0] == pytest.approx(exact(a, b), rel=1e-13)
+        assert kirchhoff_difference(b, a, table)[0] == -kirchhoff_difference(a, b, table)[0]
+    # beyond the last point: the last slope
+    assert log_viscosity(4.0, table)[0] == pytest.approx(
+        math.log(2000.0) + math.log(2000.0 / 400.0) / 1.5, rel=1e-14)
+    barus, as_table = _phys(beta=3.0), _phys(viscosity_table=f"0:1, 10:{math.exp(30.0)!r}")
+    for a, b in ((0.2, 1.0), (-1.0, 2.0), (3.0, 3.1)):
+        assert kirchhoff_difference(a, b, as_table)[0] == pytest.approx(
+            kirchhoff_difference(a, b, barus)[0], rel=1e-13)
+
+
+@pytest.mark.parametrize("text, words", [
+    ("1:2, 2:3", ["start with the point 0:1"]), ("0:1", ["at least one more point"]),
+    ("0:1, 2:5, 1:9", ["must increase"]), ("0:1, 1:-2", ["ratio > 0"]),
+    ("0:1, 1;2", ["not a point"]), ("0:1, x:2", ["not a point"])])
+def test_bad_tables_are_named(text, words):
+    with pytest.raises(ValueError) as err:
+        Physics(St=1.0, eps=1e-4, viscosity_table=text)
+    assert all(w in str(err.value) for w in words), str(err.value)

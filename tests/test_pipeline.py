@@ -654,6 +654,8 @@ def test_axes_in_either_order_give_the_same_sweep():
     ("St = [1.0]", "", ["eps", "neither"]),
     ("St = [1.0]", "eps = 0.5", ["physics.eps", "valid range"]),
     ("St = [1.0]", "eps = true", ["physics.eps", "number"]),
+    ("St = [1.0]\nviscosity_table = ['0:1, 1:2']", "eps = 1e-2", ["viscosity_table", "a table"]),
+    ("St = [1.0]", "eps = 1e-2\nviscosity_table = '1:2'", ["physics.viscosity_table", "0:1"]),
 ])
 def test_bad_axes_or_fixed_physics_are_named(grid, physics, words):
     with pytest.raises(ConfigError) as err:

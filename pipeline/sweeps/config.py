@@ -240,10 +240,10 @@ def _physics(where: str, doc: dict) -> tuple[dict, dict]:
     if missing:
         raise ConfigError(f"{where}: {missing} neither in [grid] nor in [physics]; give each "
                           "field a grid axis or a fixed value")
-    choice_axes = [n for n in names if n in grid and Physics.group(n).choices]
+    choice_axes = [n for n in names if n in grid and not Physics.group(n).numeric]
     if choice_axes:
-        raise ConfigError(f"{where}: {choice_axes} name a model, not a number: fix it in "
-                          "[physics] (one store per model)")
+        raise ConfigError(f"{where}: {choice_axes} name a model or a table, not a number: fix "
+                          "it in [physics] (one store per model)")
     n = 1
     for name in names:  # size first: a typo (num = 1e9) must not allocate gigabytes
         if name in grid:

@@ -5,7 +5,9 @@ and ``rho_bar = rho/rho0`` as functions of the gauge pressure ``P`` in ``p* = mu
 read from the physics array (solver/physics.py: ``BETA``, ``VISCOSITY``...):
 
 - viscosity: constant; Barus ``ln mu_bar = beta P``; Roelands
-  ``ln mu_bar = (beta P_R / Z) ((1 + P/P_R)^Z - 1)`` (slope ``beta`` at ``P = 0``);
+  ``ln mu_bar = (beta P_R / Z) ((1 + P/P_R)^Z - 1)`` (slope ``beta`` at ``P = 0``); a measured
+  table, ``ln mu_bar`` linear in ``P`` between its points (``TABLE``: their number ``K``, the
+  pressures, the logs), beyond the last with its slope;
 - density: constant; Dowson-Higginson ``rho_bar = 1 + c1 P / (1 + c2 P)``.
 
 Both apply to compression only: where ``P <= 0`` the liquid keeps its ambient viscosity and
@@ -29,10 +31,11 @@ import math
 import numpy as np
 
 from .._jit import jit
-from ..physics import BETA, DENSITY, DH_C1, DH_C2, ROELANDS_PR, ROELANDS_Z, TENSION, VISCOSITY
+from ..physics import (BETA, DENSITY, DH_C1, DH_C2, ROELANDS_PR, ROELANDS_Z, TABLE, TENSION,
+                       VISCOSITY)
 
 # codes in the physics array (solver/physics.py: VISCOSITY_LAWS, DENSITY_LAWS, TENSION_CHOICES)
-CONSTANT, BARUS, ROELANDS = 0.0, 1.0, 2.0
+CONSTANT, BARUS, ROELANDS, TABULATED = 0.0, 1.0, 2.0, 3.0
 DOWSON_HIGGINSON = 1.0
 LAW_IN_TENSION = 1.0
 # Roelands read in tension ("law") is undefined at P <= -P_R; it is held at this fraction of it
@@ -53,6 +56,8 @@ def log_viscosity(p, phys):
         return 0.0, 0.0
     if p <= 0.0 and phys[TENSION] != LAW_IN_TENSION:
         return 0.0, 0.0
+    if law == TABULATED:
+        return _tabulated(p, phys)
     beta = phys[BETA]
     if law == BARUS:
         return beta * p, beta
@@ -61,6 +66,35 @@ def log_viscosity(p, phys):
     base = 1.0 + max(p, -ROELANDS_TENSION_LIMIT * p_r) / p_r
     slope = beta * base ** (z - 1.0) if p > -ROELANDS_TENSION_LIMIT * p_r else 0.0
     return beta * p_r / z * (base**z - 1.0), slope
+
+
+@jit
+def _tabulated(p, phys):
+    """``ln mu_bar`` of the table and its slope: linear between the points, extended beyond the
+    ends with the end segments' slopes (in tension too when the law is read there)."""
+    k = int(phys[TABLE])
+    j = 0
+    while j < k - 2 and p > phys[TABLE + 2 + j]:
+        j += 1
+    p0 = phys[TABLE + 1 + j]
+    slope = (phys[TABLE + 1 + k + j + 1] - phys[TABLE + 1 + k + j]) / (phys[TABLE + 2 + j] - p0)
+    return phys[TABLE + 1 + k + j] + slope * (p - p0), slope
+
+
+@jit
+def _next_kink(x, b, phys):
+    """The first pressure above ``x`` and below ``b`` where ``ln(mu/rho)`` has a kink: 0 (the
+    laws apply to compression only) and a table's points; ``b`` when there is none."""
+    nxt = b
+    if x < 0.0 < nxt:
+        nxt = 0.0
+    if phys[VISCOSITY] == TABULATED:
+        k = int(phys[TABLE])
+        for j in range(1, k):
+            pj = phys[TABLE + 1 + j]
+            if x < pj < nxt:
+                nxt = pj
+    return nxt
 
 
 @jit
@@ -120,15 +154,27 @@ def _fitted(a, b, phys):
 def kirchhoff_difference(p_lo, p_hi, phys):
     """``Int_{p_lo}^{p_hi} rho_bar / mu_bar dP``, the pressure difference that drives the flux
     between two nodes, and its derivatives in ``p_lo`` and ``p_hi``: ``p_hi - p_lo`` exactly for
-    the classic film. A face whose pressures straddle 0 is split there (the laws have a kink at 0:
-    compression only)."""
+    the classic film. The interval is split where the laws have a kink (``_next_kink``: 0, the
+    table's points), so each piece is an exponential fit of a smooth ``ln(mu/rho)``, exact where it
+    is linear (Barus, a table)."""
     if isoviscous(phys):
         return p_hi - p_lo, -1.0, 1.0
-    if (p_lo < 0.0 < p_hi) or (p_hi < 0.0 < p_lo):
-        first, d_lo, _ = _fitted(p_lo, 0.0, phys)
-        second, _, d_hi = _fitted(0.0, p_hi, phys)
-        return first + second, d_lo, d_hi
-    return _fitted(p_lo, p_hi, phys)
+    a, b = min(p_lo, p_hi), max(p_lo, p_hi)
+    total, d_a, d_b = 0.0, 0.0, 0.0
+    start = a
+    while True:
+        end = _next_kink(start, b, phys)
+        value, da, db = _fitted(start, end, phys)
+        if start == a:
+            d_a = da
+        total += value
+        if end >= b:
+            d_b = db
+            break
+        start = end
+    if p_lo <= p_hi:
+        return total, d_a, d_b
+    return -total, -d_b, -d_a
 
 
 @jit

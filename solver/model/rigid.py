@@ -25,6 +25,7 @@ import numpy as np
 from scipy import optimize, special
 
 from ..integration.events import RELAXED
+from ..physics import parse_table
 
 __all__ = [
     "I0",
@@ -174,7 +175,11 @@ def law_slopes(physics):
     """How strongly the liquid's laws change the film per unit pressure, in compression and in
     tension: ``d ln(rho/mu) / dP`` at ``P = 0`` in magnitude (``beta`` and ``c1``; 0 for the
     classic film; the tension slope is 0 unless the viscosity law is read in tension)."""
-    viscous = physics.beta if physics.viscosity_law != "constant" else 0.0
+    viscous = physics.beta if physics.viscosity_law in ("barus", "roelands") else 0.0
+    if physics.viscosity_law == "table":  # its steepest segment
+        points = parse_table(physics.viscosity_table)
+        viscous = max(abs(math.log(b[1] / a[1]) / (b[0] - a[0]))
+                      for a, b in zip(points, points[1:]))
     dense = physics.dh_c1 if physics.density_law != "constant" else 0.0
     tension = viscous if physics.viscosity_in_tension == "law" else 0.0
     return viscous + dense, tension
