@@ -53,8 +53,8 @@ def _numerics_overrides(args) -> dict:
 
 def format_value(v, spec=".6g"):
     """A value of a report row: numbers with ``spec`` (non-finite as ``inf``/``nan``), flags as
-    yes/no, missing as "-", anything else as text."""
-    if v is None:
+    yes/no, missing (or empty text, e.g. no viscosity table) as "-", anything else as text."""
+    if v is None or v == "":
         return "-"
     if isinstance(v, bool):
         return "yes" if v else "no"
