@@ -3,8 +3,10 @@
 Each premise is reported as a ``Check`` carrying the number that triggered it and its threshold
 (``THRESHOLDS``); ``premise_checks`` needs only the scene, ``outcome_checks`` the solution.
 ``model_reason`` says why the rigid or the EHD model answered, ``cavitation_reason`` which film
-model (classic or with a cavitation floor) answered and why; ``cavitation_crosses`` is the
-automatic switch of ``run.run_scene``.
+model (classic or with a cavitation floor) answered and why, ``viscosity_reason`` and
+``density_reason`` which viscosity and density laws and why; ``cavitation_crosses``,
+``viscosity_switch`` and ``density_switch`` are the automatic switches of ``run.run_scene``
+(thresholds ``VISCOSITY_SWITCH``, ``DENSITY_SWITCH``).
 """
 
 from __future__ import annotations
@@ -21,7 +23,9 @@ from .units import format_quantity
 
 __all__ = ["Check", "premise_checks", "outcome_checks", "THRESHOLDS", "model_reason",
            "roughness_check", "combined_roughness", "cavitation_crosses", "cavitation_reason",
-           "physics_label", "gas"]
+           "physics_label", "cavitation_label", "gas", "VISCOSITY_SWITCH", "DENSITY_SWITCH",
+           "viscosity_switch", "density_switch", "density_rise", "viscosity_reason",
+           "density_reason", "pressure_notes", "per_gpa", "law_viscosity_ratio"]
 
 # Thresholds of the validity checks (each check warns when its number exceeds the threshold).
 THRESHOLDS = {
@@ -45,6 +49,22 @@ THRESHOLDS = {
     # reaches h_m: contact mechanics, not the film, decides the collision.
     "roughness": 1.0 / 3.0,
 }
+
+# The automatic switches of the pressure-dependent viscosity and density (run.run_scene), read at
+# the peak pressure p_peak of the classic film (the solver's p_max times p*):
+# - viscosity: alpha p_peak >= 0.1, i.e. the viscosity there exceeds mu0 by more than
+#   exp(0.1) - 1 = 10.5 %. That is above the few-% accuracy of the solver's own presets (standard:
+#   largest errors 1.3e-3 on v_r, 1.1e-2 on h_m, 1.9e-2 on h_m on approach over the St, eps panel
+#   of benchmarks/accuracy.md), so below it the constant viscosity is as good as the solve, and
+#   above it the viscosity law can move the results by more than the solver's own error;
+VISCOSITY_SWITCH = 0.1
+# - density (fluids with Dowson-Higginson constants): the density rise at p_peak,
+#   c1 p / (1 + c2 p), above 1 %. The film conserves the liquid content rho h, so a density rise
+#   of delta thins the compressed film by about delta: at 1 % that is the standard preset's own
+#   error on h_m (1.1e-2, as above). The fluids that have the constants (mineral oils,
+#   alpha = 20-42 1/GPa) have switched the viscosity on long before (1 % needs p ~ 17 MPa,
+#   alpha p ~ 0.5 there), so the density law costs no extra solve.
+DENSITY_SWITCH = 0.01
 
 
 @dataclass(frozen=True)
@@ -106,14 +126,17 @@ def outcome_checks(scene: Scene, c, p_max: float, p_min: float) -> tuple[list[Ch
                 f"{format_quantity(y, 'Pa')} of "
                 f"{body.label} ({body.solid.name}): plastic deformation is not modelled")))
     p_cav, absolute = scene.cavitation_pressure, scene.ambient_pressure + p_min
-    if p_cav is not None and c.physics.classic and absolute < p_cav:
-        # only where the classic film was asked for (cavitation = "off"): else the scene
-        # switched the floor on (run.run_scene)
+    if p_cav is not None and c.physics.cavitation == "off" and absolute < p_cav:
+        # only where the film was solved without the floor: asked for (cavitation = "off"), or
+        # the switch, decided on the classic film, kept it off while the film solved (with a
+        # pressure-dependent viscosity) pulls harder
+        why = ("cavitation = 'off' solved the film without it" if scene.cavitation == "off" else
+               "the cavitation switch, decided on the classic film's tension, left the floor off; "
+               "force it with cavitation = 'jfo'")
         out.append(Check("cavitation", absolute, p_cav, (
             f"the film tension brings the absolute pressure to {_crossing(scene, p_min)}, "
             f"below the cavitation pressure {format_quantity(p_cav, 'Pa')} "
-            f"({scene.cavitation_pressure_source}): the liquid would cavitate, and "
-            "cavitation = 'off' solved the film without it")))
+            f"({scene.cavitation_pressure_source}): the liquid would cavitate, and {why}")))
     elif p_cav is None and gas(scene) and absolute < 0.0:
         out.append(Check("gas_tension", absolute, 0.0, (
             f"the film tension brings the gas's absolute pressure to {_crossing(scene, p_min)}, "
@@ -137,7 +160,7 @@ def outcome_checks(scene: Scene, c, p_max: float, p_min: float) -> tuple[list[Ch
 
 def gas(scene: Scene) -> bool:
     """The fluid is a gas: it has a mean free path (the fluids table gives one to gases only)."""
-    return scene.fluid.mean_free_path is not None
+    return scene.fluid.gas
 
 
 def _crossing(scene: Scene, p_min: float) -> str:
@@ -153,37 +176,214 @@ def cavitation_crosses(scene: Scene, p_min: float | None) -> bool:
     return p_cav is not None and p_min is not None and scene.ambient_pressure + p_min < p_cav
 
 
-def physics_label(physics) -> str:
-    """The film model used: "classic film" or "reynolds cavitation at Pi = ..."."""
-    if physics.classic:
-        return "classic film"
+def cavitation_label(physics) -> str:
+    """The film model as to cavitation: "classic film" (no floor, and nothing else switched on),
+    "no cavitation floor" (no floor, a pressure-dependent law on) or "jfo cavitation at
+    Pi = ..."."""
+    if physics.cavitation == "off":
+        return "classic film" if physics.classic else "no cavitation floor"
     return f"{physics.cavitation} cavitation at Pi = {physics.Pi:.3g}"
 
 
-def cavitation_reason(scene: Scene, physics, classic_p_min: float | None, *,
-                      forced: bool) -> str:
-    """Which film model answered (``physics_label``) and why, in one sentence with numbers.
+def viscosity_label(physics) -> str:
+    """"constant viscosity", "barus viscosity at beta = ..." or "roelands viscosity at beta = ...
+    (Z = ..., P_R = ...)"."""
+    law = physics.viscosity_law
+    if law == "constant":
+        return "constant viscosity"
+    label = f"{law} viscosity at beta = {physics.beta:.3g}"
+    if law == "roelands":
+        label += f" (Z = {physics.roelands_Z:.3g}, P_R = {physics.roelands_PR:.3g})"
+    return label
 
-    ``classic_p_min`` is the classic film's lowest pressure [Pa, gauge] (None: the classic film
-    was not solved or failed); ``forced``: the model was asked for (``cavitation`` not "auto").
+
+def density_label(physics) -> str:
+    """"constant density" or "dowson-higginson density (c1 p* = ..., c2 p* = ...)"."""
+    if physics.density_law == "constant":
+        return "constant density"
+    return (f"{physics.density_law} density (c1 p* = {physics.dh_c1:.3g}, c2 p* = "
+            f"{physics.dh_c2:.3g})")
+
+
+def physics_label(physics) -> str:
+    """The film physics used: "classic film", or what is switched on, e.g. "jfo cavitation at
+    Pi = ..., barus viscosity at beta = ..."."""
+    if physics.classic:
+        return "classic film"
+    parts = [] if physics.cavitation == "off" else [cavitation_label(physics)]
+    if physics.viscosity_law != "constant":
+        parts.append(viscosity_label(physics))
+    if physics.density_law != "constant":
+        parts.append(density_label(physics))
+    return ", ".join(parts)
+
+
+def _first_film(base) -> str:
+    """The film the switches were decided on (``base``: the first solve's physics)."""
+    return "the classic film" if base.classic else f"the first solve ({physics_label(base)})"
+
+
+def cavitation_reason(scene: Scene, physics, base_p_min: float | None, *, forced: bool,
+                      base=None) -> str:
+    """Which film model answered (``cavitation_label``) and why, in one sentence with numbers.
+
+    ``base_p_min`` is the lowest pressure [Pa, gauge] of the film solved first without the floor
+    (``base``, default: the classic film; None: not solved or failed); ``forced``: the model
+    was asked for (``cavitation`` not "auto").
     """
-    label, p_cav = physics_label(physics), scene.cavitation_pressure
+    label, p_cav = cavitation_label(physics), scene.cavitation_pressure
     floor = ("" if p_cav is None else f"the cavitation pressure {format_quantity(p_cav, 'Pa')} "
              f"({scene.cavitation_pressure_source})")
+    film = "classic film" if base is None or base.classic else "film without the floor"
     if forced:
         why = f"{label}, as asked for (cavitation = {scene.cavitation!r})"
-        return why + (f"; {floor}" if floor and not physics.classic else "")
+        return why + (f"; {floor}" if floor and physics.cavitation != "off" else "")
     if p_cav is None:
         return f"{label}: {scene.cavitation_pressure_source}, so the film is not switched"
-    if classic_p_min is None:
-        return f"{label}: the classic solve failed, so the cavitation switch was not decided"
-    if physics.classic:
+    if base_p_min is None:
+        return f"{label}: the solve of the {film} failed, so the cavitation switch was not decided"
+    if physics.cavitation == "off":
         return (f"{label}: the film's lowest absolute pressure, "
-                f"{_crossing(scene, classic_p_min)}, stays above {floor}")
-    return (f"{label}: the classic film's tension would bring the absolute pressure to "
-            f"{_crossing(scene, classic_p_min)}, below {floor}, so the film is solved with the "
+                f"{_crossing(scene, base_p_min)}, stays above {floor}")
+    return (f"{label}: the {film}'s tension would bring the absolute pressure to "
+            f"{_crossing(scene, base_p_min)}, below {floor}, so the film is solved with the "
             f"floor p >= p_cav (P >= -Pi, Pi = (p_amb - p_cav) / p* with p* = "
             f"{format_quantity(scene.pressure_scale, 'Pa')})")
+
+
+# ---- pressure-dependent viscosity and density ------------------------------------------------
+def viscosity_switch(scene: Scene, p_peak: float | None) -> bool:
+    """True when ``alpha p_peak >= VISCOSITY_SWITCH`` (``p_peak`` [Pa, gauge] the classic film's
+    peak pressure; None: not known): the automatic switch to the fluid's viscosity law."""
+    alpha = scene.fluid.pressure_viscosity
+    return bool(alpha) and p_peak is not None and alpha * p_peak >= VISCOSITY_SWITCH
+
+
+def density_rise(scene: Scene, p: float) -> float | None:
+    """The fluid's Dowson-Higginson density rise ``c1 p / (1 + c2 p)`` at the gauge pressure
+    ``p`` [Pa] (None: no constants)."""
+    f = scene.fluid
+    if not f.has_dowson_higginson:
+        return None
+    p = max(p, 0.0)  # compression only, as the solver's law
+    return f.dowson_higginson_c1 * p / (1.0 + f.dowson_higginson_c2 * p)
+
+
+def density_switch(scene: Scene, p_peak: float | None) -> bool:
+    """True when the Dowson-Higginson density rise at the classic film's peak pressure
+    ``p_peak`` [Pa] exceeds ``DENSITY_SWITCH``: the automatic switch to that law."""
+    rise = None if p_peak is None else density_rise(scene, p_peak)
+    return rise is not None and rise > DENSITY_SWITCH
+
+
+def per_gpa(value: float | None) -> str:
+    """A coefficient in 1/Pa shown in 1/GPa, the unit of the tables (``'5.9 1/GPa'``)."""
+    return "-" if value is None else f"{value * 1e9:.3g} 1/GPa"
+
+
+def law_viscosity_ratio(scene: Scene, law: str, p: float) -> float:
+    """``mu/mu0`` of the fluid's ``law`` ("barus" or "roelands") at the gauge pressure ``p``
+    [Pa]: ``exp(alpha p)``, or Roelands' ``exp((alpha p_R / Z)((1 + p/p_R)^Z - 1))`` with the
+    same slope alpha at ``p = 0`` (solver.physics, ``roelands_Z``)."""
+    f = scene.fluid
+    alpha = f.pressure_viscosity
+    if law == "roelands":
+        z, p_r = f.roelands_index, f.roelands_pressure
+        return math.exp(alpha * p_r / z * ((1.0 + p / p_r) ** z - 1.0))
+    return math.exp(alpha * p)
+
+
+def _alpha_text(scene: Scene) -> str:
+    return f"alpha = {per_gpa(scene.fluid.pressure_viscosity)} for {scene.fluid.name}"
+
+
+def viscosity_reason(scene: Scene, physics, base_p_max: float | None, *, forced: bool,
+                     base=None) -> str:
+    """Which viscosity law answered (``viscosity_label``) and why, in one sentence with numbers.
+
+    ``base_p_max`` is the peak pressure [Pa, gauge] of the film solved first with the constant
+    viscosity (``base``, default: the classic film; None: not solved or failed); ``forced``: the
+    law was asked for (``viscosity_law`` not "auto").
+    """
+    label, f = viscosity_label(physics), scene.fluid
+    alpha, p_star = f.pressure_viscosity, scene.pressure_scale
+    if forced:
+        why = f"{label}, as asked for (viscosity_law = {scene.viscosity_law!r})"
+        if alpha:
+            why += (f"; {_alpha_text(scene)}, beta = alpha p* with p* = "
+                    f"{format_quantity(p_star, 'Pa')}")
+        return why
+    if alpha is None:
+        return (f"{label}: {f.name} has no pressure-viscosity coefficient (fluid."
+                "pressure_viscosity), so the viscosity law is not switched")
+    if alpha == 0.0:
+        return (f"{label}: the pressure-viscosity coefficient of {f.name} is 0, so the viscosity "
+                "does not depend on the pressure")
+    film = _first_film(base) if base is not None else "the classic film"
+    if base_p_max is None:
+        return f"{label}: the solve of {film} failed, so the viscosity switch was not decided"
+    ap = alpha * base_p_max
+    at = (f"alpha p_peak = {ap:.3g} at the peak pressure {format_quantity(base_p_max, 'Pa')} of "
+          f"{film} ({_alpha_text(scene)})")
+    if physics.viscosity_law == "constant":
+        return (f"{label}: {at}, below {VISCOSITY_SWITCH:g} (the Barus viscosity there would "
+                f"be {math.expm1(ap):.2%} above mu0)")
+    name = physics.viscosity_law
+    law = ("mu = mu0 exp(alpha p)" if name == "barus" else
+           f"the Roelands law (Z = {f.roelands_index:.3g}, p_R = "
+           f"{format_quantity(f.roelands_pressure, 'Pa')}, slope alpha at p = 0)")
+    ratio = law_viscosity_ratio(scene, name, base_p_max)
+    return (f"{label}: {at}, at least {VISCOSITY_SWITCH:g} (the {name.capitalize()} viscosity "
+            f"there would be {ratio:.3g} mu0), so the film is solved with {law}, beta = alpha p* "
+            f"with p* = {format_quantity(p_star, 'Pa')}")
+
+
+def density_reason(scene: Scene, physics, base_p_max: float | None, *, forced: bool,
+                   base=None) -> str:
+    """Which density law answered (``density_label``) and why, in one sentence with numbers
+    (arguments as ``viscosity_reason``)."""
+    label, f = density_label(physics), scene.fluid
+    if forced:
+        return f"{label}, as asked for (density_law = {scene.density_law!r})"
+    if f.gas:
+        return (f"{label}: {f.name} is a gas, whose density follows its pressure (ideal gas), "
+                "which the model does not have (the gas_tension check says where it matters)")
+    if not f.has_dowson_higginson:
+        return (f"{label}: {f.name} has no Dowson-Higginson constants (fluid."
+                "dowson_higginson_c1, _c2), so the density law is not switched")
+    film = _first_film(base) if base is not None else "the classic film"
+    if base_p_max is None:
+        return f"{label}: the solve of {film} failed, so the density switch was not decided"
+    rise = density_rise(scene, base_p_max)
+    at = (f"the Dowson-Higginson density of {f.name} (c1 = {per_gpa(f.dowson_higginson_c1)}, "
+          f"c2 = {per_gpa(f.dowson_higginson_c2)}) rises by {rise:.2%} at the peak pressure "
+          f"{format_quantity(base_p_max, 'Pa')} of {film}")
+    if physics.density_law == "constant":
+        return f"{label}: {at}, not above {DENSITY_SWITCH:.0%}"
+    return (f"{label}: {at}, above {DENSITY_SWITCH:.0%}, so the film is solved with rho/rho0 = "
+            f"1 + c1 p / (1 + c2 p)")
+
+
+def pressure_notes(scene: Scene, p_peak: float | None, base=None) -> list[str]:
+    """Notes where a liquid's pressure dependence is not known: no alpha (with the alpha from
+    which the switch would fire at the peak pressure ``p_peak`` [Pa] of the film solved first,
+    ``base``, default the classic film), no Dowson-Higginson constants."""
+    f, notes = scene.fluid, []
+    if f.gas or p_peak is None or p_peak <= 0.0:
+        return notes
+    film = _first_film(base) if base is not None else "the classic film"
+    peak = f"the peak pressure {format_quantity(p_peak, 'Pa')} of {film}"
+    if f.pressure_viscosity is None:
+        need = per_gpa(VISCOSITY_SWITCH / p_peak)
+        notes.append(f"pressure-dependent viscosity not checked: {f.name} has no "
+                     f"pressure_viscosity; at {peak} it would matter from alpha = {need} on "
+                     f"(alpha p_peak >= {VISCOSITY_SWITCH:g}; mineral oils: 20-42 1/GPa); give "
+                     "fluid.pressure_viscosity")
+    if not f.has_dowson_higginson:
+        notes.append(f"pressure-dependent density not checked: {f.name} has no Dowson-Higginson "
+                     f"constants ({peak}); give fluid.dowson_higginson_c1 and "
+                     "fluid.dowson_higginson_c2")
+    return notes
 
 
 def combined_roughness(scene: Scene) -> float | None:

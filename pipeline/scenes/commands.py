@@ -21,6 +21,11 @@ _FLAG_FIELDS = {
     "mean_free_path": ("fluid", "mean_free_path"), "ambient_pressure": ("fluid", "ambient_pressure"),
     "cavitation_pressure": ("fluid", "cavitation_pressure"),
     "tensile_strength": ("fluid", "tensile_strength"), "cavitation": (None, "cavitation"),
+    "viscosity_law": (None, "viscosity_law"), "density_law": (None, "density_law"),
+    "pressure_viscosity": ("fluid", "pressure_viscosity"),
+    "roelands_index": ("fluid", "roelands_index"), "roelands_pressure": ("fluid", "roelands_pressure"),
+    "dowson_higginson_c1": ("fluid", "dowson_higginson_c1"),
+    "dowson_higginson_c2": ("fluid", "dowson_higginson_c2"),
 }
 _BODY_FLAGS = {"material": "material", "radius": "radius", "density": "density",
                "youngs_modulus": "youngs_modulus", "poisson_ratio": "poisson_ratio",
@@ -102,9 +107,25 @@ def _g(value, spec=".4g"):
     return format_value(value, spec)
 
 
+# a law's constants are report rows only where that law is used (the JSON has them all)
+_LAW_ROWS = {"viscosity_in_tension": ("viscosity_law", ("barus", "roelands")),
+             "roelands_Z": ("viscosity_law", ("roelands",)),
+             "roelands_PR": ("viscosity_law", ("roelands",)),
+             "dh_c1": ("density_law", ("dowson-higginson",)),
+             "dh_c2": ("density_law", ("dowson-higginson",))}
+
+
+def _physics_rows(d: dict) -> list[str]:
+    """The Physics fields shown in the report: all, except the constants of a law not used."""
+    from solver.physics import Physics
+
+    return [name for name in Physics.names()
+            if name not in _LAW_ROWS or d[_LAW_ROWS[name][0]] in _LAW_ROWS[name][1]]
+
+
 def format_report(d: dict) -> str:
     """Human-readable report of ``SceneResult.to_dict()``."""
-    from solver.physics import Physics
+    from .checks import per_gpa
 
     ins = d["inputs"]
     lines = []
@@ -118,8 +139,10 @@ def format_report(d: dict) -> str:
                      f"nu = {b['poisson_ratio']:g}, rho = {_g(b['density_kg_per_m3'], 'g')} kg/m^3"
                      f"{extra})")
     f = ins["fluid"]
+    alpha = f["pressure_viscosity_per_Pa"]
+    alpha = "" if alpha is None else f", alpha = {per_gpa(alpha)}"
     lines.append(f"  fluid: {f['name']} (mu = {_q(f['viscosity_Pa_s'], 'Pa*s')}, "
-                 f"rho = {f['density_kg_per_m3']:g} kg/m^3)")
+                 f"rho = {f['density_kg_per_m3']:g} kg/m^3{alpha})")
     lines.append(f"  v0 = {_q(ins['v0_m_per_s'], 'm/s')}, x0 = {_q(d['x0_m'], 'm')} "
                  f"(x0/a = {d['x0_over_a']:.3g})")
     rows = [
@@ -127,7 +150,7 @@ def format_report(d: dict) -> str:
         ("reduced mass m", _q(d["reduced_mass_kg"], "kg")),
         ("theta", f"{d['theta_per_Pa']:.4g} 1/Pa (E* = {_q(d['effective_modulus_Pa'], 'Pa')})"),
         ("film scale x1", _q(d["x1_m"], "m")),
-        *((name, _g(d[name])) for name in Physics.names()),
+        *((name, _g(d[name])) for name in _physics_rows(d)),
         ("Re (Re x0/a)", f"{d['Re']:.4g} ({d['Re_x0_over_a']:.3g})"),
         ("(v0/c)^(1/5)", "-" if d["wave_parameter"] is None else
          f"{d['wave_parameter']:.3g} (c = {_q(d['sound_speed_m_per_s'], 'm/s')})"),
@@ -154,6 +177,13 @@ def format_report(d: dict) -> str:
         ("min separation x", f"{_g(d['min_separation_nm'])} nm (negative: flattened overlap)"),
         ("dimple", _g(d["dimple"]) + (f" (depth {_g(d['dimple_depth_nm'])} nm)" if d["dimple"] else "")),
     ]
+    dim = d["dimensionless"]
+    if d["viscosity_law"] != "constant" and dim.get("viscosity_ratio_max_approach") is not None:
+        # the solver's largest mu/mu0 on approach (a pressure-dependent law only)
+        ratio = dim["viscosity_ratio_max_approach"]
+        solid = " (solidified: above 1e4 mu0)" if dim.get("solidified") else ""
+        results.append(("peak viscosity", f"{_g(ratio, '.3g')} mu0 = "
+                        f"{_q(ratio * ins['fluid']['viscosity_Pa_s'], 'Pa*s')} on approach{solid}"))
     if d["cavitated"]:
         results += [
             ("largest cavity radius", _q(d["cavity_radius_max_m"], "m")),
@@ -167,6 +197,8 @@ def format_report(d: dict) -> str:
     lines += [f"  {k:<{width}}  {v}" for k, v in rows]
     lines.append(f"model: {d['model_reason']}")
     lines.append(f"physics: {d['cavitation_reason']}")
+    lines.append(f"viscosity: {d['viscosity_reason']}")
+    lines.append(f"density: {d['density_reason']}")
     if d["status"] != "ok":
         lines.append(f"solve FAILED ({d['status']}): {d['message']}")
     else:
@@ -230,6 +262,7 @@ def cmd_scene(args) -> int:
 
 
 def _list_materials(args) -> int:
+    from .checks import per_gpa
     from .materials import load_table
 
     try:
@@ -249,8 +282,17 @@ def _list_materials(args) -> int:
             extra += f", vapour pressure {_q(f.vapour_pressure, 'Pa')}"
         if f.mean_free_path is not None:
             extra += f", mean free path {_q(f.mean_free_path, 'm')}"
+        if f.pressure_viscosity is not None:
+            extra += f", alpha {per_gpa(f.pressure_viscosity)}"
+        if f.has_roelands:
+            extra += f", Roelands Z {f.roelands_index:g}, p_R {_q(f.roelands_pressure, 'Pa')}"
+        if f.has_dowson_higginson:
+            extra += (f", Dowson-Higginson c1 {per_gpa(f.dowson_higginson_c1)}, "
+                      f"c2 {per_gpa(f.dowson_higginson_c2)}")
         print(f"  {name:<20} mu = {_q(f.viscosity, 'Pa*s')}, rho = {f.density:g} kg/m^3{extra}")
         print(f"  {'':<20} source: {f.source} [{table.origins[('fluids', name)]}]")
+        if f.pressure_source:
+            print(f"  {'':<20} pressure dependence: {f.pressure_source}")
     return 0
 
 
@@ -273,6 +315,7 @@ def cmd_paper_figures(args) -> int:
 
 def _build_scene(sub) -> None:
     from ..cli import _add_numerics_flags
+    from .scene import CAVITATION_CHOICES, DENSITY_CHOICES, VISCOSITY_CHOICES
 
     p = sub.add_parser(
         "scene", help="solve a collision given in physical units (bodies, fluid, speed)",
@@ -306,10 +349,31 @@ def _build_scene(sub) -> None:
                         "(the default for a liquid) or 'gas-saturated' (the ambient pressure)")
     g.add_argument("--tensile-strength", dest="tensile_strength", default=None,
                    help="cavitation at the ambient pressure minus this, e.g. '10 MPa'")
-    g.add_argument("--cavitation", default=None, choices=("auto", "off", "reynolds", "jfo"),
-                   help="film model: auto (default: the classic film, switched to the Reynolds "
+    g.add_argument("--cavitation", default=None, choices=CAVITATION_CHOICES,
+                   help="film model: auto (default: the classic film, switched to the JFO "
                         "cavitation floor where its tension would cross the cavitation "
                         "pressure), or forced off / reynolds / jfo")
+    g.add_argument("--pressure-viscosity", dest="pressure_viscosity", default=None,
+                   help="pressure-viscosity coefficient alpha = d ln(mu)/dp, e.g. '20 1/GPa'")
+    g.add_argument("--roelands-index", dest="roelands_index", default=None,
+                   help="Roelands pressure-viscosity index Z, e.g. 0.6 (with --roelands-pressure)")
+    g.add_argument("--roelands-pressure", dest="roelands_pressure", default=None,
+                   help="Roelands reference pressure p_R, e.g. '196 MPa'")
+    g.add_argument("--dowson-higginson-c1", dest="dowson_higginson_c1", default=None,
+                   help="Dowson-Higginson c1 of rho/rho0 = 1 + c1 p/(1 + c2 p), e.g. '0.6 1/GPa'")
+    g.add_argument("--dowson-higginson-c2", dest="dowson_higginson_c2", default=None,
+                   help="Dowson-Higginson c2, e.g. '1.7 1/GPa'")
+    g.add_argument("--viscosity-law", dest="viscosity_law", default=None,
+                   choices=VISCOSITY_CHOICES,
+                   help="viscosity against pressure: auto (default: constant, switched to the "
+                        "fluid's law where alpha times the classic peak pressure is >= 0.1; "
+                        "roelands where the fluid has Z and p_R, else barus), or forced "
+                        "constant / barus / roelands")
+    g.add_argument("--density-law", dest="density_law", default=None, choices=DENSITY_CHOICES,
+                   help="density against pressure: auto (default: constant, switched to "
+                        "dowson-higginson where the fluid has its constants and the density "
+                        "would rise by more than 1%% at the classic peak pressure), or forced "
+                        "constant / dowson-higginson")
     g = p.add_argument_group("approach")
     g.add_argument("--v0", default=None, help="approach speed, e.g. '10 cm/s'")
     g.add_argument("--x0", default=None, help="starting gap, e.g. '250 nm' (default 0.01 a)")

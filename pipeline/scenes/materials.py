@@ -11,7 +11,12 @@ replace entries without editing code, with TOML files of the same form (``[mater
 
 All values are stored in SI units: solids ``youngs_modulus`` [Pa], ``poisson_ratio`` [-],
 ``density`` [kg/m^3], optional ``yield_strength`` [Pa]; fluids ``viscosity`` [Pa s], ``density``
-[kg/m^3], optional ``vapour_pressure`` [Pa] and ``mean_free_path`` [m].
+[kg/m^3], optional ``vapour_pressure`` [Pa] and ``mean_free_path`` [m], and the optional
+pressure dependence (docs/scenes.md, "Pressure-dependent viscosity and density"):
+``pressure_viscosity`` alpha [1/Pa] (``d ln mu / dp`` at ambient pressure), the Roelands
+``roelands_index`` Z [-] and ``roelands_pressure`` p_R [Pa] (given together), the
+Dowson-Higginson ``dowson_higginson_c1``, ``dowson_higginson_c2`` [1/Pa] (given together), with
+their ``pressure_source``.
 """
 
 from __future__ import annotations
@@ -27,7 +32,8 @@ from ..errors import UsageError
 from .units import FieldSpec, UnitError, to_si
 
 __all__ = ["Solid", "FluidProps", "MaterialTable", "SOLID_FIELDS", "FLUID_FIELDS",
-           "load_table", "user_table_paths", "MaterialError"]
+           "PRESSURE_FIELDS", "PRESSURE_PAIRS", "load_table", "user_table_paths", "MaterialError",
+           "check_pairs"]
 
 
 class MaterialError(UsageError, ValueError):
@@ -49,8 +55,24 @@ FLUID_FIELDS = {
     "density": (FieldSpec("[mass] / [length] ** 3", "998 kg/m^3", si_unit="kg/m^3"), True),
     "vapour_pressure": (FieldSpec("[pressure]", "2.34 kPa", lo_open=False, si_unit="Pa"), False),
     "mean_free_path": (FieldSpec("[length]", "67 nm", si_unit="m"), False),
+    # the pressure dependence (Physics.beta, roelands_*, dh_*): alpha >= 0 (a liquid whose
+    # viscosity falls with pressure, cold water, is entered as 0), Z in the solver's (0, 2]
+    "pressure_viscosity": (FieldSpec("1 / [pressure]", "20 1/GPa", lo_open=False, si_unit="1/Pa"),
+                           False),
+    "roelands_index": (FieldSpec("", "0.6", 0.0, 2.0, hi_open=False), False),
+    "roelands_pressure": (FieldSpec("[pressure]", "196 MPa", si_unit="Pa"), False),
+    "dowson_higginson_c1": (FieldSpec("1 / [pressure]", "0.6 1/GPa", lo_open=False,
+                                      si_unit="1/Pa"), False),
+    "dowson_higginson_c2": (FieldSpec("1 / [pressure]", "1.7 1/GPa", lo_open=False,
+                                      si_unit="1/Pa"), False),
 }
-_TEXT_FIELDS = ("description", "source")
+# the fluid fields of the pressure dependence, and those that only make sense together
+PRESSURE_FIELDS = ("pressure_viscosity", "roelands_index", "roelands_pressure",
+                   "dowson_higginson_c1", "dowson_higginson_c2")
+PRESSURE_PAIRS = (("roelands_index", "roelands_pressure"),
+                  ("dowson_higginson_c1", "dowson_higginson_c2"))
+_TEXT_FIELDS = {"materials": ("description", "source"),
+                "fluids": ("description", "source", "pressure_source")}
 
 
 @dataclass(frozen=True)
@@ -88,18 +110,49 @@ class FluidProps:
     density: float  # kg/m^3
     vapour_pressure: float | None = None  # Pa
     mean_free_path: float | None = None  # m
+    pressure_viscosity: float | None = None  # 1/Pa, alpha = d ln(mu)/dp at ambient pressure
+    roelands_index: float | None = None  # Roelands Z
+    roelands_pressure: float | None = None  # Pa, Roelands p_R
+    dowson_higginson_c1: float | None = None  # 1/Pa: rho/rho0 = 1 + c1 p / (1 + c2 p)
+    dowson_higginson_c2: float | None = None  # 1/Pa
     source: str = ""
     description: str = ""
+    pressure_source: str = ""  # where the pressure-dependence values come from
+
+    @property
+    def gas(self) -> bool:
+        """A gas: it has a mean free path (the fluids table gives one to gases only)."""
+        return self.mean_free_path is not None
+
+    @property
+    def has_roelands(self) -> bool:
+        return self.roelands_index is not None and self.roelands_pressure is not None
+
+    @property
+    def has_dowson_higginson(self) -> bool:
+        return self.dowson_higginson_c1 is not None and self.dowson_higginson_c2 is not None
+
+
+def check_pairs(values: dict, where: str, error=None) -> None:
+    """Raise ``error`` (MaterialError) when only one field of a ``PRESSURE_PAIRS`` pair is
+    given: the Roelands law needs Z and p_R, the Dowson-Higginson law c1 and c2."""
+    for a, b in PRESSURE_PAIRS:
+        if (values.get(a) is None) != (values.get(b) is None):
+            have, miss = (a, b) if values.get(a) is not None else (b, a)
+            spec = FLUID_FIELDS[miss][0]
+            raise (error or MaterialError)(f"{where}: {have} is given without {miss}; the law "
+                                           f"needs both (e.g. {miss} = '{spec.example}')")
 
 
 def _parse_entry(kind, name, raw, where):
     fields = SOLID_FIELDS if kind == "materials" else FLUID_FIELDS
     if not isinstance(raw, dict):
         raise MaterialError(f"{where}: [{kind}.{name}] must be a table of values")
-    unknown = sorted(set(raw) - set(fields) - set(_TEXT_FIELDS))
+    texts = _TEXT_FIELDS[kind]
+    unknown = sorted(set(raw) - set(fields) - set(texts))
     if unknown:
         raise MaterialError(f"{where}: [{kind}.{name}] has unknown field(s) {unknown}; valid fields: "
-                            f"{sorted([*fields, *_TEXT_FIELDS])}")
+                            f"{sorted([*fields, *texts])}")
     if not str(raw.get("source", "")).strip():
         raise MaterialError(f"{where}: [{kind}.{name}] needs a 'source' saying where its values "
                             "come from (a reference, a data sheet, or 'own measurement')")
@@ -115,7 +168,9 @@ def _parse_entry(kind, name, raw, where):
             values[field] = to_si(raw[field], spec, f"{kind}.{name}.{field}")
         except UnitError as exc:
             raise MaterialError(f"{where}: {exc}") from None
-    text = {k: str(raw.get(k, "")) for k in _TEXT_FIELDS}
+    if kind == "fluids":
+        check_pairs(values, f"{where}: [{kind}.{name}]")
+    text = {k: str(raw.get(k, "")) for k in texts}
     cls = Solid if kind == "materials" else FluidProps
     return cls(name=name, **values, **text)
 

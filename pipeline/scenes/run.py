@@ -11,8 +11,9 @@ from dataclasses import dataclass, field
 
 from solver.physics import Physics
 
-from .checks import (Check, cavitation_crosses, cavitation_reason, model_reason, outcome_checks,
-                     premise_checks)
+from .checks import (Check, cavitation_crosses, cavitation_reason, density_reason, density_switch,
+                     model_reason, outcome_checks, premise_checks, pressure_notes,
+                     viscosity_reason, viscosity_switch)
 from .scene import Scene
 
 __all__ = ["SceneResult", "run_scene", "RESULT_KEYS", "check_solvable"]
@@ -21,7 +22,8 @@ __all__ = ["SceneResult", "run_scene", "RESULT_KEYS", "check_solvable"]
 RESULT_KEYS = (
     "title", "inputs", "reduced_radius_m", "reduced_mass_kg", "theta_per_Pa", "effective_modulus_Pa",
     "x0_m", "x0_over_a", "x1_m", *Physics.names(), "Re", "Re_x0_over_a", "sound_speed_m_per_s",
-    "wave_parameter", "model", "model_reason", "cavitation_reason", "cavitation_pressure_Pa",
+    "wave_parameter", "model", "model_reason", "cavitation_reason", "viscosity_reason",
+    "density_reason", "cavitation_pressure_Pa",
     "status", "message", "v_r",
     "rebound_speed_m_per_s", "e_wet", "departure_speed_m_per_s", "closest_approach_nm", "closest_approach_on_approach_nm",
     "equilibrium_separation_m", "log10_equilibrium_separation_m", "escaped", "time_to_stop_s",
@@ -43,6 +45,8 @@ class SceneResult:
     peak_pressure: float = math.nan  # Pa
     min_pressure: float = math.nan  # Pa (negative: tension)
     cavitation_reason: str = ""  # the film model used and why, one sentence with numbers
+    viscosity_reason: str = ""  # the viscosity law used and why, likewise
+    density_reason: str = ""  # the density law used and why, likewise
 
     def to_dict(self) -> dict:
         """All results (keys ``RESULT_KEYS``), SI with the unit in the key, non-finite as None."""
@@ -67,6 +71,7 @@ class SceneResult:
             "sound_speed_m_per_s": s.sound_speed, "wave_parameter": s.wave_parameter,
             "model": c.model, "model_reason": model_reason(s, c),
             "cavitation_reason": self.cavitation_reason,
+            "viscosity_reason": self.viscosity_reason, "density_reason": self.density_reason,
             "cavitation_pressure_Pa": s.cavitation_pressure,
             "status": c.status, "message": c.message,
             "v_r": num(c.v_r), "rebound_speed_m_per_s": num(c.v_r * s.v0),
@@ -107,11 +112,16 @@ def check_solvable(scene: Scene) -> Physics:
 def run_scene(scene: Scene, accuracy: str = "standard", **overrides) -> SceneResult:
     """Solve a scene and check it.
 
-    With the scene's ``cavitation = "auto"`` (the default) the classic film is solved first; where
-    its tension brings the absolute pressure below the scene's cavitation pressure
-    (``checks.cavitation_crosses``) the scene is solved again with the floor (``Pi`` finite, the
-    solver's default model). ``SceneResult.cavitation_reason`` says which film answered and why.
-    A forced model (``"off"``, ``"reynolds"``, ``"jfo"``) is solved once.
+    The scene's automatic switches (``cavitation``, ``viscosity_law``, ``density_law`` "auto",
+    the defaults) are decided on one first solve, the *base*: the classic film, with whatever
+    the scene forces. Where the base's tension brings the absolute pressure below the scene's
+    cavitation pressure (``checks.cavitation_crosses``) the floor is switched on (``Pi`` finite,
+    the solver's default model); where alpha times its peak pressure is not small
+    (``checks.viscosity_switch``) the fluid's viscosity law; where the Dowson-Higginson density
+    rises by more than 1 % there (``checks.density_switch``) the density law. If anything was
+    switched on the scene is solved again with it. The ``SceneResult`` reasons say which film
+    answered and why. A scene that forces everything (or whose fluid gives nothing to switch)
+    is solved once.
 
     Parameters
     ----------
@@ -129,26 +139,44 @@ def run_scene(scene: Scene, accuracy: str = "standard", **overrides) -> SceneRes
     """
     from solver import collide
 
-    auto = scene.cavitation == "auto"
-    # the automatic switch starts from the classic film (docs/scenes.md, "Cavitation")
-    physics = check_solvable(scene) if not auto else scene.physics("off")
+    auto_cav = scene.cavitation == "auto"
+    auto_visc = scene.viscosity_law == "auto"
+    auto_dens = scene.density_law == "auto"
+    # the automatic switches start from the classic film (docs/scenes.md, "Cavitation",
+    # "Pressure-dependent viscosity and density"), with what the scene forces
+    base = scene.physics("off" if auto_cav else None, "constant" if auto_visc else None,
+                         "constant" if auto_dens else None)
     overrides = {k: v for k, v in overrides.items() if v is not None}
     overrides.setdefault("save_profiles", False)
-    c = collide(physics, accuracy=accuracy, **overrides)
-    # the classic film's lowest pressure [Pa, gauge], when the classic film was solved
-    classic_p_min = c.p_min * scene.pressure_scale if c.ok and c.physics.classic else None
-    if auto and cavitation_crosses(scene, classic_p_min):
-        c = collide(scene.physics("auto"), accuracy=accuracy, **overrides)
-    reason = cavitation_reason(scene, c.physics, classic_p_min, forced=not auto)
+    c = collide(base, accuracy=accuracy, **overrides)
+    # the base film's pressure extremes [Pa, gauge], when it was solved
+    p_star = scene.pressure_scale
+    base_p_min = c.p_min * p_star if c.ok else None
+    base_p_max = c.p_max * p_star if c.ok else None
+    final = scene.physics(
+        ("auto" if cavitation_crosses(scene, base_p_min) else "off") if auto_cav else None,
+        ("auto" if viscosity_switch(scene, base_p_max) else "constant") if auto_visc else None,
+        ("auto" if density_switch(scene, base_p_max) else "constant") if auto_dens else None)
+    if final != base:
+        c = collide(final, accuracy=accuracy, **overrides)
+    reasons = {
+        "cavitation_reason": cavitation_reason(scene, c.physics, base_p_min, forced=not auto_cav,
+                                               base=base),
+        "viscosity_reason": viscosity_reason(scene, c.physics, base_p_max, forced=not auto_visc,
+                                             base=base),
+        "density_reason": density_reason(scene, c.physics, base_p_max, forced=not auto_dens,
+                                         base=base),
+    }
     warnings = premise_checks(scene)
     notes = []
     p_max = p_min = math.nan
     if c.ok:
         # the solver's extremes over the whole collision, rigid phases included
-        p_max, p_min = c.p_max * scene.pressure_scale, c.p_min * scene.pressure_scale
+        p_max, p_min = c.p_max * p_star, c.p_min * p_star
         post, notes = outcome_checks(scene, c, p_max, p_min)
         warnings += post
+    notes += pressure_notes(scene, base_p_max, base)
     if scene.sound_speed is None:
         notes.append("elastic-wave check skipped: no density known for either solid")
     return SceneResult(scene=scene, collision=c, warnings=warnings, notes=notes,
-                       peak_pressure=p_max, min_pressure=p_min, cavitation_reason=reason)
+                       peak_pressure=p_max, min_pressure=p_min, **reasons)

@@ -9,7 +9,11 @@ A *scene* is what a user sees: "two 100 um sandstone grains meeting in water at 
 - film scale ``x1 = (4 theta mu a^1.5 v0)^(2/5)`` [m], Stokes number ``St = m v0 / (6 pi mu a^2)``,
   elasticity parameter ``eps = 4 theta mu v0 a^1.5 / x0^2.5 = (x1/x0)^(5/2)``;
 - Reynolds number ``Re = rho_f v0 a / mu`` (the film's inertia relative to viscosity is
-  ``Re x0/a``); bar sound speed of a solid ``c = sqrt(E / rho)``.
+  ``Re x0/a``); bar sound speed of a solid ``c = sqrt(E / rho)``;
+- with the pressure scale ``p* = mu a v0 / x1^2``: the cavitation number
+  ``Pi = (p_amb - p_cav) / p*``, the piezoviscous number ``beta = alpha p*`` (alpha the fluid's
+  ``pressure_viscosity``), the Roelands ``P_R = p_R / p*`` and the Dowson-Higginson ``c1 p*``,
+  ``c2 p*`` (docs/scenes.md, "Pressure-dependent viscosity and density").
 
 The solver works in the dimensionless variables of docs/model.md ("Scales"); results are converted back with
 the scales ``x1`` (axial lengths), ``mu a v0 / x1^2`` (pressure), ``6 pi mu a^2 v0 / x1`` (force)
@@ -32,10 +36,15 @@ from ..errors import UsageError
 from .materials import FluidProps, Solid
 from .units import format_quantity
 
-__all__ = ["SceneError", "Body", "Scene", "STANDARD_ATMOSPHERE", "CAVITATION_CHOICES"]
+__all__ = ["SceneError", "Body", "Scene", "STANDARD_ATMOSPHERE", "CAVITATION_CHOICES",
+           "VISCOSITY_CHOICES", "DENSITY_CHOICES"]
 
 STANDARD_ATMOSPHERE = 101325.0  # Pa: the default ambient pressure of a scene (a liquid at sea level)
 CAVITATION_CHOICES = ("auto", "off", "reynolds", "jfo")
+# a scene's viscosity and density laws: "auto" is the automatic switch (run.run_scene), the
+# others are forced; the laws are the solver's (solver.physics.VISCOSITY_LAWS, DENSITY_LAWS)
+VISCOSITY_CHOICES = ("auto", "constant", "barus", "roelands")
+DENSITY_CHOICES = ("auto", "constant", "dowson-higginson")
 
 
 class SceneError(UsageError, ValueError):
@@ -85,6 +94,16 @@ class Scene:
     # the cavitation model: "auto" (classic, switched to the default model where the classic
     # tension would cross the floor: run.run_scene), or forced "off", "reynolds", "jfo"
     cavitation: str = "auto"
+    # the viscosity law: "auto" (constant, switched to the fluid's law where alpha times the
+    # classic peak pressure is not small: run.run_scene), or forced "constant", "barus",
+    # "roelands"; the density law likewise: "auto", "constant", "dowson-higginson"
+    viscosity_law: str = "auto"
+    density_law: str = "auto"
+
+    def __post_init__(self):
+        # a forced law the fluid has no constants for is refused here, before anything is solved
+        self._viscosity_law(self.viscosity_law)
+        self._density_law(self.density_law)
 
     # ---- derived numbers (SI), docs/model.md---------------------------------------------------
     @property
@@ -149,18 +168,76 @@ class Scene:
             return math.inf
         return (self.ambient_pressure - self.cavitation_pressure) / self.pressure_scale
 
-    def physics(self, cavitation: str | None = None) -> Physics:
+    @property
+    def beta(self) -> float | None:
+        """Piezoviscous number ``alpha p*`` (alpha the fluid's ``pressure_viscosity``, ``p*`` the
+        ``pressure_scale``); None when the fluid has no alpha."""
+        alpha = self.fluid.pressure_viscosity
+        return None if alpha is None else alpha * self.pressure_scale
+
+    def _viscosity_law(self, law: str) -> str:
+        """The law ``law`` stands for with this fluid: "auto" is the fluid's own law (the one the
+        automatic switch turns on: "roelands" with Z and p_R, "barus" with alpha > 0, else
+        "constant"); a forced law the fluid has no constants for raises SceneError."""
+        if law not in VISCOSITY_CHOICES:
+            raise SceneError(f"viscosity_law must be one of {list(VISCOSITY_CHOICES)}, got {law!r}")
+        f = self.fluid
+        alpha = f.pressure_viscosity
+        if law == "auto":
+            if not alpha:  # None (unknown) or 0 (no pressure dependence)
+                return "constant"
+            return "roelands" if f.has_roelands else "barus"
+        if law in ("barus", "roelands"):
+            if alpha is None:
+                raise SceneError(f"viscosity_law = {law!r} needs the fluid's pressure-viscosity "
+                                 f"coefficient, and the fluid {f.name!r} has none: give "
+                                 "fluid.pressure_viscosity (e.g. '20 1/GPa', --pressure-viscosity)")
+            if alpha == 0.0:
+                raise SceneError(f"viscosity_law = {law!r} with the fluid {f.name!r}'s "
+                                 "pressure_viscosity = 0 is the constant viscosity: give "
+                                 "fluid.pressure_viscosity > 0 or viscosity_law = 'constant'")
+            if law == "roelands" and not f.has_roelands:
+                raise SceneError(f"viscosity_law = 'roelands' needs the fluid's roelands_index "
+                                 f"and roelands_pressure, and the fluid {f.name!r} has none: give "
+                                 "both (e.g. fluid.roelands_index = 0.6, fluid.roelands_pressure "
+                                 "= '196 MPa'), or viscosity_law = 'barus'")
+        return law
+
+    def _density_law(self, law: str) -> str:
+        """The density law ``law`` stands for: "auto" is "dowson-higginson" where the fluid has
+        its constants, else "constant"; a forced law without them raises SceneError."""
+        if law not in DENSITY_CHOICES:
+            raise SceneError(f"density_law must be one of {list(DENSITY_CHOICES)}, got {law!r}")
+        has = self.fluid.has_dowson_higginson
+        if law == "auto":
+            return "dowson-higginson" if has else "constant"
+        if law == "dowson-higginson" and not has:
+            raise SceneError(f"density_law = 'dowson-higginson' needs the fluid's "
+                             f"dowson_higginson_c1 and dowson_higginson_c2, and the fluid "
+                             f"{self.fluid.name!r} has none: give both (e.g. "
+                             "fluid.dowson_higginson_c1 = '0.6 1/GPa', fluid.dowson_higginson_c2 "
+                             "= '1.7 1/GPa')")
+        return law
+
+    def physics(self, cavitation: str | None = None, viscosity_law: str | None = None,
+                density_law: str | None = None) -> Physics:
         """The scene's dimensionless groups: the one place a scene becomes solver input.
 
         ``cavitation`` is the model (default: the scene's own choice); "auto" is the solver's
         default model where the scene has a cavitation pressure (``Pi`` finite) and the classic
-        film where it has none. The automatic switch of a scene (classic first, the floor only
-        where the classic tension crosses it) is ``run.run_scene``'s: it asks for "off" first.
-        With "off" and a cavitation pressure, ``Pi`` is kept (finite) and ignored by the solver.
+        film where it has none. ``viscosity_law`` and ``density_law`` likewise (default: the
+        scene's own); "auto" is the fluid's own law (``_viscosity_law``, ``_density_law``),
+        "constant" the classic film's. The automatic switches of a scene (classic first, the
+        floor or the law only where the classic film needs them) are ``run.run_scene``'s: it
+        asks for "off" and "constant" first. With "off" and a cavitation pressure, ``Pi`` is kept
+        (finite) and ignored by the solver; a law's constants (``beta = alpha p*``, ``roelands_Z``,
+        ``roelands_PR = p_R / p*``, ``dh_c1 = c1 p*``, ``dh_c2 = c2 p*``) are passed only with
+        the law that uses them (with the constant viscosity ``beta`` is the solver's 0).
 
         Raises SceneError when a group is outside what the solver accepts (the Physics' own
         range check; for a group above its range the message says what to change in the
-        scene), or when a cavitation model is asked for a scene without a cavitation pressure.
+        scene), or when a cavitation model is asked for a scene without a cavitation pressure,
+        or a law for a fluid without its constants.
         """
         model = self.cavitation if cavitation is None else cavitation
         if model not in CAVITATION_CHOICES:
@@ -170,7 +247,19 @@ class Scene:
                              f"has none ({self.cavitation_pressure_source or 'not given'}): give "
                              "fluid.cavitation_pressure (a pressure, 'vapour' or 'gas-saturated') "
                              "or fluid.tensile_strength")
-        values = {"St": self.stokes, "eps": self.eps, "Pi": self.Pi, "cavitation": model}
+        visc = self._viscosity_law(self.viscosity_law if viscosity_law is None else viscosity_law)
+        dens = self._density_law(self.density_law if density_law is None else density_law)
+        f, p_star = self.fluid, self.pressure_scale
+        values = {"St": self.stokes, "eps": self.eps, "Pi": self.Pi, "cavitation": model,
+                  "viscosity_law": visc, "density_law": dens}
+        if visc != "constant":
+            values["beta"] = self.beta
+        if visc == "roelands":
+            values["roelands_Z"] = f.roelands_index
+            values["roelands_PR"] = f.roelands_pressure / p_star
+        if dens != "constant":
+            values["dh_c1"] = f.dowson_higginson_c1 * p_star
+            values["dh_c2"] = f.dowson_higginson_c2 * p_star
         try:
             return Physics(**values)
         except ValueError as exc:
@@ -219,7 +308,12 @@ class Scene:
                           "ambient_pressure_Pa": self.ambient_pressure,
                           "cavitation_pressure_Pa": self.cavitation_pressure,
                           "cavitation_pressure_source": self.cavitation_pressure_source,
-                          "source": f.source},
+                          "pressure_viscosity_per_Pa": f.pressure_viscosity,
+                          "roelands_index": f.roelands_index,
+                          "roelands_pressure_Pa": f.roelands_pressure,
+                          "dowson_higginson_c1_per_Pa": f.dowson_higginson_c1,
+                          "dowson_higginson_c2_per_Pa": f.dowson_higginson_c2,
+                          "source": f.source, "pressure_source": f.pressure_source},
                 "v0_m_per_s": self.v0, "x0_m": self.x0}
 
 
@@ -238,5 +332,14 @@ def _stokes_too_large(scene: Scene, stokes: float) -> str:
             "viscous losses are negligible and the impact is close to dry Hertz contact")
 
 
+def _beta_too_large(scene: Scene, beta: float) -> str:
+    return (f"beta = alpha p* = {beta:.4g} is outside the solver's range "
+            f"[0, {Physics.group('beta').hi:g}] (alpha = "
+            f"{format_quantity(scene.fluid.pressure_viscosity, '1/Pa')} of {scene.fluid.name}, "
+            f"p* = {format_quantity(scene.pressure_scale, 'Pa')}): the viscosity would grow by "
+            f"e^{beta:.3g} already at the pressure scale; solve the constant-viscosity film "
+            "instead with viscosity_law = 'constant' (--viscosity-law constant)")
+
+
 # group -> message for a scene whose group is above the solver's range (what to change)
-_TOO_LARGE = {"eps": _eps_too_large, "St": _stokes_too_large}
+_TOO_LARGE = {"eps": _eps_too_large, "St": _stokes_too_large, "beta": _beta_too_large}

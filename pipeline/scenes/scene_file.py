@@ -8,8 +8,10 @@ from __future__ import annotations
 
 import math
 
-from .materials import FLUID_FIELDS, SOLID_FIELDS, FluidProps, MaterialTable, Solid
-from .scene import CAVITATION_CHOICES, STANDARD_ATMOSPHERE, Body, Scene, SceneError, _reduced
+from .materials import (FLUID_FIELDS, PRESSURE_FIELDS, SOLID_FIELDS, FluidProps, MaterialTable,
+                        Solid, check_pairs)
+from .scene import (CAVITATION_CHOICES, DENSITY_CHOICES, STANDARD_ATMOSPHERE, VISCOSITY_CHOICES,
+                    Body, Scene, SceneError, _reduced)
 from .units import FieldSpec, format_quantity, to_si
 
 __all__ = ["scene_from_dict", "DEFAULT_X0_OVER_A"]
@@ -22,8 +24,8 @@ _GAP = FieldSpec("[length]", "500 nm", si_unit="m")
 _RATIO = FieldSpec("", "0.01")
 _PRESSURE = FieldSpec("[pressure]", "101.325 kPa", si_unit="Pa")
 
-_TOP_KEYS = ("title", "v0", "x0", "x0_over_a", "cavitation", "body1", "body2", "fluid",
-             "materials", "fluids")
+_TOP_KEYS = ("title", "v0", "x0", "x0_over_a", "cavitation", "viscosity_law", "density_law",
+             "body1", "body2", "fluid", "materials", "fluids")
 _BODY_KEYS = ("material", "radius", "wall", *SOLID_FIELDS)
 _FLUID_KEYS = ("name", "ambient_pressure", "cavitation_pressure", "tensile_strength",
                *FLUID_FIELDS)
@@ -101,14 +103,31 @@ def _fluid(data, table: MaterialTable):
         raise SceneError("missing the table [fluid]: give name = 'water' (or viscosity and density)")
     raw = data["fluid"]
     _check_keys(raw, _FLUID_KEYS, "fluid")
+    for key, law, choices in (("viscosity", "viscosity_law", VISCOSITY_CHOICES),
+                              ("density", "density_law", DENSITY_CHOICES)):
+        given = raw.get(key)
+        if isinstance(given, str) and given.strip().lower() in choices:
+            # `ehd scene --viscosity barus`: the flag of `ehd run` that names the law is the
+            # fluid's own viscosity here
+            raise SceneError(f"fluid.{key} is the fluid's {key} (e.g. "
+                             f"'{FLUID_FIELDS[key][0].example}'), got {given!r}: the {key} law "
+                             f"is {law} = {given.strip()!r} at the top of the scene file (flag "
+                             f"--{law.replace('_', '-')})")
     base = None
     if "name" in raw:
         if not isinstance(raw["name"], str):
             raise SceneError(f"fluid.name must be a name, got {raw['name']!r}")
         base = table.fluid(raw["name"], "fluid.name")
     values, name, source = _properties(raw, FLUID_FIELDS, base, "fluid", "fluid")
+    check_pairs(values, "fluid", SceneError)
+    given = sorted(set(raw) & set(PRESSURE_FIELDS))
+    if base is None:
+        pressure_source = "given in the scene" if given else ""
+    else:
+        pressure_source = base.pressure_source + (f"; {', '.join(given)} given in the scene"
+                                                  if given else "")
     fluid = FluidProps(name=name, source=source, description=base.description if base else "",
-                       **values)
+                       pressure_source=pressure_source.lstrip("; "), **values)
     ambient = STANDARD_ATMOSPHERE
     if "ambient_pressure" in raw:
         ambient = to_si(raw["ambient_pressure"], _PRESSURE, "fluid.ambient_pressure")
@@ -164,7 +183,8 @@ def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
     Parameters
     ----------
     data : dict
-        Top-level keys ``title``, ``v0``, ``x0`` or ``x0_over_a``, tables ``body1``, ``body2``,
+        Top-level keys ``title``, ``v0``, ``x0`` or ``x0_over_a``, ``cavitation``,
+        ``viscosity_law``, ``density_law``, tables ``body1``, ``body2``,
         ``fluid`` (and optionally ``materials`` / ``fluids``, already merged into ``table``).
     table : MaterialTable
         Named materials and fluids.
@@ -186,6 +206,11 @@ def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
     cavitation = data.get("cavitation", "auto")
     if cavitation not in CAVITATION_CHOICES:
         raise SceneError(f"cavitation must be one of {list(CAVITATION_CHOICES)}, got {cavitation!r}")
+    laws = {}
+    for key, choices in (("viscosity_law", VISCOSITY_CHOICES), ("density_law", DENSITY_CHOICES)):
+        laws[key] = data.get(key, "auto")
+        if laws[key] not in choices:
+            raise SceneError(f"{key} must be one of {list(choices)}, got {laws[key]!r}")
     if "v0" not in data:
         raise SceneError("missing the field 'v0' (approach speed, e.g. v0 = '10 cm/s')")
     v0 = to_si(data["v0"], _SPEED, "v0")
@@ -203,4 +228,4 @@ def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
         raise SceneError(f"title must be a string, got {title!r}")
     return Scene(title=title, body1=body1, body2=body2, fluid=fluid, v0=v0, x0=x0,
                  ambient_pressure=ambient, cavitation_pressure=p_cav,
-                 cavitation_pressure_source=how, cavitation=cavitation)
+                 cavitation_pressure_source=how, cavitation=cavitation, **laws)
