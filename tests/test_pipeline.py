@@ -165,6 +165,15 @@ def test_cavitation_sweep_file_has_a_Pi_axis_with_the_classic_limit():
 
 
 
+def test_piezoviscous_sweep_file_has_a_beta_axis_from_the_classic_film():
+    from pipeline.sweeps.config import load_sweep
+
+    s = load_sweep(REPO / "sweeps" / "piezoviscous.toml")
+    assert s.axis_names == ("St", "eps", "beta") and s.axes["beta"][0] == 0.0  # the classic film
+    assert s.axes["beta"][-1] == 10.0 and s.fixed["viscosity_law"] == "barus"
+    St = s.axes["St"]
+    assert (St[0], St[-1]) == (1.0, 300.0) and np.allclose(np.diff(np.log(St)), np.log(St[1]))
+
 def test_range_axis_is_log_spaced_and_sorted():
     s = parse_sweep(sweep_text("{start = 100.0, stop = 1.0, num = 3}", [1e-3, 1e-2]))
     assert s.axes["St"] == pytest.approx((1.0, 10.0, 100.0), rel=1e-12)
