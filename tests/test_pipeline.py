@@ -164,6 +164,16 @@ def test_cavitation_sweep_file_has_a_Pi_axis_with_the_classic_limit():
         parse_sweep(sweep_text([1.0], [1e-2]).replace("[numerics]", "Pi = [inf, inf]\n[numerics]"))
 
 
+
+def test_piezoviscous_sweep_file_has_a_beta_axis_from_the_classic_film():
+    from pipeline.sweeps.config import load_sweep
+
+    s = load_sweep(REPO / "sweeps" / "piezoviscous.toml")
+    assert s.axis_names == ("St", "eps", "beta") and s.axes["beta"][0] == 0.0  # the classic film
+    assert s.axes["beta"][-1] == 10.0 and s.fixed["viscosity_law"] == "barus"
+    St = s.axes["St"]
+    assert (St[0], St[-1]) == (1.0, 300.0) and np.allclose(np.diff(np.log(St)), np.log(St[1]))
+
 def test_range_axis_is_log_spaced_and_sorted():
     s = parse_sweep(sweep_text("{start = 100.0, stop = 1.0, num = 3}", [1e-3, 1e-2]))
     assert s.axes["St"] == pytest.approx((1.0, 10.0, 100.0), rel=1e-12)
@@ -761,7 +771,7 @@ def test_a_three_axis_store_end_to_end(tmp_path, capsys, monkeypatch):
         f"{n}_Pi={v}.png" for n in figures.FIGURES for v in ("0.001", "0.01", "0.1")} | \
         {"critical_stokes.csv", "cavitation_eps=0.001.png", "cavitation_eps=0.01.png",
          "critical_stokes_vs_Pi.png"}
-    drawn = dict(figures.pi_figures(ds3))
+    drawn = dict(figures.axis_figures(ds3))
     fig = drawn["cavitation_eps=0.01"]()
     assert [len(ax.get_lines()) for ax in fig.axes] == [3, 4, 3]  # + the ln(x_e/x0) = 0 line
     (ax,) = drawn["critical_stokes_vs_Pi"]().axes
@@ -775,6 +785,85 @@ def test_a_three_axis_store_end_to_end(tmp_path, capsys, monkeypatch):
 
     with pytest.raises(PlaneError, match="no eps axis"):
         list(planes(ds_flat))
+
+
+def test_a_beta_axis_sweep_end_to_end_draws_the_piezoviscous_figures(tmp_path, capsys,
+                                                                    monkeypatch):
+    """The real solver on a tiny St x beta grid (beta = 0: the classic film on the same axes),
+    through the command line: the (eps, St) figures per beta and the piezoviscous ones."""
+    import pipeline.plots.sweep_maps as figures
+    from pipeline.cli import main
+
+    path = tmp_path / "piezo.toml"  # viscosity_law left at "auto": Barus where beta > 0
+    path.write_text(physics_sweep_text("St = [3.0, 30.0]\nbeta = [0.0, 2.0]", "eps = 1e-2",
+                                       store=str(tmp_path / "piezo.zarr")))
+    assert main(["sweep", str(path), "--executor", "serial"]) == 0
+    assert "done             4" in capsys.readouterr().out
+    monkeypatch.setattr(figures, "FORMATS", ("png",))  # quicker
+    out = tmp_path / "figs"
+    assert main(["figures", str(tmp_path / "piezo.zarr"), "--out", str(out)]) == 0
+    assert {p.name for p in out.iterdir() if not p.name.startswith(".")} == {
+        f"{n}_beta={v}.png" for n in figures.FIGURES for v in ("0", "2")} | {
+        "critical_stokes.csv", "piezoviscous_eps=0.01.png", "critical_stokes_vs_beta.png"}
+
+    ds = open_results(tmp_path / "piezo.zarr").load()
+    drawn = dict(figures.axis_figures(ds))
+    assert set(drawn) == {"piezoviscous_eps=0.01", "critical_stokes_vs_beta"}
+    fig = drawn["piezoviscous_eps=0.01"]()
+    assert "barus viscosity" in fig.get_suptitle()  # "auto" as the solver resolves it
+    # v_r, h_m, ln(x_e/x0) (+ its threshold) and the peak viscosity (+ the solidification line),
+    # a curve per beta
+    _, hm, _, mu = fig.axes
+    assert [len(ax.get_lines()) for ax in fig.axes] == [2, 2, 3, 3]
+    assert mu.get_yscale() == hm.get_yscale() == "log"
+    classic, piezo = (line.get_ydata() for line in mu.get_lines()[:2])
+    assert list(classic) == [1.0, 1.0] and piezo[1] > 2.0  # the film thickens under pressure
+    assert hm.get_lines()[1].get_ydata()[1] > hm.get_lines()[0].get_ydata()[1]  # ... and stays thicker
+    (ax,) = drawn["critical_stokes_vs_beta"]().axes
+    rows = critical_stokes(ds)
+    x, y = ax.get_lines()[0].get_data()  # St_c against beta, the classic film included
+    assert list(x) == [0.0, 2.0] and list(y) == [r["St_c"] for r in rows]
+    assert 3.0 < y[1] < y[0] < 30.0  # a piezoviscous film sticks less
+    dashed = [line for line in ax.get_lines() if line.get_linestyle() == "--"]
+    assert dashed[0].get_ydata()[0] == y[0]  # the classic film's St_c as the dashed line
+
+
+def test_a_store_with_pi_and_beta_axes_gets_both_figure_families(tmp_path):
+    """Each further axis draws its figures once per value of the other (fake solves only)."""
+    import pipeline.plots.sweep_maps as figures
+
+    sweep = parse_sweep(physics_sweep_text(
+        "St = [1.0, 10.0, 30.0]\neps = [1e-2]\nPi = [0.01, inf]\nbeta = [0.0, 5.0]",
+        store=str(tmp_path / "both.zarr")))
+    assert run(sweep).done == 12
+    drawn = dict(figures.axis_figures(open_results(sweep.store).load()))
+    assert set(drawn) == {"cavitation_eps=0.01_beta=0", "cavitation_eps=0.01_beta=5",
+                          "critical_stokes_vs_Pi_beta=0", "critical_stokes_vs_Pi_beta=5",
+                          "piezoviscous_eps=0.01_Pi=0.01", "piezoviscous_eps=0.01_Pi=inf",
+                          "critical_stokes_vs_beta_Pi=0.01", "critical_stokes_vs_beta_Pi=inf"}
+    fig = drawn["piezoviscous_eps=0.01_Pi=0.01"]()
+    assert "Pi = 0.01" in fig.texts[-1].get_text()  # the footer names the plane
+    assert [line.get_label() for line in fig.axes[0].get_lines()] == [
+        r"classic film ($\beta = 0$)", r"$\beta = 5$"]
+
+
+def test_a_capped_axis_says_how_far_the_curves_go():
+    from matplotlib.figure import Figure
+
+    from pipeline.plots.sweep_maps import _cap
+
+    ax = Figure().add_subplot()
+    St = np.array([1.0, 2.0, 3.0])
+    y = np.array([[1.0, 1e3, 1e40], [1.0, math.inf, 1e5]])
+    ax.plot(St, y[0])
+    ax.set_yscale("log")
+    _cap(ax, y, 1e30, St)
+    assert ax.get_ylim()[1] == 1e30 and 1e-2 < ax.get_ylim()[0] < 1.0  # 5 % of the range below
+    note = ax.texts[0].get_text()
+    assert "$10^{40}$ at St = 3" in note and "(1 scene(s), St = 2)" in note
+    ax2 = Figure().add_subplot()
+    _cap(ax2, y[:, :2].clip(max=1e3), 1e30, St[:2])  # nothing above the cap: untouched
+    assert not ax2.texts and ax2.get_ylim()[1] < 1e30
 
 
 def test_docs_list_every_store_variable_and_status_code():

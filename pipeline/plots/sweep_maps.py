@@ -11,10 +11,13 @@ bytes).
 - the same three quantities as maps over the (St, eps) plane;
 - stick or rebound: the map of ``escaped`` with the critical Stokes number St_c(eps) against the
   experimental St ~ 10, and the St_c table as CSV;
-- a store with a ``Pi`` axis (cavitation) also gets, per eps, ``v_r``, ``ln(x_e/x0)`` and
-  ``e_wet`` against St with one curve per Pi and the classic film (Pi = inf) on the same axes
-  (``cavitation_eps=...``), and ``St_c`` against Pi per eps (``critical_stokes_vs_Pi``):
-  ``pi_figures``.
+- a store with a further physics axis declared in ``AXES`` gets that group as the curve
+  parameter, with the classic film on the same axes (``axis_figures``): with ``Pi`` (cavitation),
+  per eps ``v_r``, ``ln(x_e/x0)`` and ``e_wet`` against St, one curve per Pi, the classic film at
+  Pi = inf (``cavitation_eps=...``), and ``St_c`` against Pi per eps (``critical_stokes_vs_Pi``);
+  with ``beta`` (piezoviscous liquid), per eps ``v_r``, ``h_m``, ``ln(x_e/x0)`` and the peak
+  viscosity on approach against St, one curve per beta, the classic film at beta = 0
+  (``piezoviscous_eps=...``), and ``St_c`` against beta per eps (``critical_stokes_vs_beta``).
 
 Every figure is drawn on an (eps, St) plane of the store (``analysis.planes``: St or eps fixed by
 the sweep is a plane one row or column wide). A store with further axes gets one set of figures
@@ -32,15 +35,19 @@ scenes not run are left grey.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from solver.collision import SOLID_VISCOSITY_RATIO
+from solver.physics import Physics
 
 from ..sweeps.analysis import (EXPERIMENT_REFERENCE, EXPERIMENT_ST_C, critical_stokes,
                                critical_stokes_csv, planes, valid)
 from ..sweeps.config import physics_from_json
 
-__all__ = ["render_all", "update_figures", "fingerprint", "FIGURES", "pi_figures"]
+__all__ = ["render_all", "update_figures", "fingerprint", "FIGURES", "axis_figures", "AXES"]
 
 FIGURES = ("fig12_rebound_velocity", "fig12b_wet_restitution", "fig13_closest_approach",
            "fig14_equilibrium_separation", "map_rebound_velocity", "map_closest_approach",
@@ -87,7 +94,7 @@ def render_all(ds, out) -> list:
                     path = out / f"{name}{_suffix(extra)}.{fmt}"
                     fig.savefig(path, format=fmt, dpi=DPI, metadata=_METADATA[fmt])
                     paths.append(path)
-        for name, draw in pi_figures(ds):
+        for name, draw in axis_figures(ds):
             fig = draw()
             for fmt in FORMATS:
                 path = out / f"{name}.{fmt}"
@@ -132,7 +139,7 @@ def update_figures(ds, out) -> tuple[list, bool]:
     key = fingerprint(ds)
     stamp = out / STAMP_NAME
     expected = [out / f"{n}{_suffix(extra)}.{f}" for extra, _ in planes(ds) for n in FIGURES
-                for f in FORMATS] + [out / f"{n}.{f}" for n, _ in pi_figures(ds)
+                for f in FORMATS] + [out / f"{n}.{f}" for n, _ in axis_figures(ds)
                                      for f in FORMATS] + [out / CSV_NAME]
     if stamp.is_file() and stamp.read_text().strip() == key and all(p.is_file() for p in expected):
         return expected, False
@@ -500,120 +507,225 @@ def _stick_or_rebound(ds):
     return fig
 
 
-# ---- a store with a Pi axis: the cavitation number as the curve parameter -----------------------
-PI_AXIS = "Pi"
-# per eps: v_r, ln(x_e/x0) and e_wet against St, one curve per Pi (classic, Pi = inf, dashed)
-PI_FIGURE = "cavitation"
-# St_c against Pi, one curve per eps (the classic film's St_c as a dashed line)
-PI_ST_C_FIGURE = "critical_stokes_vs_Pi"
+# ---- a store with a further physics axis (Pi, beta): that group as the curve parameter ----------
+@dataclass(frozen=True)
+class Panel:
+    """One panel of a per-eps figure: ``variable`` against St, one curve per value of the axis."""
+
+    variable: str
+    label: str
+    log: bool = False  # log y axis
+    bottom: float | None = None  # fixed lower y limit
+    top: float | None = None  # fixed upper y limit (with ``bottom``)
+    reference: float | None = None  # a dotted horizontal line (ln(x_e/x0) = 0: the threshold)
+    reference_label: str = ""  # written on that line
+    window: tuple | None = None  # (floor, top): y shown from max(lowest, floor) - 0.5 up to top
+    cap: float | None = None  # the axis stops here when a value passes it (a note says how far)
 
 
-def pi_figures(ds):
-    """Yield ``(name, draw)`` of the cavitation figures of a store with a Pi axis (none without
-    one): per eps ``cavitation_eps=...`` (``_pi_curves``), and ``critical_stokes_vs_Pi``
-    (``_pi_critical_stokes``); names carry the values of the store's further axes (``_suffix``).
-    Each ``draw()`` returns a Figure; nothing is computed but St_c (``analysis``)."""
+@dataclass(frozen=True)
+class AxisFigures:
+    """The figures of a store with the physics axis ``axis`` (a field of ``solver.Physics``): per
+    eps the ``panels`` against St with a curve per value of the axis (``{name}_eps=...``), and St_c
+    against the axis with a curve per eps (``critical_stokes_vs_{axis}``). The axis value of the
+    classic film (``classic``) is drawn black dashed on the same axes. Another physics axis gets
+    its figures by one more entry in ``AXES``."""
+
+    axis: str
+    name: str  # file-name stem of the per-eps figure
+    symbol: str  # TeX, e.g. r"\Pi"
+    classic: float  # the axis value at which the physics is off (the classic film)
+    classic_tex: str  # that value in TeX
+    log: bool  # log-spaced values: a log axis, powers of ten in the labels
+    axis_label: str  # x label of the St_c figure
+    panels: tuple
+    title: str  # suptitle of the per-eps figure, filled with {eps} and the fields of Physics
+    st_c_title: str
+    figsize: tuple = (13.0, 4.2)
+    grid: tuple = (1, 3)  # rows, columns of the panels
+    legend: tuple = (2, "lower right")  # panel that holds the legend, where
+    st_c_legend: str = "lower right"
+
+    @property
+    def st_c_name(self) -> str:
+        return f"critical_stokes_vs_{self.axis}"
+
+    def label(self, v: float) -> str:
+        if v == self.classic:
+            return rf"classic film (${self.symbol} = {self.classic_tex}$)"
+        k = math.log10(v) if self.log and v > 0 else math.nan
+        if math.isfinite(k) and abs(k - round(k)) < 1e-9:
+            return rf"${self.symbol} = 10^{{{int(round(k))}}}$"
+        return rf"${self.symbol} = {v:.3g}$"
+
+    def styles(self, values):
+        """Colour, line style and width per value: the others along plasma, the farthest from the
+        classic film darkest; the classic film black dashed."""
+        import matplotlib
+
+        cmap = matplotlib.colormaps["plasma"]
+        others = [v for v in values if v != self.classic]
+        others.sort(reverse=bool(others) and self.classic < min(others))
+        shade = dict(zip(others, np.linspace(0.0, 0.85, len(others)) if len(others) > 1 else [0.0]))
+        return [("k", "--", 1.6) if v == self.classic else (cmap(shade[v]), "-", 1.2)
+                for v in values]
+
+
+_V_R = Panel("v_r", r"maximum rebound velocity $v_r/v_0$", bottom=0.0)
+_LN_X_E = Panel("ln_x_e_x0", r"equilibrium separation $\ln(x_e/x_0)$ ($> 0$: rebound)",
+                reference=0.0, window=(-20.0, 10.0))  # ln(x_e/x0) grows ~ St past escape
+AXES = {a.axis: a for a in (
+    AxisFigures("Pi", "cavitation", r"\Pi", math.inf, r"\infty", True,
+                r"cavitation number $\Pi = (p_{amb} - p_{cav}) x_1^2 / (\mu a v_0)$",
+                (_V_R, _LN_X_E, Panel("e_wet", r"wet restitution $e_{wet}$ (at $x_0$)", bottom=0.0,
+                                      top=1.0)),
+                "Cavitation (Reynolds floor $P \\geq -\\Pi$) at {eps}",
+                r"stick-or-rebound threshold against the cavitation number"),
+    AxisFigures("beta", "piezoviscous", r"\beta", 0.0, "0", False,
+                r"piezoviscous number $\beta = \alpha \mu_0 a v_0 / x_1^2$",
+                (_V_R, Panel("h_m_x1", r"closest approach $h_m/x_1$", log=True), _LN_X_E,
+                 Panel("viscosity_ratio_max_approach",
+                       r"peak viscosity on approach $\mu_{max}/\mu_0$", log=True,
+                       reference=SOLID_VISCOSITY_RATIO,
+                       reference_label=rf"solidified above ($\mu > "
+                                       rf"10^{{{math.log10(SOLID_VISCOSITY_RATIO):g}}} \mu_0$)",
+                       # up to beta = 10 the curves stay below 1e28 but where the film first
+                       # solidifies (1e43 to 1e136 and beyond the float range): off scale
+                       cap=1e30)),
+                "Piezoviscous film ({viscosity_law} viscosity, {density_law} density) at {eps}",
+                r"stick-or-rebound threshold against the piezoviscous number",
+                figsize=(10.0, 7.6), grid=(2, 2), legend=(0, "upper left"), st_c_legend="best"),
+)}
+
+
+def axis_figures(ds):
+    """Yield ``(name, draw)`` of the figures of every further physics axis of the store that
+    ``AXES`` declares (``Pi``: ``cavitation_eps=...`` and ``critical_stokes_vs_Pi``; ``beta``:
+    ``piezoviscous_eps=...`` and ``critical_stokes_vs_beta``); none without one. Names carry the
+    values of the store's other axes (``_suffix``). Each ``draw()`` returns a Figure; nothing is
+    computed but St_c (``analysis``)."""
     import itertools
 
-    if PI_AXIS not in ds["status"].dims or "St" not in ds["status"].dims:
+    dims = ds["status"].dims
+    if "St" not in dims:
         return
     fixed = physics_from_json(dict(ds.attrs.get("fixed_physics", {})))
-    if "eps" not in ds["status"].dims:
+    if "eps" not in dims:
         ds = ds.expand_dims({"eps": [float(fixed["eps"])]})
-    others = [d for d in ds["status"].dims if d not in ("St", "eps", PI_AXIS)]
-    for values in itertools.product(*(range(ds.sizes[a]) for a in others)):
-        sel = dict(zip(others, values))
-        cube = ds.isel(sel).transpose(PI_AXIS, "eps", "St")
-        extra = {a: float(ds[a].values[i]) for a, i in sel.items()}
-        for j, eps in enumerate(cube["eps"].values):
-            yield (f"{PI_FIGURE}{_suffix({'eps': float(eps), **extra})}",
-                   lambda c=cube.isel(eps=j), e=extra: _pi_curves(c, e))
-        yield (f"{PI_ST_C_FIGURE}{_suffix(extra)}",
-               lambda c=cube, e=extra: _pi_critical_stokes(c, e))
+    for spec in (s for a, s in AXES.items() if a in dims):
+        others = [d for d in ds["status"].dims if d not in ("St", "eps", spec.axis)]
+        for values in itertools.product(*(range(ds.sizes[a]) for a in others)):
+            sel = dict(zip(others, values))
+            cube = ds.isel(sel).transpose(spec.axis, "eps", "St")
+            extra = {a: float(ds[a].values[i]) for a, i in sel.items()}
+            for j, eps in enumerate(cube["eps"].values):
+                yield (f"{spec.name}{_suffix({'eps': float(eps), **extra})}",
+                       lambda c=cube.isel(eps=j), e=extra, s=spec: _axis_curves(s, c, e))
+            yield (f"{spec.st_c_name}{_suffix(extra)}",
+                   lambda c=cube, e=extra, s=spec: _axis_critical_stokes(s, c, e))
 
 
-def _pi_label(pi: float) -> str:
-    if math.isinf(pi):
-        return r"classic film ($\Pi = \infty$)"
-    k = math.log10(pi) if pi > 0 else math.nan
-    if math.isfinite(k) and abs(k - round(k)) < 1e-9:
-        return rf"$\Pi = 10^{{{int(round(k))}}}$"
-    return rf"$\Pi = {pi:.3g}$"
-
-
-def _pi_styles(pis):
-    """Colour and line style per Pi: finite values along plasma (small Pi dark), inf black dashed."""
-    import matplotlib
-
-    cmap = matplotlib.colormaps["plasma"]
-    finite = [p for p in pis if math.isfinite(p)]
-    shade = dict(zip(finite, np.linspace(0.0, 0.85, len(finite)) if len(finite) > 1 else [0.0]))
-    return [("k", "--", 1.6) if math.isinf(p) else (cmap(shade[p]), "-", 1.2) for p in pis]
-
-
-def _pi_curves(cube, extra):
-    """One eps: ``v_r``, ``ln(x_e/x0)`` and ``e_wet`` against St, a curve per Pi."""
+def _axis_curves(spec, cube, extra):
+    """One eps: each of ``spec.panels`` against St, a curve per value of ``spec.axis``."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(13.0, 4.2), layout="constrained")
-    axes = fig.subplots(1, 3)
-    St, pis = cube["St"].values, [float(p) for p in cube[PI_AXIS].values]
+    fig = Figure(figsize=spec.figsize, layout="constrained")
+    axes = fig.subplots(*spec.grid).ravel()
+    St, values = cube["St"].values, [float(v) for v in cube[spec.axis].values]
     ok = valid(cube)
-    panels = (("v_r", r"maximum rebound velocity $v_r/v_0$"),
-              ("ln_x_e_x0", r"equilibrium separation $\ln(x_e/x_0)$ ($> 0$: rebound)"),
-              ("e_wet", r"wet restitution $e_{wet}$ (at $x_0$)"))
-    for ax, (name, label) in zip(axes, panels):
-        y = np.where(ok, np.asarray(cube[name].values, dtype=float), np.nan)
-        for k, (pi, (color, ls, lw)) in enumerate(zip(pis, _pi_styles(pis))):
-            ax.plot(St, y[k], color=color, ls=ls, lw=lw, marker="o", ms=1.8, label=_pi_label(pi))
+    styles = spec.styles(values)
+    for ax, panel in zip(axes, spec.panels):
+        y = np.where(ok, np.asarray(cube[panel.variable].values, dtype=float), np.nan)
+        for k, (v, (color, ls, lw)) in enumerate(zip(values, styles)):
+            ax.plot(St, y[k], color=color, ls=ls, lw=lw, marker="o", ms=1.8, label=spec.label(v))
         ax.set_xscale("log")
+        if panel.log:
+            ax.set_yscale("log")
         ax.set_xlabel(r"Stokes number $St$")
-        ax.set_ylabel(label)
+        ax.set_ylabel(panel.label)
         ax.grid(True, which="major", lw=0.4, alpha=0.5)
-    axes[0].set_ylim(bottom=0.0)
-    axes[2].set_ylim(0.0, 1.0)
-    axes[1].axhline(0.0, color="0.3", lw=0.8, ls=":")
-    # ln(x_e/x0) grows ~ St past escape: keep the threshold region readable
-    y = np.where(ok, np.asarray(cube["ln_x_e_x0"].values, dtype=float), np.nan)
-    if np.isfinite(y).any():
-        axes[1].set_ylim(max(float(np.nanmin(y)), -20.0) - 0.5, 10.0)
+        if panel.top is not None:
+            ax.set_ylim(panel.bottom, panel.top)
+        elif panel.bottom is not None:
+            ax.set_ylim(bottom=panel.bottom)
+        if panel.reference is not None:
+            ax.axhline(panel.reference, color="0.3", lw=0.8, ls=":")
+        if panel.reference_label:
+            ax.text(0.01, panel.reference, panel.reference_label, fontsize=7, color="0.3",
+                    va="bottom", transform=ax.get_yaxis_transform())
+        if panel.window is not None and np.isfinite(y).any():
+            ax.set_ylim(max(float(np.nanmin(y)), panel.window[0]) - 0.5, panel.window[1])
+        if panel.cap is not None:
+            _cap(ax, y, panel.cap, St)
     failed = int(_failed(cube).sum())
     if failed:
         axes[0].text(0.01, 0.01, f"{failed} failed scene(s) left out", transform=axes[0].transAxes,
                      fontsize=7, color=FAILED_COLOR)
-    axes[2].legend(loc="lower right", frameon=False, fontsize=7)
+    where, loc = spec.legend
+    axes[where].legend(loc=loc, frameon=False, fontsize=7)
     eps = float(cube["eps"].values)
-    fig.suptitle(f"Cavitation (Reynolds floor $P \\geq -\\Pi$) at {_eps_label(eps)}")
+    # the title names the physics as the solver resolves it where it is on ("auto" -> "barus")
+    on = next((v for v in values if v != spec.classic), spec.classic)
+    physics = Physics.from_mapping({**physics_from_json(dict(cube.attrs.get("fixed_physics", {}))),
+                                    **extra, "St": float(St[0]), "eps": eps, spec.axis: on})
+    fig.suptitle(spec.title.format_map({**physics.as_dict(), "eps": _eps_label(eps)}))
     _footer(fig, cube, {**extra, "eps": eps})
     return fig
 
 
-def _pi_critical_stokes(cube, extra):
-    """St_c against Pi, a curve per eps; the classic film's St_c (Pi = inf) dashed."""
+def _cap(ax, y, cap, St):
+    """Stop the y axis at ``cap`` if a value passes it, and say how far the curves go (inf: a
+    value beyond the float range, left out of the curve)."""
+    finite = np.isfinite(y)
+    above = y[finite] > cap
+    if not above.any() and not np.isinf(y).any():
+        return
+    lo = float(np.min(y[finite])) if finite.any() else cap
+    # the margin matplotlib leaves, taken from the range shown rather than the full one
+    ax.set_ylim(lo * (lo / cap) ** 0.05 if ax.get_yscale() == "log" else lo - 0.05 * (cap - lo),
+                cap)
+    notes = []
+    if above.any():
+        k = np.nanargmax(np.where(finite, y, np.nan))
+        notes.append(f"off scale above: up to $10^{{{math.log10(y.flat[k]):.0f}}}$ at "
+                     f"St = {float(St[k % St.size]):.3g}")
+    n_inf = int(np.isinf(y).sum())
+    if n_inf:
+        at = ", ".join(f"{float(s):.3g}" for s in St[np.nonzero(np.isinf(y).any(axis=0))[0]])
+        notes.append(f"beyond the float range ({n_inf} scene(s), St = {at}): left out")
+    ax.text(0.99, 0.99, "\n".join(notes), transform=ax.transAxes, ha="right", va="top",
+            fontsize=7, color="0.3")
+
+
+def _axis_critical_stokes(spec, cube, extra):
+    """St_c against ``spec.axis``, a curve per eps; the classic film's St_c dashed."""
     fig = _figure()
     ax = fig.add_subplot()
     rows = [r for r in critical_stokes(cube) if math.isfinite(r["St_c"])]
     eps_values = [float(e) for e in cube["eps"].values]
     colors = _eps_colors(len(eps_values))
+    axis = spec.axis
     for i in range(len(eps_values) - 1, -1, -1):
         mine = [r for r in rows if r["eps"] == eps_values[i]]
-        finite = sorted((r[PI_AXIS], r["St_c"]) for r in mine if math.isfinite(r[PI_AXIS]))
-        if finite:
-            x, y = zip(*finite)
+        # on a log axis the classic film at inf has no place: it is the dashed line
+        points = sorted((r[axis], r["St_c"]) for r in mine if math.isfinite(r[axis]))
+        if points:
+            x, y = zip(*points)
             ax.plot(x, y, color=colors[i], marker="o", ms=3.5, lw=1.3,
                     label=_eps_label(eps_values[i]))
         for r in mine:
-            if math.isinf(r[PI_AXIS]):
+            if r[axis] == spec.classic:
                 ax.axhline(r["St_c"], color=colors[i], ls="--", lw=1.0)
-    ax.plot([], [], color="0.3", ls="--", lw=1.0, label=r"classic film ($\Pi = \infty$)")
+    ax.plot([], [], color="0.3", ls="--", lw=1.0, label=spec.label(spec.classic))
     ax.axhline(EXPERIMENT_ST_C, color="k", ls=":", lw=1.0,
                label=r"experiments: no rebound below $St \approx 10$")
-    ax.set_xscale("log")
-    ax.set_xlabel(r"cavitation number $\Pi = (p_{amb} - p_{cav}) x_1^2 / (\mu a v_0)$")
+    if spec.log:
+        ax.set_xscale("log")
+    ax.set_xlabel(spec.axis_label)
     ax.set_ylabel(r"critical Stokes number $St_c$")
     ax.set_ylim(bottom=0.0)
-    ax.set_title(r"stick-or-rebound threshold against the cavitation number")
+    ax.set_title(spec.st_c_title)
     ax.grid(True, which="major", lw=0.4, alpha=0.5)
-    ax.legend(loc="lower right", frameon=False)
+    ax.legend(loc=spec.st_c_legend, frameon=False)
     _footer(fig, cube, extra)
     return fig
