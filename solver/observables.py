@@ -77,7 +77,8 @@ OBSERVABLES = (
                master="lin time"),
     Observable("peak_force", "float", "peak film force", "6 pi mu a^2 v0 / x1",
                "peak force / (6 pi mu a^2 v0/x1)", master="log force"),
-    Observable("p_max", "float", "largest film pressure over the collision", _P,
+    Observable("p_max", "float", "largest film pressure over the collision (a pressure-dependent "
+               "liquid: until v first reaches 0)", _P,
                "peak film pressure / (mu a v0/x1^2)", master="log pressure"),
     Observable("p_min", "float", "lowest film pressure over the collision (< 0: tension)", _P,
                "lowest film pressure (< 0: tension)", master="lin pressure"),
