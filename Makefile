@@ -47,6 +47,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_solver.py
 	$(PY) benchmarks/bench_accuracy.py
 	$(PY) benchmarks/bench_cavitation.py
+	$(PY) benchmarks/bench_piezoviscous.py
 
 bench-sweep: $(STAMP)
 	$(PY) benchmarks/bench_sweep.py
