@@ -204,13 +204,15 @@ class Physics:
         "ambient" (the default): the law applies to compression only, ``mu = mu0`` where
         ``P <= 0`` (the Barus formula would thin a liquid in tension by orders of magnitude, which
         real liquids do not: they cavitate first). "law": the formula at every pressure, to
-        measure what that choice changes. The density law is always compression-only.
+        measure what that choice changes. (The density's compressibility fades in tension
+        over ``0.01``, model/liquid.py.)
     roelands_Z, roelands_PR : float
         Roelands index ``Z`` in (0, 2] and reference pressure ``p_R / p*`` in (0, 1e6]
         (defaults: a mineral oil at ``p* = 5e8 Pa``).
     density_law : {"constant", "dowson-higginson"}
-        ``rho/rho0`` against ``P``: "dowson-higginson" ``1 + c1 P / (1 + c2 P)`` (compression
-        only, as the viscosity); with ``dh_c1 = 0`` it is "constant".
+        ``rho/rho0`` against ``P``: "dowson-higginson" ``1 + c1 P / (1 + c2 P)`` in compression
+        (in tension its compressibility ``c1`` fades over ``P = -0.01``); with ``dh_c1 = 0`` it
+        is "constant".
     dh_c1, dh_c2 : float
         Dowson-Higginson constants times the pressure scale, in [0, 100] (defaults
         ``0.6e-9, 1.7e-9 1/Pa`` at ``p* = 5e8 Pa``).

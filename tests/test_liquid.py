@@ -112,15 +112,19 @@ def test_energy_terms_match_their_integrals():
     def drho(p):
         return density(p, phys)[1]
 
-    for p in (0.01, 0.5, 3.0, 20.0):
+    for p in (0.01, 0.5, 3.0, 20.0, -0.003, -0.02, -1.0):
         e = integrate.quad(lambda x: x * drho(x) / rho(x) ** 2, 0.0, p, epsrel=1e-13)[0]
-        # 1e-10: closed form against quadrature (1e-13), relative; the closed form's log1p and
-        # the subtraction lose up to ~1e-11 at small p (the value is ~c1 p^2/2)
-        assert compression_energy(p, phys) == pytest.approx(e, rel=1e-10)
+        # 1e-9: closed form against quadrature (1e-13), relative; the closed forms' log1p and
+        # the subtractions lose up to ~1e-10 at small |p| (the value is ~c1 p^2/2)
+        assert compression_energy(p, phys) == pytest.approx(e, rel=1e-9)
         vol = integrate.quad(lambda x: 1.0 / rho(x), 0.0, p, epsrel=1e-13)[0]
         assert volume_difference(0.0, p, phys) == pytest.approx(vol, rel=1e-12)
-    assert compression_energy(-1.0, phys) == 0.0  # compression only
-    assert density(-1.0, phys) == (1.0, 0.0)
+    # in tension the compressibility c1 fades over 0.01: density and slope continuous at 0, the
+    # expansion bounded by c1 * 0.01
+    assert density(1e-12, phys)[0] - density(-1e-12, phys)[0] == pytest.approx(2 * 0.6e-12,
+                                                                               rel=1e-3)
+    assert density(-1e-12, phys)[1] == pytest.approx(density(1e-12, phys)[1], rel=1e-9)
+    assert density(-5.0, phys)[0] == pytest.approx(1.0 - 0.6 * 0.01, rel=1e-15)
     # Dowson-Higginson tends to 1 + c1/c2 at infinite pressure
     assert density(1e12, phys)[0] == pytest.approx(1.0 + 0.6 / 1.7, rel=1e-9)
 

@@ -265,7 +265,7 @@ def density_rise(scene: Scene, p: float) -> float | None:
     f = scene.fluid
     if not f.has_dowson_higginson:
         return None
-    p = max(p, 0.0)  # compression only, as the solver's law
+    p = max(p, 0.0)  # the rise under compression (in tension it is below c1 * 0.01 p*)
     return f.dowson_higginson_c1 * p / (1.0 + f.dowson_higginson_c2 * p)
 
 

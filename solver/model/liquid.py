@@ -10,9 +10,11 @@ read from the physics array (solver/physics.py: ``BETA``, ``VISCOSITY``...):
   pressures, the logs), beyond the last with its slope;
 - density: constant; Dowson-Higginson ``rho_bar = 1 + c1 P / (1 + c2 P)``.
 
-Both apply to compression only: where ``P <= 0`` the liquid keeps its ambient viscosity and
-density (a real liquid cavitates long before the Barus formula's thinning in tension matters;
-``viscosity_in_tension = "law"`` reads the viscosity law at ``P < 0`` too, for comparison).
+The viscosity law applies to compression only: where ``P <= 0`` the liquid keeps its ambient
+viscosity (a real liquid cavitates long before the Barus formula's thinning in tension matters;
+``viscosity_in_tension = "law"`` reads the viscosity law at ``P < 0`` too, for comparison). The
+density's compressibility ``c1`` fades in tension over ``TENSION_WIDTH``, so it expands by at most
+``c1 TENSION_WIDTH`` (docs/model.md says why neither "compression only" nor the law itself).
 
 What the film needs from them (model/film.py):
 
@@ -40,6 +42,11 @@ DOWSON_HIGGINSON = 1.0
 LAW_IN_TENSION = 1.0
 # Roelands read in tension ("law") is undefined at P <= -P_R; it is held at this fraction of it
 ROELANDS_TENSION_LIMIT = 0.99
+# Tension over which a compressible liquid's compressibility fades (in p*; ~5 MPa at
+# p* = 5e8 Pa, the order of liquids' tensile strength, beyond which they cavitate). Compression
+# only with a jump of the compressibility at P = 0 made a draining compressed cell's pressure
+# jump where it crossed 0 (its storage vanished): the step underflowed (docs/model.md)
+TENSION_WIDTH = 0.01
 
 
 @jit
@@ -84,7 +91,8 @@ def _tabulated(p, phys):
 @jit
 def _next_kink(x, b, phys):
     """The first pressure above ``x`` and below ``b`` where ``ln(mu/rho)`` has a kink: 0 (the
-    laws apply to compression only) and a table's points; ``b`` when there is none."""
+    viscosity law applies to compression only, and the density changes its law there) and a
+    table's points; ``b`` when there is none."""
     nxt = b
     if x < 0.0 < nxt:
         nxt = 0.0
@@ -99,10 +107,16 @@ def _next_kink(x, b, phys):
 
 @jit
 def density(p, phys):
-    """``rho_bar`` at the pressure ``p`` and its derivative in ``p``."""
-    if phys[DENSITY] == CONSTANT or p <= 0.0:
+    """``rho_bar`` at the pressure ``p`` and its derivative in ``p``: Dowson-Higginson in
+    compression; in tension its compressibility ``c1`` at 0 fades over ``TENSION_WIDTH``,
+    ``1 + c1 w (exp(P/w) - 1)``, so the density and its slope are continuous at 0 and the liquid
+    expands by at most ``c1 w``."""
+    if phys[DENSITY] == CONSTANT:
         return 1.0, 0.0
     c1 = phys[DH_C1]
+    if p <= 0.0:
+        e = math.exp(p / TENSION_WIDTH)
+        return 1.0 + c1 * TENSION_WIDTH * (e - 1.0), c1 * e
     c2 = phys[DH_C2]
     den = 1.0 + c2 * p
     return 1.0 + c1 * p / den, c1 / (den * den)
@@ -180,10 +194,15 @@ def kirchhoff_difference(p_lo, p_hi, phys):
 @jit
 def _specific_volume_integral(p, phys):
     """``Int_0^p dP / rho_bar``: ``p`` where the density is constant; for Dowson-Higginson
-    (``rho_bar = (1 + b p)/(1 + c2 p)``, ``b = c1 + c2``) ``(c2/b) p + (c1/b^2) ln(1 + b p)``."""
-    if phys[DENSITY] == CONSTANT or p <= 0.0:
+    (``rho_bar = (1 + b p)/(1 + c2 p)``, ``b = c1 + c2``) ``(c2/b) p + (c1/b^2) ln(1 + b p)``;
+    in tension (``rho_bar = A + a exp(p/w)``, ``a = c1 w``, ``A = 1 - a``)
+    ``(p - w ln rho_bar)/A``."""
+    if phys[DENSITY] == CONSTANT:
         return p
     c1 = phys[DH_C1]
+    if p <= 0.0:
+        rho = density(p, phys)[0]
+        return (p - TENSION_WIDTH * math.log(rho)) / (1.0 - c1 * TENSION_WIDTH)
     b = c1 + phys[DH_C2]
     return phys[DH_C2] / b * p + c1 / (b * b) * math.log1p(b * p)
 
@@ -201,10 +220,13 @@ def volume_difference(p_lo, p_hi, phys):
 @jit
 def compression_energy(p, phys):
     """Energy stored per unit mass of liquid (in ``p*/rho0``) compressed to ``p``:
-    ``e = Int_0^p P rho_bar' / rho_bar^2 dP`` (docs/model.md, "Energy"), 0 at constant density;
-    for Dowson-Higginson ``(c1/b^2) (ln(1 + b p) - b p / (1 + b p))``, ``b = c1 + c2``."""
-    if phys[DENSITY] == CONSTANT or p <= 0.0:
+    ``e = Int_0^p P rho_bar' / rho_bar^2 dP = Int_0^p dP/rho_bar - p/rho_bar`` (by parts;
+    docs/model.md, "Energy"), 0 at constant density; for Dowson-Higginson
+    ``(c1/b^2) (ln(1 + b p) - b p / (1 + b p))``, ``b = c1 + c2``; positive in tension too."""
+    if phys[DENSITY] == CONSTANT:
         return 0.0
+    if p <= 0.0:
+        return _specific_volume_integral(p, phys) - p / density(p, phys)[0]
     c1 = phys[DH_C1]
     b = c1 + phys[DH_C2]
     y = b * p
