@@ -290,3 +290,10 @@ def test_exact_for():
                                 Pi=1e-3))
     assert not pz.exact_for(Physics(St=5.0, eps=1e-3, beta=2.0, viscosity_law="roelands"))
     assert not pz.exact_for(Physics(St=5.0, eps=1e-3, beta=2.0, density_law="dowson-higginson"))
+
+
+def test_scalar_load_factor_is_the_array_one():
+    from solver.model.piezoviscous import _load_factor_scalar, load_factor
+
+    for z in (-3.0, -0.06, -0.05, -1e-3, 0.0, 1e-3, 0.05, 0.051, 0.3, 0.5, 0.51, 0.9, 1.0):
+        assert _load_factor_scalar(z) == pytest.approx(float(load_factor(z)), rel=1e-15, abs=0)

@@ -90,6 +90,8 @@ TENSION_CHOICES = ("ambient", "law")  # as solver.physics.TENSION_CHOICES
 GLASS_LOG_VISCOSITY = 1.0
 GLASS_MARGIN = 1.0 / math.sqrt(-math.expm1(-GLASS_LOG_VISCOSITY))  # X/k there: 1.2578
 
+# Gauss-Legendre nodes per sample interval of the path's time quadrature (``approach``)
+_GAUSS_NODES, _GAUSS_WEIGHTS = np.polynomial.legendre.leggauss(24)
 _SERIES_BELOW = 0.05  # |z| below which S(z) is summed as its series (the closed form is 0/0 at 0)
 _SERIES_TERMS = 14  # 0.05^13 / (14 * 27) < 1e-19: the series' truncation is below round-off
 _CLOSE_TO_GLASS = 0.5  # z above which S uses the (1 +- e) log1p(+-e) form (artanh diverges at 1)
@@ -148,12 +150,29 @@ def load_factor(z):
     return out
 
 
+def _load_factor_scalar(z):
+    """``load_factor`` of one float, the same branches in ``math`` (the ODE's right-hand side:
+    numpy's per-call overhead on scalars was most of the rigid approach's time)."""
+    if abs(z) <= _SERIES_BELOW:
+        total = 0.0
+        for n in range(_SERIES_TERMS, 0, -1):  # Horner
+            total = total * z + 1.0 / (n * (2.0 * n - 1.0))
+        return total
+    if _SERIES_BELOW < z <= _CLOSE_TO_GLASS:
+        e = math.sqrt(z)
+        return (2.0 * e * math.atanh(e) + math.log1p(-z)) / z
+    if z < -_SERIES_BELOW:
+        w = math.sqrt(-z)
+        return (2.0 * w * math.atan(w) - math.log1p(-z)) / (-z)
+    return float(load_factor(z))
+
+
 def _load_log_slope(z):
     """``d ln S / d ln z = artanh(e)/(e S) - 1`` (``e = sqrt(z)``, ``0 < z < 1``; ``~ z/6``)."""
     if z <= 0.0:
         return 0.0
     e = math.sqrt(z)
-    return math.atanh(e) / (e * float(load_factor(z))) - 1.0
+    return math.atanh(e) / (e * _load_factor_scalar(z)) - 1.0
 
 
 def deflection_factor(z):
@@ -407,7 +426,7 @@ def approach(x_from, v_from, t_from, stokes, beta, switch, glass_margin=GLASS_MA
     ds_cont = _load_log_slope(z_cont) * s_cont / z_cont
 
     def s_of(z):
-        return s_cont + ds_cont * (z - z_cont) if z > z_cont else float(load_factor(z))
+        return s_cont + ds_cont * (z - z_cont) if z > z_cont else _load_factor_scalar(z)
 
     def rhs(u, y):
         return [-s_of(z_of(u, y[0])) / stokes]
@@ -507,28 +526,31 @@ def approach(x_from, v_from, t_from, stokes, beta, switch, glass_margin=GLASS_MA
     u_end, event = min(ends)
     v_end = 0.0 if event == "rest" else v_at(u_end)
 
-    def time_between(u_a, u_b):
-        if u_b <= u_a:
-            return 0.0
-        val, _ = integrate.quad(lambda u: x_from * math.exp(-u) / v_at(u), u_a, u_b,
-                                epsabs=0.0, epsrel=1e-13, limit=200)
-        return val
+    def elapsed(u_a, u_b):
+        """``Int X/V du`` over each interval ``[u_a[i], u_b[i]]``: Gauss-Legendre on the dense
+        output, one vectorised call (``X/V`` is analytic inside each interval; its nearest
+        singularity, ``V = 0`` at a rest, lies at least one sample interval beyond, where
+        ``_GAUSS_POINTS`` nodes converge to round-off)."""
+        u_a, u_b = np.atleast_1d(u_a), np.atleast_1d(u_b)
+        half = 0.5 * (u_b - u_a)
+        u = (u_a + u_b)[:, None] * 0.5 + half[:, None] * _GAUSS_NODES[None, :]
+        v = sol.sol(u.ravel())[0].reshape(u.shape)
+        return half * np.sum(_GAUSS_WEIGHTS * x_from * np.exp(-u) / v, axis=1)
 
     u_s = np.linspace(0.0, u_end, samples)
-    v_s = np.array([v_at(u) for u in u_s])
+    v_s = sol.sol(u_s)[0]
     v_s[0], v_s[-1] = v_from, v_end
-    t_s = np.empty(samples)
-    t_s[0] = t_from
-    for i in range(1, samples):
-        t_s[i] = math.inf if (i == samples - 1 and event == "rest") else \
-            t_s[i - 1] + time_between(u_s[i - 1], u_s[i])
+    finite = samples - 1 if event == "rest" else samples  # a rest is reached after infinite time
+    t_s = np.full(samples, math.inf)
+    t_s[:finite] = t_from + np.concatenate([[0.0], np.cumsum(elapsed(u_s[:finite - 1],
+                                                                     u_s[1:finite]))])
     x_s = x_from * np.exp(-u_s)
     x_s[-1] = x_from * math.exp(-u_end)
 
     # peaks: at the ends or at an interior maximum (events on the log-derivatives)
     def time_at(u):
         i = int(np.searchsorted(u_s, u, side="right") - 1)
-        return t_s[i] + time_between(u_s[i], u)  # t_s[i] finite: u < u_end
+        return t_s[i] + float(elapsed(u_s[i], u)[0])  # t_s[i] finite: u < u_end
 
     peaks = {}
     for key, t_key, d, quantity in (
