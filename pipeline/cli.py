@@ -177,15 +177,15 @@ def _add_physics_flags(p: argparse.ArgumentParser) -> None:
     for group in GROUPS:
         default = "" if group.default is None else f"; default {group.default}"
         if group.choices:
-            p.add_argument(group.option, dest=group.name, choices=group.choices,
+            p.add_argument(*group.options, dest=group.name, choices=group.choices,
                            default=group.default, help=f"{group.long_name}{default}")
             continue
         if group.table:
-            p.add_argument(group.option, dest=group.name, default=group.default,
+            p.add_argument(*group.options, dest=group.name, default=group.default,
                            metavar="P:MU_RATIO,...", help=group.long_name)
             continue
         lb = "[" if group.closed_lo else "("
-        p.add_argument(group.option, dest=group.name, type=float,
+        p.add_argument(*group.options, dest=group.name, type=float,
                        required=group.default is None, default=group.default,
                        metavar=group.name.upper(),
                        help=f"{group.long_name}, in {lb}{group.lo:g}, {group.hi:g}]{default}")

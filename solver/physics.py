@@ -49,8 +49,15 @@ class Group:
 
     @property
     def option(self) -> str:
-        """The command-line flag of the group, e.g. ``--St`` or ``--viscosity``."""
-        return "--" + (self.flag or self.name)
+        """The command-line flag of the group, e.g. ``--St``, ``--viscosity`` or ``--dh-c1``
+        (words joined by hyphens, as the other flags)."""
+        return "--" + (self.flag or self.name.replace("_", "-"))
+
+    @property
+    def options(self) -> tuple:
+        """``option``, and the field's own name as a flag where it differs (``--dh_c1``)."""
+        own = "--" + self.name
+        return (self.option,) if own == self.option else (self.option, own)
 
     def check(self, value):
         """``value`` as a float (or one of ``choices``), or ValueError naming the group and its
@@ -155,7 +162,7 @@ GROUPS = (
     # measured mu(p): ln(mu/mu0) linear between the points, extended with the last slope
     Group("viscosity_table", "measured viscosity against pressure, \"P:mu/mu0, ...\" from 0:1 "
           "with P increasing (P in mu a v0 / x1^2)", "viscosity table", math.nan, math.nan,
-          default="", table=True, flag="viscosity-table"),
+          default="", table=True),
 )
 # positions in Physics.as_array(), read by the compiled kernels
 ST, EPS, PI, CAVITATION = 0, 1, 2, 3
