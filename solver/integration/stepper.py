@@ -26,14 +26,14 @@ model's terms come from model/film.py; this module knows nothing of the physics 
 import numpy as np
 
 from .._jit import jit
-from ..model.film import (cavity_edge, cell_content, compression_work, constrain, jacobian, residual,
-                          energy_rates, face_fluxes, film_force, gap, jfo_void, update_cavity,
-                          update_cavity_jfo, void_work)
+from ..model.film import (cavity_edge, cell_content, compression_work, constrain, jacobian,
+                          residual, energy_rates, face_fluxes, film_force, gap, jfo_void,
+                          update_cavity, update_cavity_jfo, void_work)
+from ..model.liquid import isoviscous, kirchhoff_difference
 from ..physics import CAVITATION, PI, ST
 from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
 from .events import reached
 from .linalg import lu_factor, lu_solve, matvec
-from ..model.liquid import isoviscous, kirchhoff_difference
 
 # status codes of the loop (solver/observables.py: STATUS)
 RUNNING = 0

@@ -174,14 +174,15 @@ def departs_rigidly(physics) -> bool:
 def law_slopes(physics):
     """How strongly the liquid's laws change the film per unit pressure, in compression and in
     tension: ``d ln(rho/mu) / dP`` at ``P = 0`` in magnitude (``beta`` and ``c1``; 0 for the
-    classic film; the tension slope is 0 unless the viscosity law is read in tension)."""
+    classic film). In tension the viscosity counts only where its law is read there; the
+    density's compressibility ``c1`` fades there (model/liquid.py), so ``c1`` bounds it."""
     viscous = physics.beta if physics.viscosity_law in ("barus", "roelands") else 0.0
     if physics.viscosity_law == "table":  # its steepest segment
         points = parse_table(physics.viscosity_table)
         viscous = max(abs(math.log(b[1] / a[1]) / (b[0] - a[0]))
                       for a, b in zip(points, points[1:]))
     dense = physics.dh_c1 if physics.density_law != "constant" else 0.0
-    tension = viscous if physics.viscosity_in_tension == "law" else 0.0
+    tension = (viscous if physics.viscosity_in_tension == "law" else 0.0) + dense
     return viscous + dense, tension
 
 
