@@ -284,3 +284,19 @@ def test_a_tabulated_law_reproduces_the_law_it_tabulates():
         # the same film; the Barus law's own rigid approach hands over elsewhere than the
         # table's classic one: measured 6e-5 to 3.4e-4, the standard preset's accuracy
         assert getattr(two, name) == pytest.approx(getattr(barus, name), rel=1e-3), name
+
+
+def test_with_a_floor_the_step_control_is_the_cavitating_films():
+    """While a cavity is open the pressure leaves the step's error norm (docs/solver.md,
+    "Cavitation"); a pressure-dependent film's Kirchhoff pressure must leave it too: with it,
+    the JFO refill below (St 470, Roelands beta 0.3) underflowed the step after 3987 steps, where
+    it now takes 1449 (the film without beta: 1509)."""
+    kw = dict(St=30.0, eps=1e-4, Pi=1e-3)
+    floor = collide(Physics(**kw), save_profiles=False)
+    both = collide(Physics(**kw, beta=1e-9), save_profiles=False)
+    # beta = 1e-9 moves the pressures' differences by ~1e-9: every step decision is the same
+    assert both.steps == floor.steps and both.rejected_steps == floor.rejected_steps
+    assert both.v_r == pytest.approx(floor.v_r, rel=1e-7)
+    refill = collide(Physics(St=470.2981592314503, eps=6.774250277240935e-07, beta=0.3,
+                             viscosity_law="roelands", Pi=0.01), save_profiles=False)
+    assert refill.ok, refill.message
