@@ -195,8 +195,16 @@ def rigid_head(physics, numerics) -> RigidHead:
         block["W0"] = path.w0[keep]
         block["P_max"] = path.p_axis[keep]
         beta, x, v = physics.beta, path.x_end, path.v_end
-        return RigidHead(x, v, path.t_end, rests, path.event, block, path.peaks,
-                         lambda s: piezoviscous.rigid_pressure(s, x, v, beta))
+        peaks = path.peaks
+        if x > piezoviscous.glass_gap(v, beta):
+            pressure = lambda s: piezoviscous.rigid_pressure(s, x, v, beta)  # noqa: E731
+        else:
+            # the start x0 itself lies inside the glass gap (beta > x0^2/3, e.g. 13 at eps 1e-2):
+            # no rigid Barus film exists there; the coupled phase starts from the classic
+            # pressure, the Kirchhoff pressure of that state, as with the other laws
+            pressure = lambda s: 3.0 * v / (x + s) ** 2  # noqa: E731
+            peaks = rigid.approach_peaks(x_start, stokes, x_start)
+        return RigidHead(x, v, path.t_end, rests, path.event, block, peaks, pressure)
     x_switch = handover_separation(physics, numerics)
     if x_switch is None:
         ln_x_stop = rigid.rest_separation(x_start, 1.0, stokes)

@@ -300,3 +300,18 @@ def test_with_a_floor_the_step_control_is_the_cavitating_films():
     refill = collide(Physics(St=470.2981592314503, eps=6.774250277240935e-07, beta=0.3,
                              viscosity_law="roelands", Pi=0.01), save_profiles=False)
     assert refill.ok, refill.message
+
+
+@pytest.mark.parametrize("st, eps, beta, pi", [(3.7124, 0.04297, 15.0, math.inf),
+                                               (0.45605, 0.013507, 25.0, 0.0)])
+def test_a_start_inside_the_glass_gap_starts_from_the_classic_pressure(st, eps, beta, pi):
+    """Where even the start x0 lies inside the rigid Barus film's glass gap
+    (``x0 < sqrt(3 beta)``) no rigid film exists there: the coupled phase starts from the
+    classic (Kirchhoff) pressure, as with the other laws, and finishes with finite peaks (it
+    failed on an infinite starting pressure, found by a random scan)."""
+    physics = Physics(St=st, eps=eps, beta=beta, Pi=pi)
+    assert physics.x_start < math.sqrt(3.0 * beta)
+    c = collide(physics, save_profiles=False)
+    assert c.ok, c.message
+    assert math.isfinite(c.p_max) and math.isfinite(c.peak_force) and c.solidified
+    assert c.energy_error < 5e-3  # as the extremes above
