@@ -166,3 +166,15 @@ def test_bad_tables_are_named(text, words):
     with pytest.raises(ValueError) as err:
         Physics(St=1.0, eps=1e-4, viscosity_table=text)
     assert all(w in str(err.value) for w in words), str(err.value)
+
+
+def test_a_law_read_in_tension_stays_finite():
+    """``viscosity_in_tension = "law"`` thins the liquid by ``exp(beta P)``: held at ``exp(300)``
+    (a Newton iterate at P = -16, beta = 45 overflowed to inf), with a zero slope there."""
+    phys = _phys(beta=45.0, viscosity_in_tension="law")
+    value, d_lo, d_hi = kirchhoff_difference(-30.0, -20.0, phys)
+    assert value == pytest.approx(10.0 * math.exp(300.0), rel=1e-12)  # the held mobility
+    assert math.isfinite(d_lo) and math.isfinite(d_hi)
+    # below the limit the law itself
+    assert kirchhoff_difference(-2.0, -1.0, phys)[0] == pytest.approx(
+        (math.exp(90.0) - math.exp(45.0)) / 45.0, rel=1e-12)

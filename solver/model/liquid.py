@@ -47,6 +47,11 @@ ROELANDS_TENSION_LIMIT = 0.99
 # only with a jump of the compressibility at P = 0 made a draining compressed cell's pressure
 # jump where it crossed 0 (its storage vanished): the step underflowed (docs/model.md)
 TENSION_WIDTH = 0.01
+# A viscosity law read in tension (viscosity_in_tension = "law") thins the liquid by exp(beta P):
+# beyond exp(300) (1e130) its mobility is held there, or a Newton iterate at P = -16, beta = 45
+# overflowed to inf (found by a random scan). No pressure a collision reaches is near it for the
+# laws read in compression, where the mobility only falls.
+THINNING_LIMIT = 300.0
 
 
 @jit
@@ -124,12 +129,15 @@ def density(p, phys):
 
 @jit
 def _mobility_log(p, phys):
-    """``g = ln mu_bar - ln rho_bar`` (``rho_bar/mu_bar = exp(-g)``) and ``dg/dp``."""
+    """``g = ln mu_bar - ln rho_bar`` (``rho_bar/mu_bar = exp(-g)``) and ``dg/dp``; held at
+    ``-THINNING_LIMIT`` below it (only a viscosity law read in tension gets there)."""
     g, dg = log_viscosity(p, phys)
     if phys[DENSITY] != CONSTANT:
         rho, drho = density(p, phys)
         g -= math.log(rho)
         dg -= drho / rho
+    if g < -THINNING_LIMIT:
+        return -THINNING_LIMIT, 0.0
     return g, dg
 
 
