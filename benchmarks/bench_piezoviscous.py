@@ -40,6 +40,8 @@ from pathlib import Path
 
 import numpy as np
 
+from bench_cavitation import richardson  # the same extrapolation as the cavitation bench
+
 HERE = Path(__file__).parent
 PRESETS = ("fast", "standard", "fine")
 REPEATS = 3
@@ -292,22 +294,6 @@ def error(value, ref, key):
     if key in FLOORS:
         return abs(value - ref) / max(abs(ref), FLOORS[key])
     return abs(value - ref)
-
-
-def richardson(vals):
-    """Limit of three values at ratio-2 refinement, with the observed order and the estimate's
-    own error (the last correction); NaN order when the differences do not shrink (as
-    benchmarks/bench_cavitation.py)."""
-    a, b, c = vals
-    d1, d2 = b - a, c - b
-    if d2 == 0.0:
-        return c, math.inf, 0.0
-    ratio = d1 / d2
-    if not ratio > 1.0:
-        return c, math.nan, abs(d2)
-    p = math.log2(ratio)
-    corr = d2 / (2.0**p - 1.0)
-    return c + corr, p, abs(corr)
 
 
 def accuracy():

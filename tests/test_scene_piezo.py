@@ -26,16 +26,8 @@ GLYCEROL = EXAMPLES / "steel_ball_glass_wall_glycerol.toml"
 WATER = EXAMPLES / "sandstone_water.toml"
 
 
-@pytest.fixture(scope="module")
-def table():
-    return load_table(user_files=False)
-
-
-@pytest.fixture(autouse=True)
-def _no_user_materials(monkeypatch, tmp_path):
-    """Tests must not see the developer's own ~/.config/ehd/materials.toml or $EHD_MATERIALS."""
-    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "config"))
-    monkeypatch.delenv("EHD_MATERIALS", raising=False)
+# the shipped table, and no user materials (~/.config/ehd, $EHD_MATERIALS): test_scene's fixtures
+from tests.test_scene import _no_user_materials, table  # noqa: E402,F401
 
 
 def example(path=GLYCEROL, fluid=None, **top) -> dict:
