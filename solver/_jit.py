@@ -19,8 +19,11 @@
 
 import hashlib
 import os
+import signal
 import sys
 import tempfile
+import threading
+from contextlib import contextmanager
 from pathlib import Path
 
 import numba
@@ -97,3 +100,25 @@ def jit(func):
     # no cache at all rather than numba's silent fallback to __pycache__ (no source-hash guard)
     return numba.njit(cache=CACHE_DIR is not None, nogil=True, fastmath=FASTMATH,
                       error_model="numpy")(func)
+
+
+@contextmanager
+def deferred_interrupt():
+    """Around a long compiled call: a Ctrl-C that arrives while it runs is raised as
+    KeyboardInterrupt once it has returned. Raised inside it (Python's default handler runs when
+    numba converts the results back to Python objects) it crashed the process with a segmentation
+    fault (measured: ``ehd run`` interrupted mid-solve exited -11). Only in the main thread, and
+    only where Ctrl-C is Python's default (a process that ignores it, e.g. a sweep's worker,
+    keeps ignoring it)."""
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+        yield
+        return
+    caught = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if caught:
+        raise KeyboardInterrupt

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._jit import deferred_interrupt
 from .integration import stepper
 from .integration.grid import reference_grid, scaled_grid
 from .integration.events import RELAXED_FULL
@@ -316,11 +317,12 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
     stop_kind, stop_params = rigid.release_event(numerics.release, stokes, physics)
     if physics.cavitation == "jfo" and not _floor_departure(physics):
         stop_kind = RELAXED_FULL  # its cavity has a memory: rigid only once the film is full
-    code, counters, rows, p_hist, w_hist, theta_hist = stepper.integrate(
-        grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, physics.as_array(),
-        x_switch, v_switch, p_init, t_switch, 1.0 - v_switch**2, numerics.rtol,
-        1e-3 * time_scale, 1e-12 * time_scale, numerics.max_steps, stop_kind, stop_params,
-        numerics.save_profiles)
+    with deferred_interrupt():
+        code, counters, rows, p_hist, w_hist, theta_hist = stepper.integrate(
+            grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, physics.as_array(),
+            x_switch, v_switch, p_init, t_switch, 1.0 - v_switch**2, numerics.rtol,
+            1e-3 * time_scale, 1e-12 * time_scale, numerics.max_steps, stop_kind, stop_params,
+            numerics.save_profiles)
     name = next(k for k, (c, _) in STATUS.items() if c == code)
     message = STATUS[name][1]
     cols = {c.name: rows[:, k] for k, c in enumerate(SERIES)}

@@ -579,3 +579,38 @@ def test_ctrl_c_inside_compiled_code_is_an_interrupt_not_a_bug(monkeypatch, caps
     err = capsys.readouterr().err
     assert "Traceback" not in err and err.strip().splitlines() == [
         "ehd run: interrupted; everything finished so far is kept"]
+
+
+REAL_CTRL_C = textwrap.dedent("""
+    import sys
+    sys.path.insert(0, {repo!r})
+    from pipeline.cli import main
+    from solver import Physics, collide
+
+    if sys.argv[1] == "compile":  # fills the numba cache (another process: see the test)
+        collide(Physics(St=1000.0, eps=1e-8), accuracy="fast", save_profiles=False)
+        sys.exit(0)
+    print("ready", flush=True)
+    sys.exit(main(["run", "--St", "1000", "--eps", "1e-8", "--accuracy", "fine",
+                   "--rtol", "1e-8"]))
+    """)
+
+
+def test_a_real_ctrl_c_during_the_compiled_solve_is_exit_130_one_line(tmp_path):
+    """Ctrl-C while the compiled time loop runs its first call in a process (the kernels loaded
+    from a warm cache): raised inside it, where numba converts the results back to Python
+    objects, it killed ``ehd run`` with a segmentation fault (exit -11, every time at 0.5-2 s);
+    it is taken once the loop returns (solver._jit.deferred_interrupt): exit 130, one line."""
+    (tmp_path / "run.py").write_text(REAL_CTRL_C.format(repo=str(REPO)))
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+    subprocess.run([sys.executable, "run.py", "compile"], cwd=tmp_path, env=env, check=True)
+    proc = subprocess.Popen([sys.executable, "run.py", "solve"], cwd=tmp_path, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    assert proc.stdout.readline().strip() == "ready"
+    time.sleep(1.0)  # inside the fine solve (~3 s)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == EXIT_INTERRUPTED, (proc.returncode, err)
+    assert "Traceback" not in err
+    assert err.strip().splitlines()[-1] == "ehd run: interrupted; everything finished so far is kept"
