@@ -30,7 +30,8 @@ RESULT_KEYS = (
     "time_of_max_rebound_s", "peak_force_N", "peak_pressure_Pa", "min_pressure_Pa",
     "max_central_deformation_nm", "min_separation_nm", "dimple", "dimple_depth_nm",
     "cavitated", "cavity_radius_max_m", "void_volume_max_m3", "cavitation_onset_s",
-    "warnings", "notes", "dimensionless",
+    "viscosity_ratio_max_approach", "peak_viscosity_Pa_s", "central_gap_at_peak_pressure_nm",
+    "solidified", "warnings", "notes", "dimensionless",
 )
 
 
@@ -96,6 +97,11 @@ class SceneResult:
             "cavity_radius_max_m": num(c.cavity_radius_max * math.sqrt(s.reduced_radius * x1)),
             "void_volume_max_m3": num(c.void_volume_max * 2.0 * math.pi * s.reduced_radius * x1**2),
             "cavitation_onset_s": num(c.tau_cavitation_onset * s.time_scale),
+            # the pressure-dependent liquid on approach (1 and mu0 for a constant viscosity)
+            "viscosity_ratio_max_approach": num(c.viscosity_ratio_max_approach),
+            "peak_viscosity_Pa_s": num(c.viscosity_ratio_max_approach * s.fluid.viscosity),
+            "central_gap_at_peak_pressure_nm": num(c.h_axis_at_peak_pressure_x1 * x1 * 1e9),
+            "solidified": None if c.solidified is None else bool(c.solidified),
             "warnings": [w.as_dict() for w in self.warnings], "notes": list(self.notes),
             "dimensionless": c.to_dict(),
         }
