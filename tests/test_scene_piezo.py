@@ -175,12 +175,19 @@ def test_glycerol_example_switches_the_piezoviscous_film_on_by_itself(solves, ca
     assert "of the classic film" in reason and f"at least {VISCOSITY_SWITCH:g}" in reason
     assert d["density_reason"].startswith("constant density: glycerol has no Dowson-Higginson")
     assert any(n.startswith("pressure-dependent density not checked") for n in d["notes"])
+    # the solver's peak viscosity on approach, also in Pa s (the fluid's mu0 times the ratio)
+    ratio = d["dimensionless"]["viscosity_ratio_max_approach"]
+    assert d["viscosity_ratio_max_approach"] == ratio > 1.0
+    assert d["peak_viscosity_Pa_s"] == pytest.approx(ratio * d["inputs"]["fluid"]["viscosity_Pa_s"],
+                                                     rel=1e-12)
+    assert d["solidified"] is (ratio >= 1e4)
 
 
 def test_water_keeps_the_constant_viscosity(solves, capsys):
     assert main(["scene", str(WATER), "--json", "--accuracy", "fast"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert d["viscosity_law"] == "constant" and d["beta"] == 0.0
+    assert d["viscosity_ratio_max_approach"] == 1.0 and d["solidified"] is False
     assert d["viscosity_reason"] == ("constant viscosity: the pressure-viscosity coefficient of "
                                      "water is 0, so the viscosity does not depend on the "
                                      "pressure")
@@ -232,6 +239,7 @@ def test_forced_constant_viscosity_is_one_classic_solve(solves, capsys):
     d = json.loads(capsys.readouterr().out)
     assert len(solves) == 1 and solves[0][0].classic
     assert d["viscosity_law"] == "constant" and d["beta"] == 0.0
+    assert d["viscosity_ratio_max_approach"] == 1.0 and d["solidified"] is False
     assert d["viscosity_reason"].startswith("constant viscosity, as asked for (viscosity_law = "
                                             "'constant'); alpha = 5.9 1/GPa for glycerol")
 
