@@ -170,7 +170,6 @@ class RigidHead:
     v: float
     t: float
     rests: bool
-    event: str  # "handover", "glass" (Barus: near the glass gap) or "rest"
     block: dict  # its time series (phase 0), without the end state when a coupled phase follows
     peaks: dict  # rigid.approach_peaks keys, and x_p_max (the gap at the largest pressure)
     pressure: object  # P(s) of the film at the end state, the coupled phase's start
@@ -205,7 +204,7 @@ def rigid_head(physics, numerics) -> RigidHead:
             # pressure, the Kirchhoff pressure of that state, as with the other laws
             pressure = lambda s: 3.0 * v / (x + s) ** 2  # noqa: E731
             peaks = rigid.approach_peaks(x_start, stokes, x_start)
-        return RigidHead(x, v, path.t_end, rests, path.event, block, peaks, pressure)
+        return RigidHead(x, v, path.t_end, rests, block, peaks, pressure)
     x_switch = handover_separation(physics, numerics)
     if x_switch is None:
         ln_x_stop = rigid.rest_separation(x_start, 1.0, stokes)
@@ -213,7 +212,7 @@ def rigid_head(physics, numerics) -> RigidHead:
         x = x_start * np.exp(-u)
         t, v = _rigid_path(x_start, 1.0, 0.0, stokes, x)
         block = _rigid_block(t, x, v, tau_per_t, 0, 1.0 - v * v)
-        return RigidHead(math.exp(ln_x_stop), 0.0, math.inf, True, "rest", block,
+        return RigidHead(math.exp(ln_x_stop), 0.0, math.inf, True, block,
                          rigid.approach_peaks(x_start, stokes, 0.0), None)
     v_switch = float(rigid.velocity(x_switch, x_start, 1.0, stokes))
     t_switch = float(rigid.elapsed_time(x_switch, x_start, 1.0, stokes))
@@ -222,7 +221,7 @@ def rigid_head(physics, numerics) -> RigidHead:
         x_head = x_start * np.exp(-np.linspace(0.0, math.log(x_start / x_switch), 60))[:-1]
         t_head, v_head = _rigid_path(x_start, 1.0, 0.0, stokes, x_head)
         block = _rigid_block(t_head, x_head, v_head, tau_per_t, 0, 1.0 - v_head**2)
-    return RigidHead(x_switch, v_switch, t_switch, False, "handover", block,
+    return RigidHead(x_switch, v_switch, t_switch, False, block,
                      rigid.approach_peaks(x_start, stokes, x_switch),
                      lambda s: 3.0 * v_switch / (x_switch + s) ** 2)
 

@@ -465,17 +465,14 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
                     # stay continuous; they control this step, and the history restarts after it
                     for i in range(n):
                         dh[i] = 0.0
-                if piezo:
+                if piezo and not (floor and (open_cavity or refilled)):
                     # a pressure-dependent liquid: the pressure error in the variable the film
                     # sees, the Kirchhoff pressure Int rho/mu dP, smooth where a glassy lens
                     # makes P itself spike (that spike moves the gap, X and V only through W
-                    # and the force, both in the norm on their own); none while a cavity is
-                    # open, as above
-                    pressure_counts = not (floor and (open_cavity or refilled))
+                    # and the force, both in the norm on their own)
                     for i in range(n):
+                        res[i] = err_fac * kirchhoff_difference(y_pred[i], y[i], phys)[0]
                         kq[i] = kirchhoff_difference(0.0, y[i], phys)[0]
-                        if pressure_counts:
-                            res[i] = err_fac * kirchhoff_difference(y_pred[i], y[i], phys)[0]
                     err = _norm(res[:n], res[n], res[n + 1], dh, kq, y[n], y[n + 1], h, 1.0,
                                 p_abs) / rtol
                 else:

@@ -32,7 +32,7 @@ import numpy as np
 from .._jit import jit
 from ..integration.linalg import matvec
 from ..physics import CAVITATION, DENSITY, PI, ST
-from .liquid import compression_energy, density, kirchhoff_difference, volume_difference
+from .liquid import CONSTANT, compression_energy, density, kirchhoff_difference, volume_difference
 
 
 # ---- the terms ------------------------------------------------------------------------------------
@@ -130,7 +130,7 @@ def compression_work(area, p, h, theta, phys):
     """Energy stored in the compressed liquid, ``E_c = (2/(3 St)) Int rho_bar theta H e(P) ds``
     (``e`` per unit mass, model/liquid.py: ``compression_energy``), relative to the initial kinetic
     energy; 0 at constant density (docs/model.md, "Energy")."""
-    if phys[DENSITY] == 0.0:
+    if phys[DENSITY] == CONSTANT:
         return 0.0
     total = 0.0
     for i in range(theta.size):  # the cells (the last node is the far-field boundary)

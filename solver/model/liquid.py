@@ -38,7 +38,6 @@ from ..physics import (BETA, DENSITY, DH_C1, DH_C2, ROELANDS_PR, ROELANDS_Z, TAB
 
 # codes in the physics array (solver/physics.py: VISCOSITY_LAWS, DENSITY_LAWS, TENSION_CHOICES)
 CONSTANT, BARUS, ROELANDS, TABULATED = 0.0, 1.0, 2.0, 3.0
-DOWSON_HIGGINSON = 1.0
 LAW_IN_TENSION = 1.0
 # Roelands read in tension ("law") is undefined at P <= -P_R; it is held at this fraction of it
 ROELANDS_TENSION_LIMIT = 0.99

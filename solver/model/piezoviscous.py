@@ -57,7 +57,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import integrate, optimize, special
+from scipy import integrate, optimize
 
 from .rigid import I0
 
@@ -129,42 +129,34 @@ def load_factor(z):
         ``S(z) = sum_{n>=1} z^(n-1)/(n (2n-1))``: 1 at ``z = 0``, ``2 ln 2`` at ``z = 1``, ``inf``
         beyond (no rigid film: ``X`` inside the glass gap); decreasing for ``z < 0``.
     """
-    z = np.asarray(z, dtype=float)
-    out = np.full(z.shape, np.inf)
-    small = np.abs(z) <= _SERIES_BELOW
-    zs = z[small]
-    total = np.zeros_like(zs)
-    for n in range(_SERIES_TERMS, 0, -1):  # Horner
-        total = total * zs + 1.0 / (n * (2.0 * n - 1.0))
-    out[small] = total
-    mid = (z > _SERIES_BELOW) & (z <= _CLOSE_TO_GLASS)
-    e = np.sqrt(z[mid])
-    out[mid] = (2.0 * e * np.arctanh(e) + np.log1p(-z[mid])) / z[mid]
-    near = (z > _CLOSE_TO_GLASS) & (z <= 1.0)
-    e = np.sqrt(z[near])
-    out[near] = ((1.0 + e) * np.log1p(e) + special.xlog1py(1.0 - e, -e)) / z[near]
-    neg = z < -_SERIES_BELOW
-    w = np.sqrt(-z[neg])
-    out[neg] = (2.0 * w * np.arctan(w) - np.log1p(-z[neg])) / (-z[neg])
-    out[np.isnan(z)] = np.nan
-    return out
+    return _load_factor_array(z)
 
 
 def _load_factor_scalar(z):
-    """``load_factor`` of one float, the same branches in ``math`` (the ODE's right-hand side:
-    numpy's per-call overhead on scalars was most of the rigid approach's time)."""
+    """``load_factor`` of one float in ``math``: the one place its branches are written (the ODE's
+    right-hand side calls it per step, where numpy's per-call overhead on scalars was most of the
+    rigid approach's time)."""
+    if math.isnan(z):
+        return math.nan
     if abs(z) <= _SERIES_BELOW:
         total = 0.0
         for n in range(_SERIES_TERMS, 0, -1):  # Horner
             total = total * z + 1.0 / (n * (2.0 * n - 1.0))
         return total
-    if _SERIES_BELOW < z <= _CLOSE_TO_GLASS:
-        e = math.sqrt(z)
-        return (2.0 * e * math.atanh(e) + math.log1p(-z)) / z
     if z < -_SERIES_BELOW:
         w = math.sqrt(-z)
         return (2.0 * w * math.atan(w) - math.log1p(-z)) / (-z)
-    return float(load_factor(z))
+    if z <= _CLOSE_TO_GLASS:
+        e = math.sqrt(z)
+        return (2.0 * e * math.atanh(e) + math.log1p(-z)) / z
+    if z <= 1.0:  # near the glass gap: artanh diverges, the (1 -+ e) log1p(+-e) form does not
+        e = math.sqrt(z)
+        tail = (1.0 - e) * math.log1p(-e) if e < 1.0 else 0.0
+        return ((1.0 + e) * math.log1p(e) + tail) / z
+    return math.inf
+
+
+_load_factor_array = np.vectorize(_load_factor_scalar, otypes=[float])
 
 
 def _load_log_slope(z):
