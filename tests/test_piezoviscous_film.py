@@ -294,9 +294,16 @@ def test_with_a_floor_the_step_control_is_the_cavitating_films():
     kw = dict(St=30.0, eps=1e-4, Pi=1e-3)
     floor = collide(Physics(**kw), save_profiles=False)
     both = collide(Physics(**kw, beta=1e-9), save_profiles=False)
-    # beta = 1e-9 moves the pressures' differences by ~1e-9: every step decision is the same
-    assert both.steps == floor.steps and both.rejected_steps == floor.rejected_steps
-    assert both.v_r == pytest.approx(floor.v_r, rel=1e-7)
+    # beta = 1e-9 moves the pressures' differences by ~1e-9, but round-off of that size flips
+    # some of the cavity's active-set decisions on one CPU and not on another (docs/solver.md,
+    # "Cavitation"): bit-identical step counts are not the property. Measured across machines and
+    # kernel reorderings such flips moved the step count by at most 2 % (793 against 802) and
+    # e_wet by at most 2e-5; the bug kept the Kirchhoff pressure in the norm and took 2.7x the
+    # steps (the refill below), so 5 % separates the two.
+    assert both.steps == pytest.approx(floor.steps, rel=0.05)
+    # 1e-4: five times the largest flip seen (2e-5), below the preset's v_r error (5.6e-4,
+    # benchmarks/accuracy.md)
+    assert both.v_r == pytest.approx(floor.v_r, rel=1e-4)
     refill = collide(Physics(St=470.2981592314503, eps=6.774250277240935e-07, beta=0.3,
                              viscosity_law="roelands", Pi=0.01), save_profiles=False)
     assert refill.ok, refill.message
