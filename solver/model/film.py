@@ -31,9 +31,12 @@ import numpy as np
 
 from .._jit import jit
 from ..integration.linalg import matvec
-from ..physics import CAVITATION, DENSITY, PI, ST
+from ..physics import CAVITATION, CAVITATION_MODELS, DENSITY, PI, ST
 from .liquid import (CONSTANT, compression_energy, density, isoviscous, kirchhoff_difference,
                      volume_difference)
+
+# the cavitation models' codes in the physics array (solver/physics.py: codes("cavitation"))
+NO_FLOOR, REYNOLDS, JFO = (float(CAVITATION_MODELS.index(m)) for m in ("off", "reynolds", "jfo"))
 
 
 # ---- the terms ------------------------------------------------------------------------------------
@@ -102,7 +105,7 @@ def cavitated(p, r_film, was_cavitated, phys):
     primal-dual active set: a full cell cavitates when its pressure falls below the floor, a
     cavitated cell refills when its film equation would draw liquid in (``r < 0``); otherwise a
     cell keeps its state. The classic film never cavitates."""
-    if phys[CAVITATION] == 0.0:
+    if phys[CAVITATION] == NO_FLOOR:
         return False
     if was_cavitated:
         return r_film >= 0.0
@@ -376,7 +379,7 @@ def jacobian(s, s_face, area, weight, influence, phys, bh, p, theta, h, active, 
     jac[n - 1, n - 2] += dr_dpi
     dres_dh[n - 1, 0] = dr_dhi
     dres_dh[n - 1, 1] = dr_dho
-    jfo = phys[CAVITATION] == 2.0
+    jfo = phys[CAVITATION] == JFO
     if not jfo:
         for i in range(n - 1):  # an active constraint replaces the whole row
             if active[i]:
