@@ -9,7 +9,7 @@ import pytest
 
 from pipeline.cli import main
 from pipeline.dem import liggghts
-from pipeline.dem.conventions import stokes_numbers
+from pipeline.dem.conventions import stokes_numbers, store_stokes_numbers
 from pipeline.dem.export import CSV_FIELDS, read_csv
 from pipeline.dem.fits import fit_exponential, fit_threshold
 
@@ -21,10 +21,27 @@ def test_conventions_for_a_sphere_on_a_wall():
     rho, d, v, mu = 7800.0, 3e-3, 0.5, 1.4
     m, a = rho * math.pi / 6 * d**3, d / 2
     ours = m * v / (6 * math.pi * mu * a * a)
-    row = stokes_numbers(ours, rho_p=rho, d=d, v0=v, mu=mu, rho_f=1260.0)
+    row = stokes_numbers(ours, geometry="sphere-wall", rho_p=rho, d=d, v0=v, mu=mu, rho_f=1260.0)
     assert row["St_exp"] == pytest.approx(ours, rel=1e-14)
     assert row["St_L"] == pytest.approx(ours * (1 + 1260 / (2 * 7800)), rel=1e-14)
-    assert row["St_yade"] == pytest.approx(9 * ours, rel=1e-14)
+    # YADE: <rho> (R1 + R2) v / mu with the wall material's density 0: (rho/2) d v / mu
+    assert row["St_yade"] == pytest.approx(4.5 * ours, rel=1e-14)
+
+
+def test_conventions_for_two_equal_spheres():
+    # ours uses the reduced mass and radius: twice the experimenters' number of the moving sphere
+    rho, d, v, mu = 2500.0, 2e-4, 0.1, 1e-3
+    m, a = rho * math.pi / 6 * d**3 / 2, d / 4
+    ours = m * v / (6 * math.pi * mu * a * a)
+    row = stokes_numbers(ours, geometry="sphere-sphere", rho_p=rho, d=d, v0=v, mu=mu,
+                         rho_2=rho, d_2=d)
+    assert row["St_exp"] == pytest.approx(ours / 2, rel=1e-14)
+    assert row["St_yade"] == pytest.approx(rho * d * v / mu, rel=1e-14)
+    assert row["St_yade"] == pytest.approx(4.5 * ours, rel=1e-14)
+    # a store row carries both geometries
+    store = store_stokes_numbers(ours)
+    assert store["St_exp"] == ours and store["St_exp_pair"] == pytest.approx(row["St_exp"])
+    assert store["St_yade"] == pytest.approx(row["St_yade"], rel=1e-14)
 
 
 @pytest.mark.parametrize("law", [fit_exponential, fit_threshold])
@@ -82,9 +99,11 @@ def test_exported_files_parse(exported):
     assert len(rows) == 7 and tuple(rows[0]) == CSV_FIELDS
     assert rows[0]["sticks"] and rows[0]["e_wet"] == 0.0 and not rows[-1]["sticks"]
     # glass at 1 nm rms against the sub-nm films of the rebounding collisions: roughness
-    assert all(r["warning"] for r in rows if not r["sticks"])
+    assert all("roughness" in r["warning_checks"].split() for r in rows if not r["sticks"])
+    assert all(r["geometry"] == "sphere-sphere" for r in rows)
     doc = json.loads((exported / "restitution.json").read_text())
     (group,) = doc["groups"].values()
+    assert set(group["fits"]) == {"St", "St_exp", "St_L", "St_yade"}  # no pair columns: a scene
     for conv in ("St", "St_exp", "St_L", "St_yade"):
         for law in ("exponential", "threshold"):
             fit = group["fits"][conv][law]
@@ -105,15 +124,14 @@ def test_exported_files_parse(exported):
     for key in ("youngsModulus", "poissonsRatio"):
         m = re.search(rf"property/global {key} peratomtype (.*)", lig)
         assert len(m.group(1).split()) == n
-    foam = next(exported.glob("openfoam_*.txt")).read_text()
-    for key in ("patchInteractionModel localInteractionHW;", "type       rebound;", "e ",
-                "coeffStc", "eCutoffLog", "rhoF", "muP"):
-        assert key in foam
-    assert foam.count("{") == foam.count("}")
+    # two spheres: no wall line, no OpenFOAM (a patch interaction: walls only)
+    assert not list(exported.glob("liggghts_*_wall.in")) and not list(exported.glob("openfoam_*"))
+    assert "openfoam" not in group
     yade = next(exported.glob("yade_*.py")).read_text()
     compile(yade, "yade", "exec")  # valid Python
     for key in ("ViscElMat(", "en=", "lubrication=True", "viscoDyn=", "roughnessScale="):
         assert key in yade
+    assert "BLOCK 2" not in yade  # the wall-mass block: walls only
 
 
 def test_export_dem_from_a_scene_file(tmp_path, capsys):
@@ -140,7 +158,8 @@ def test_export_dem_from_a_sweep_store(tmp_path, capsys):
     assert main(["export-dem", str(sweep.store), "--out", str(tmp_path / "out")]) == 0
     rows = read_csv(tmp_path / "out" / "restitution.csv")
     assert [r["St"] for r in rows] == [6.0, 10.0, 15.0, 30.0, 60.0]
-    assert rows[0]["sticks"] and rows[0]["St_exp"] == 6.0 and rows[0]["St_yade"] == 54.0
+    assert rows[0]["sticks"] and rows[0]["St_exp"] == 6.0 and rows[0]["St_yade"] == 27.0
+    assert rows[0]["St_exp_pair"] == 3.0 and rows[0]["geometry"] == "either"
     doc = json.loads((tmp_path / "out" / "restitution.json").read_text())
     assert set(doc["groups"]) == {"eps=0.01"}
     assert doc["groups"]["eps=0.01"]["liggghts"]["MaximumRestitution"] <= 1.0

@@ -48,20 +48,32 @@ def _print_rows(rows, skipped):
     print(f"{'St':>10} {'St_L':>10} {'eps':>10} {'v0 [m/s]':>10} {'e_wet':>8}  note")
     for r in rows:
         note = "sticks" if r["sticks"] else ""
-        if r["warning"]:
-            note = (note + "; " if note else "") + "roughness decides (see CSV)"
+        if r["warning_checks"]:
+            note = (note + "; " if note else "") + "warnings: " + r["warning_checks"] + " (see CSV)"
         print(f"{r['St']:>10.4g} {r['St_L']:>10.4g} {r['eps']:>10.3g} {r['v0_m_s']:>10.4g} "
               f"{r['e_wet']:>8.4f}  {note}")
     for s in skipped:
         print(f"skipped: {s}")
 
 
+def _fit_range(args):
+    from pipeline.cli import UsageError
+
+    if args.fit_range is None:
+        return None
+    lo, hi = args.fit_range
+    if not (0.0 <= lo < hi):
+        raise UsageError(f"--fit-range {lo:g} {hi:g}: give 0 <= LO < HI (our St)")
+    return (lo, hi)
+
+
 def cmd_export_dem(args) -> int:
     from pipeline.cli import UsageError, check_output_dir
 
-    from .export import scene_rows, store_rows, write_export
+    from .export import _progress, export_files, scene_rows, store_rows, write_files
 
     check_output_dir("--out", args.out)  # before any solve
+    fit_range = _fit_range(args)
     path = Path(args.path)
     if not path.exists():
         raise UsageError(f"{args.path}: no such store or scene file")
@@ -74,7 +86,12 @@ def cmd_export_dem(args) -> int:
         if "e_wet" not in ds:
             raise UsageError(f"{args.path}: the store has no e_wet (made before solver 1.4.0); "
                              "rerun the sweep")
+        if not args.density_ratio >= 0.0:
+            raise UsageError(f"--density-ratio {args.density_ratio:g}: give rho_f/rho_p >= 0")
         rows = store_rows(ds, args.density_ratio)
+        if not rows:
+            raise UsageError(f"{args.path}: no finished (ok) scene in the store; run "
+                             "ehd sweep on it first (ehd status shows what is done)")
     else:
         scene = _scene(str(path), args.materials)
         factors = np.geomspace(0.1, 10.0, args.n)
@@ -83,7 +100,19 @@ def cmd_export_dem(args) -> int:
                                    f"{scene.fluid.name}")
         for s in skipped:
             print(f"skipped: {s}")
-    paths = write_export(rows, args.out, str(path))
+        if not rows:
+            raise UsageError(f"{args.path}: the solver refused every speed of the path "
+                             "(skipped lines above); change the scene")
+    if not any(r["e_wet"] > 0.0 for r in rows):
+        raise UsageError(f"{args.path}: no collision rebounds (every e_wet is 0): nothing to fit; "
+                         "export a store or scene that reaches higher St")
+    files = export_files(rows, str(path), fit_range=fit_range, density_ratio=args.density_ratio,
+                         progress=_progress)
+    if not any(name.startswith("liggghts_") for name in files):
+        raise UsageError(f"{args.path}: no group has 3 rebounding collisions"
+                         + (" in --fit-range" if fit_range else "") + ": nothing to fit; "
+                         "export more St (a wider sweep or --n)")
+    paths = write_files(files, args.out)
     print(f"wrote {len(rows)} rows: " + ", ".join(str(p) for p in paths))
     return 0
 
@@ -91,7 +120,7 @@ def cmd_export_dem(args) -> int:
 def cmd_restitution(args) -> int:
     from pipeline.cli import UsageError, check_output_dir
 
-    from .export import scene_rows, write_export
+    from .export import _progress, scene_rows, write_export
 
     check_output_dir("--out", args.out)  # before any solve
     scene = _scene(args.scene, args.materials)
@@ -103,7 +132,7 @@ def cmd_restitution(args) -> int:
                                f"{scene.fluid.name}, {args.vary} path")
     _print_rows(rows, skipped)
     if args.out:
-        paths = write_export(rows, args.out, args.scene)
+        paths = write_export(rows, args.out, args.scene, progress=_progress)
         print("wrote " + ", ".join(str(p) for p in paths))
     return 0
 
@@ -116,6 +145,9 @@ def register(sub) -> None:
     p.add_argument("--density-ratio", type=float, default=0.0,
                    help="stores only: rho_f/rho_p for Legendre's St_L (default 0)")
     p.add_argument("--n", type=int, default=13, help="scenes only: speeds from 0.1 to 10 v0")
+    p.add_argument("--fit-range", nargs=2, type=float, default=None, metavar=("LO", "HI"),
+                   help="fit and calibrate only on rows with LO <= St <= HI (our St: where your "
+                        "collisions are); errors are still reported on every row")
     p.add_argument("--accuracy", default="standard")
     p.add_argument("--materials", action="append", default=None, metavar="FILE")
     p.set_defaults(func=cmd_export_dem)
