@@ -3,6 +3,7 @@
 import json
 import math
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -163,3 +164,108 @@ def test_export_dem_from_a_sweep_store(tmp_path, capsys):
     doc = json.loads((tmp_path / "out" / "restitution.json").read_text())
     assert set(doc["groups"]) == {"eps=0.01"}
     assert doc["groups"]["eps=0.01"]["liggghts"]["MaximumRestitution"] <= 1.0
+
+
+# ---- bad input: one line, the documented exit code, no partial files ------------------------
+
+def _tiny_store(path, st):
+    from pipeline.sweeps.config import parse_sweep
+    from pipeline.sweeps.run import run_sweep
+
+    text = (f'name = "dem-bad"\nstore = "x.zarr"\n[grid]\nSt = {list(st)}\neps = [0.01]\n'
+            '[numerics]\naccuracy = "fast"\n')
+    sweep = parse_sweep(text).with_store(path)
+    run_sweep(sweep, runner="serial", progress=None)
+    return sweep.store
+
+
+def _one_error_line(capsys, code_expected, code):
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == code_expected and len(err) == 1 and err[0].startswith("ehd export-dem: error:")
+    return err[0]
+
+
+def test_export_dem_refuses_a_store_without_finished_scenes(tmp_path, capsys):
+    import zarr
+
+    store = _tiny_store(tmp_path / "s.zarr", [20.0, 40.0, 80.0])
+    zarr.open_group(str(store), mode="r+")["status"][:] = 0  # as if never run
+    capsys.readouterr()
+    line = _one_error_line(capsys, 2, main(["export-dem", str(store), "--out", str(tmp_path / "o")]))
+    assert "no finished" in line
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+
+
+def test_export_dem_refuses_a_store_where_nothing_rebounds(tmp_path, capsys):
+    # eps 1e-2 sticks below St ~ 8: nothing to fit
+    store = _tiny_store(tmp_path / "s.zarr", [0.5, 1.0, 2.0])
+    capsys.readouterr()
+    out = tmp_path / "o"
+    line = _one_error_line(capsys, 2, main(["export-dem", str(store), "--out", str(out)]))
+    assert "no collision rebounds" in line
+    assert not out.exists() or not any(out.iterdir())
+
+
+def test_export_dem_refuses_an_unwritable_out_before_any_work(tmp_path, capsys):
+    (tmp_path / "file").write_text("x")
+    line = _one_error_line(capsys, 2, main(["export-dem", EXAMPLE, "--out",
+                                            str(tmp_path / "file" / "sub")]))
+    assert "--out" in line
+
+
+def test_interrupted_export_leaves_no_file(tmp_path, capsys, monkeypatch):
+    # Ctrl-C during the calibration: exit 130, nothing written (files are written only after
+    # every group is computed, each under a temporary name renamed into place)
+    store = _tiny_store(tmp_path / "s.zarr", [10.0, 15.0, 30.0, 60.0])
+    out = tmp_path / "o"
+
+    def interrupt(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(liggghts, "calibrate", interrupt)
+    assert main(["export-dem", str(store), "--out", str(out)]) == 130
+    assert not out.exists() or not list(out.iterdir())
+
+
+def test_write_files_leaves_the_old_export_when_a_write_fails(tmp_path, monkeypatch):
+    from pipeline.dem import export
+
+    export.write_files({"a.txt": "old a", "b.txt": "old b"}, tmp_path)
+    real = Path.write_text
+
+    def fail_on_b(self, text, *a, **k):
+        if ".b.txt" in self.name:
+            raise OSError("disk full")
+        return real(self, text, *a, **k)
+
+    monkeypatch.setattr(Path, "write_text", fail_on_b)
+    with pytest.raises(OSError):
+        export.write_files({"a.txt": "new a", "b.txt": "new b"}, tmp_path)
+    monkeypatch.undo()
+    # nothing renamed (a.txt is still the old one) and no temporary file left behind
+    assert (tmp_path / "a.txt").read_text() == "old a"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.txt", "b.txt"]
+
+
+def test_fit_range_fits_only_there_and_reports_every_row(tmp_path):
+    store = _tiny_store(tmp_path / "s.zarr", [6.0, 10.0, 15.0, 30.0, 60.0, 120.0])
+    out_all, out_near = tmp_path / "all", tmp_path / "near"
+    assert main(["export-dem", str(store), "--out", str(out_all)]) == 0
+    assert main(["export-dem", str(store), "--out", str(out_near), "--fit-range", "10", "30"]) == 0
+    g_all = json.loads((out_all / "restitution.json").read_text())["groups"]["eps=0.01"]
+    g_near = json.loads((out_near / "restitution.json").read_text())["groups"]["eps=0.01"]
+    assert g_near["fit_range"]["n"] == 3 and g_near["fits"]["St"]["threshold"]["n"] <= 3
+    rows = [r for r in read_csv(out_all / "restitution.csv") if 10 <= r["St"] <= 30]
+    st, e = np.array([r["St"] for r in rows]), np.array([r["e_wet"] for r in rows])
+
+    def lig_err(g):
+        lig = g["liggghts"]
+        return np.max(np.abs(liggghts.replica_many(st, lig["MaximumRestitution"],
+                                                   lig["CriticalStokes"]) - e))
+
+    # calibrated where the collisions are: better there than the calibration over every row
+    assert lig_err(g_near) == pytest.approx(g_near["liggghts"]["realised_max_error_fit_range"])
+    assert lig_err(g_near) < lig_err(g_all)
+    for code in ("liggghts", "openfoam", "yade"):  # errors still reported on every row
+        assert sum(b["n"] for b in g_near[code]["realised_error_by_St"]) == 6
+    assert main(["export-dem", str(store), "--out", str(out_near), "--fit-range", "30", "10"]) == 2

@@ -30,7 +30,7 @@ HERE = Path(__file__).parent / "dem"
 PAIR_SCENE = "examples/glass_beads_water.toml"
 WALL_SCENE = str(HERE / "glass_bead_glass_wall_water.toml")
 # The e the programs realise may differ from what the JSON states by the program's own
-# numerics: LIGGGHTS' fixed time step at tc/200 (README, "DEM codes": < 0.002 measured), YADE's
+# numerics: LIGGGHTS' fixed time step at tc/200 (pipeline/dem/liggghts.py: 0.004 measured), YADE's
 # Newton iteration for the dashpot (stops at 1 % relative) and its time step. 0.01 is the margin
 # the issue (18) asks for on top of the stated error.
 MARGIN = 0.01

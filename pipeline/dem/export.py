@@ -200,12 +200,14 @@ def group_settings(rows: list[dict], fit_range=None) -> dict:
         "uncalibrated_max_error": float(np.max(np.abs(plain - em[em > 0]))),
         **_realised(st, liggghts.replica_many(st, e_max, c), e, fit_mask),
         "steps_per_contact": liggghts.STEPS_PER_CONTACT,
+        "time_step_error_measured": liggghts.TIME_STEP_ERROR,
         "note": "CriticalStokes is the constant C of e = e_max exp(-C/St) with St from the "
                 "instantaneous normal velocity; values calibrated against the replica "
                 "(pipeline/dem/liggghts.py) so the realised e matches the model at impact. "
                 "calibration_max_error: rebounding rows of the fit; realised_max_error: every "
                 "row, where the model sticks too (the law never sticks). Needs dt <= "
-                "tc/steps_per_contact.",
+                "tc/steps_per_contact, at which LIGGGHTS 3.8.0 was measured to differ from the "
+                "replica by up to time_step_error_measured (tests/test_dem_programs.py).",
     }
 
     # OpenFOAM localInteractionHW: a patch (wall) model, on St_L
