@@ -248,7 +248,9 @@ def _yade(out, geometry, tmp_path):
     results = [line.split()[1:] for line in log.splitlines() if line.startswith("EHD_RESULT")]
     assert len(results) == len(rows), log[-2000:]
     assert all(float(g) >= -SEPARATED * a1 for _, _, g in results), "still in contact"
-    _check(rows, [float(e) for _, e, _ in results], s["yade"]["realised_max_error"], "YADE")
+    realised = [float(e) for _, e, _ in results]
+    _check(rows, realised, s["yade"]["realised_max_error"], "YADE")
+    return realised
 
 
 def test_yade_store_export_two_spheres(store_export, tmp_path):
