@@ -163,7 +163,55 @@ def test_export_dem_from_a_sweep_store(tmp_path, capsys):
     assert rows[0]["St_exp_pair"] == 3.0 and rows[0]["geometry"] == "either"
     doc = json.loads((tmp_path / "out" / "restitution.json").read_text())
     assert set(doc["groups"]) == {"eps=0.01"}
-    assert doc["groups"]["eps=0.01"]["liggghts"]["MaximumRestitution"] <= 1.0
+    group = doc["groups"]["eps=0.01"]
+    assert group["liggghts"]["MaximumRestitution"] <= 1.0
+    # both geometries: fits on the pair conventions too
+    assert {"St_exp_pair", "St_L_pair"} <= set(group["fits"])
+    out = tmp_path / "out"
+    lig = (out / "liggghts_eps_0.01.in").read_text()
+    for line in ("hard_particles yes", "pair_style gran model hooke tangential history viscous on",
+                 "coefficientFriction", "characteristicVelocity", "variable ehd_dt_max"):
+        assert line in lig
+    # a store has no materials: every physical value is an example marked REPLACE
+    for var in ("viscosity", "youngs", "poisson", "vchar", "density", "radius", "friction"):
+        assert re.search(rf"^variable ehd_{var} equal \S+ +# REPLACE", lig, re.M), var
+    wall = (out / "liggghts_eps_0.01_wall.in").read_text()
+    assert re.search(r"wall/gran model hooke tangential history primitive type 1 zplane \S+ "
+                     r"viscous on$", wall, re.M)  # model keywords after the wall's arguments
+    yade = (out / "yade_eps_0.01.py").read_text()
+    compile(yade, "yade", "exec")
+    assert "ehd_wall_mat" in yade and "BLOCK 2" in yade and yade.count("# REPLACE") >= 5
+    foam = (out / "openfoam_eps_0.01.txt").read_text()
+    # the keywords the library reads (src/patchInteractionDataHW.C), its libs line, the
+    # dictionary named; rhoF 0 as the fit's St_L assumed (--density-ratio 0)
+    for key in ('libs ("libLocalInteractionModelHW.so");', "kinematicCloudProperties",
+                "patchInteractionModel localInteractionHW;", "localInteractionHWCoeffs",
+                "type       rebound;", "coeffStc", "muP"):
+        assert key in foam
+    assert re.search(r"^ +rhoF +0;", foam, re.M) and re.search(r"^ +e +[0-9.]+;", foam, re.M)
+    code = re.sub(r"//.*", "", foam)  # balanced outside the comments
+    assert code.count("{") == code.count("}") == 2 and code.count("(") == code.count(")") == 2
+    of = group["openfoam"]
+    assert of["realised_max_error"] >= max(b["max_error"] for b in of["realised_error_by_St"]) - 1e-15
+
+
+def test_liggghts_snippet_raises_a_slow_characteristic_velocity():
+    lig = {"realised_max_error": 0.02, "CriticalStokes": 10.0, "MaximumRestitution": 0.9}
+    text = liggghts.snippet(lig, types=["glass"], placeholders=False, values={
+        "youngs": [7e10], "poisson": [0.22], "viscosity": 1e-3, "v_char": 0.004, "dt_max": 1e-9})
+    # LIGGGHTS refuses characteristicVelocity < 1e-2 in SI units; it sets kn only
+    assert re.search(r"characteristicVelocity scalar 0.01 ", text)
+    assert "REPLACE" in text and text.count("REPLACE") == 1  # friction only: the scene's values
+
+
+def test_liggghts_contact_time_is_the_hooke_half_period():
+    # kn from LIGGGHTS' formula; pi sqrt(m/k) by hand for 200 um glass on a glass wall
+    m, r, y = 2500 * 4 / 3 * math.pi * 1e-4**3, 1e-4, 7e10
+    yeff = liggghts.effective_modulus(y, 0.25, y, 0.25)
+    assert yeff == pytest.approx(y / (2 * (1 - 0.25**2)), rel=1e-14)
+    kn = 16 / 15 * math.sqrt(r) * yeff * (15 * m * 0.1**2 / (16 * math.sqrt(r) * yeff)) ** 0.2
+    assert liggghts.contact_time(m, r, yeff, 0.1) == pytest.approx(math.pi * math.sqrt(m / kn),
+                                                                   rel=1e-14)
 
 
 # ---- bad input: one line, the documented exit code, no partial files ------------------------
