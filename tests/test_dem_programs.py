@@ -29,6 +29,7 @@ from pipeline.dem.export import read_csv
 HERE = Path(__file__).parent / "dem"
 PAIR_SCENE = "examples/glass_beads_water.toml"
 WALL_SCENE = str(HERE / "glass_bead_glass_wall_water.toml")
+UNEQUAL_SCENE = str(HERE / "glass_bead_steel_ball_water.toml")
 # The e the programs realise may differ from what the JSON states by the program's own
 # numerics: LIGGGHTS' fixed time step at tc/200 (pipeline/dem/liggghts.py: 0.004 measured), YADE's
 # Newton iteration for the dashpot (stops at 1 % relative) and its time step. 0.01 is the margin
@@ -88,6 +89,11 @@ def pair_export(tmp_path_factory):
 @pytest.fixture(scope="module")
 def wall_export(tmp_path_factory):
     return _scene_export(tmp_path_factory, WALL_SCENE, "dem_wall")
+
+
+@pytest.fixture(scope="module")
+def unequal_export(tmp_path_factory):
+    return _scene_export(tmp_path_factory, UNEQUAL_SCENE, "dem_unequal")
 
 
 def _collisions(out):
@@ -225,6 +231,10 @@ def test_liggghts_scene_export_sphere_on_wall(wall_export, tmp_path):
     _liggghts(wall_export, "sphere-wall", tmp_path)
 
 
+def test_liggghts_scene_export_unequal_spheres(unequal_export, tmp_path):
+    _liggghts(unequal_export, "sphere-sphere", tmp_path)
+
+
 # ---- YADE ----------------------------------------------------------------------------------
 
 def _yade(out, geometry, tmp_path):
@@ -267,3 +277,7 @@ def test_yade_scene_export_two_spheres(pair_export, tmp_path):
 
 def test_yade_scene_export_sphere_on_wall(wall_export, tmp_path):
     _yade(wall_export, "sphere-wall", tmp_path)
+
+
+def test_yade_scene_export_unequal_spheres(unequal_export, tmp_path):
+    _yade(unequal_export, "sphere-sphere", tmp_path)

@@ -17,20 +17,29 @@ import numpy as np
 __all__ = ["register", "solve_path"]
 
 
-def solve_path(scene, vary: str, factors, accuracy: str = "standard"):
+def solve_path(scene, vary: str, factors, accuracy: str = "standard", progress=None):
     """Solve the scenes along a path (export.scene_path); scenes the solver refuses are skipped
-    with their reason. Returns ``(results, skipped)``."""
+    with their reason. ``progress``: called with a line per scene once the path has taken more
+    than 2 s. Returns ``(results, skipped)``."""
+    import time
+
     from pipeline.scenes.run import run_scene
     from pipeline.scenes.scene import SceneError
 
     from .export import scene_path
 
     results, skipped = [], []
-    for s in scene_path(scene, vary, factors):
+    path = scene_path(scene, vary, factors)
+    t0 = time.perf_counter()
+    for k, s in enumerate(path):
+        factor = s.v0 / scene.v0 if vary == "v0" else s.body1.radius / scene.body1.radius
         try:
             results.append(run_scene(s, accuracy=accuracy, save_profiles=False))
         except SceneError as exc:
-            skipped.append(f"{vary} x {s.v0 / scene.v0 if vary == 'v0' else s.body1.radius / scene.body1.radius:.3g}: {exc}")
+            skipped.append(f"{vary} x {factor:.3g}: {exc}")
+        elapsed = time.perf_counter() - t0
+        if progress and elapsed > 2.0:
+            progress(f"{vary} x {factor:.3g} solved ({k + 1}/{len(path)}), {elapsed:.1f} s")
     return results, skipped
 
 
@@ -70,7 +79,9 @@ def _fit_range(args):
 def cmd_export_dem(args) -> int:
     from pipeline.cli import UsageError, check_output_dir
 
-    from .export import _progress, export_files, scene_rows, store_rows, write_files
+    from .export import export_files, progress_to_stderr, scene_rows, store_rows, write_files
+
+    _progress = progress_to_stderr("export-dem")
 
     check_output_dir("--out", args.out)  # before any solve
     fit_range = _fit_range(args)
@@ -95,7 +106,7 @@ def cmd_export_dem(args) -> int:
     else:
         scene = _scene(str(path), args.materials)
         factors = np.geomspace(0.1, 10.0, args.n)
-        results, skipped = solve_path(scene, "v0", factors, args.accuracy)
+        results, skipped = solve_path(scene, "v0", factors, args.accuracy, progress=_progress)
         rows = scene_rows(results, f"{scene.body1.solid.name}-{scene.body2.solid.name} in "
                                    f"{scene.fluid.name}")
         for s in skipped:
@@ -120,14 +131,16 @@ def cmd_export_dem(args) -> int:
 def cmd_restitution(args) -> int:
     from pipeline.cli import UsageError, check_output_dir
 
-    from .export import _progress, scene_rows, write_export
+    from .export import progress_to_stderr, scene_rows, write_export
+
+    _progress = progress_to_stderr("restitution")
 
     check_output_dir("--out", args.out)  # before any solve
     scene = _scene(args.scene, args.materials)
     if not (args.start > 0 and args.stop > 0 and args.n >= 1):
         raise UsageError("--from and --to must be positive factors and --n >= 1")
     factors = np.geomspace(args.start, args.stop, args.n)
-    results, skipped = solve_path(scene, args.vary, factors, args.accuracy)
+    results, skipped = solve_path(scene, args.vary, factors, args.accuracy, progress=_progress)
     rows = scene_rows(results, f"{scene.body1.solid.name}-{scene.body2.solid.name} in "
                                f"{scene.fluid.name}, {args.vary} path")
     _print_rows(rows, skipped)

@@ -38,7 +38,8 @@ from .conventions import CONVENTIONS, store_stokes_numbers, stokes_numbers
 from .fits import LAWS
 
 __all__ = ["CSV_FIELDS", "store_rows", "scene_rows", "scene_path", "write_export", "read_csv",
-           "group_settings", "export_files", "write_files", "ST_BANDS", "PLACEHOLDERS"]
+           "group_settings", "export_files", "write_files", "progress_to_stderr", "ST_BANDS",
+           "PLACEHOLDERS"]
 
 CSV_FIELDS = (
     "group", "geometry", "material1", "material2", "fluid", "radius1_m", "radius2_m",
@@ -286,9 +287,14 @@ def _scene_values(grp) -> dict:
     yeff = liggghts.effective_modulus(f["youngs1_Pa"], f["poisson1"], f["youngs2_Pa"],
                                       f["poisson2"])
     tc = liggghts.contact_time(meff, reff, yeff, v_char)
-    # YADE: kn = harmonic mean of 2 young R (snippet: body 1's material for both) = young a
+    # YADE: kn = 1/(1/(2 young1 R1) + 1/(2 young2 R2)) (a wall: the sphere's R and, in the
+    # snippet, its young), the wall given a mass: m_red = m1
     a_yade = a1 if wall else 0.5 * (a1 + f["radius2_m"])
-    tc_yade = math.pi * math.sqrt((m1 if wall else 0.5 * m1) / (f["youngs1_Pa"] * a_yade))
+    if wall:
+        kn_yade = f["youngs1_Pa"] * a1
+    else:
+        kn_yade = 1.0 / (0.5 / (f["youngs1_Pa"] * a1) + 0.5 / (f["youngs2_Pa"] * f["radius2_m"]))
+    tc_yade = math.pi * math.sqrt(meff / kn_yade)
     return {**f, "v0": v0, "v_char": v_char, "wall": wall, "a_yade": a_yade,
             "tc": tc, "dt_max": tc / liggghts.STEPS_PER_CONTACT,
             "tc_yade": tc_yade, "dt_max_yade": tc_yade / liggghts.STEPS_PER_CONTACT}
@@ -330,8 +336,13 @@ def _snippets(name, grp, s, store: bool, density_ratio: float) -> dict:
         s["yade"].update(contact_time_s=v["tc_yade"], time_step_max_s=v["dt_max_yade"],
                          roughnessScale_m=v["a_yade"] * math.exp(-s["yade"]["st_c"]),
                          viscoDyn=v["viscosity_Pa_s"])
-        yv = {"density": v["density1_kg_m3"], "radius": v["a_yade"], "young": v["youngs1_Pa"],
+        yv = {"density": v["density1_kg_m3"], "radius": v["radius1_m"], "young": v["youngs1_Pa"],
               "poisson": v["poisson1"], "viscosity": v["viscosity_Pa_s"]}
+        if not v["wall"] and (v["radius2_m"], v["density2_kg_m3"], v["youngs2_Pa"],
+                              v["poisson2"]) != (v["radius1_m"], v["density1_kg_m3"],
+                                                 v["youngs1_Pa"], v["poisson1"]):
+            yv.update(radius2=v["radius2_m"], density2=v["density2_kg_m3"],
+                      young2=v["youngs2_Pa"], poisson2=v["poisson2"])
         if walls:
             s["openfoam"].update(rhoF=v["fluid_density_kg_m3"], muP=v["viscosity_Pa_s"])
     if store:
@@ -345,8 +356,11 @@ def _snippets(name, grp, s, store: bool, density_ratio: float) -> dict:
     return files
 
 
-def _progress(msg):
-    print(msg, file=sys.stderr, flush=True)
+def progress_to_stderr(command: str):
+    """A ``progress`` callback printing ``<command>: <line>`` on stderr (stdout keeps results)."""
+    def progress(msg):
+        print(f"{command}: {msg}", file=sys.stderr, flush=True)
+    return progress
 
 
 def export_files(rows: list[dict], source: str, *, fit_range=None, density_ratio=0.0,
@@ -372,7 +386,7 @@ def export_files(rows: list[dict], source: str, *, fit_range=None, density_ratio
         if "liggghts" in s:
             files.update(_snippets(name, grp, s, store, density_ratio))
         if progress and len(groups) > 1:
-            progress(f"export-dem: group {name} ({k + 1}/{len(groups)}) fitted and calibrated, "
+            progress(f"group {name} ({k + 1}/{len(groups)}) fitted and calibrated, "
                      f"{time.perf_counter() - t0:.1f} s")
     buf = _csv_text(rows)
     return {"restitution.csv": buf,

@@ -52,6 +52,7 @@ def snippet(y: dict, *, geometry: str, values: dict, placeholders: bool, steps: 
         "# ==== ehd-collision wet restitution for YADE 2023.02a: ViscElMat lubrication ====",
         f"# Geometry: {'sphere-wall and sphere-sphere' if geometry == 'either' else geometry}."
         " BLOCK 1 before the bodies; bodies: sphere(..., material=ehd_mat)"
+        + (" and the second sphere material=ehd_mat2" if "radius2" in v else "")
         + (", walls: wall(..., material=ehd_wall_mat)" if walls else "") + ".",
         "# Engines: InteractionLoop([Ig2_Sphere_Sphere_ScGeom()" + (", Ig2_Wall_Sphere_ScGeom()" if walls else "")
         + "], [Ip2_ViscElMat_ViscElMat_ViscElPhys()], [Law2_ScGeom_ViscElPhys_Basic()]).",
@@ -68,11 +69,29 @@ def snippet(y: dict, *, geometry: str, values: dict, placeholders: bool, steps: 
         f"ehd_viscosity = {v['viscosity']:.6g}{rep}fluid viscosity [Pa s] (enters St_yade)",
         "ehd_friction_angle = 0.5  # REPLACE: your friction angle [rad] (no effect head-on)",
         f"ehd_en = {y['en']:.6g}",
-        f"ehd_roughness = ehd_radius * math.exp(-{y['st_c']:.6g})  # a exp(-St_c): a fitting constant",
+    ]
+    second = "radius2" in v  # two spheres of different size or material: a second material
+    if second:
+        lines += [
+            f"ehd_density2 = {v['density2']:.6g}  # the scene's second sphere's density [kg/m^3]",
+            f"ehd_radius2 = {v['radius2']:.6g}  # the scene's second sphere's radius [m]",
+            f"ehd_young2 = {v['young2']:.6g}  # the scene's second sphere's Young's modulus [Pa]",
+            f"ehd_poisson2 = {v['poisson2']:.6g}  # the scene's second sphere's Poisson's ratio",
+            "ehd_a = 0.5 * (ehd_radius + ehd_radius2)  # YADE's (R1 + R2)/2",
+        ]
+    else:
+        lines.append("ehd_a = ehd_radius  # YADE's (R1 + R2)/2 (a wall counts with the sphere's R)")
+    lines += [
+        f"ehd_roughness = ehd_a * math.exp(-{y['st_c']:.6g})  # a exp(-St_c): a fitting constant",
         "ehd_mat = O.materials.append(ViscElMat(young=ehd_young, poisson=ehd_poisson, "
         "density=ehd_density, frictionAngle=ehd_friction_angle, en=ehd_en, lubrication=True, "
         "viscoDyn=ehd_viscosity, roughnessScale=ehd_roughness, label='ehd'))",
     ]
+    if second:
+        lines.append(
+            "ehd_mat2 = O.materials.append(ViscElMat(young=ehd_young2, poisson=ehd_poisson2, "
+            "density=ehd_density2, frictionAngle=ehd_friction_angle, en=ehd_en, lubrication=True, "
+            "viscoDyn=ehd_viscosity, roughnessScale=ehd_roughness, label='ehd2'))  # sphere 2")
     if walls:
         lines.append(
             "# walls: density 0 (YADE averages the densities in St), the rest as the spheres'")
@@ -80,13 +99,24 @@ def snippet(y: dict, *, geometry: str, values: dict, placeholders: bool, steps: 
             "ehd_wall_mat = O.materials.append(ViscElMat(young=ehd_young, poisson=ehd_poisson, "
             "density=0.0, frictionAngle=ehd_friction_angle, en=ehd_en, lubrication=True, "
             "viscoDyn=ehd_viscosity, roughnessScale=ehd_roughness, label='ehd_wall'))")
-    lines += [
-        "ehd_mass = 4.0 / 3.0 * math.pi * ehd_radius**3 * ehd_density",
-        "# time step: at most 1/%d of the contact time pi sqrt(m_red / kn), kn = young R;" % steps,
-        "# the shorter of the geometries (two equal spheres: m_red = m/2; a wall: m)",
-        f"ehd_dt_max = math.pi * math.sqrt({'0.5 * ' if pair else ''}ehd_mass / (ehd_young * ehd_radius)) / {steps}",
-        "# set O.dt = ehd_dt_max or smaller",
-    ]
+    lines.append("ehd_mass = 4.0 / 3.0 * math.pi * ehd_radius**3 * ehd_density")
+    if second:
+        lines += [
+            "ehd_mass2 = 4.0 / 3.0 * math.pi * ehd_radius2**3 * ehd_density2",
+            "# time step: at most 1/%d of the contact time pi sqrt(m_red / kn)," % steps,
+            "# kn = 1 / (1/(2 young R1) + 1/(2 young2 R2))",
+            "ehd_dt_max = math.pi * math.sqrt(ehd_mass * ehd_mass2 / (ehd_mass + ehd_mass2) / "
+            f"(1.0 / (0.5 / (ehd_young * ehd_radius) + 0.5 / (ehd_young2 * ehd_radius2)))) / {steps}",
+        ]
+    else:
+        lines += [
+            "# time step: at most 1/%d of the contact time pi sqrt(m_red / kn), kn = young R;" % steps,
+            "# " + ("the shorter of the geometries (two equal spheres: m_red = m/2; a wall: m)"
+                    if pair and walls else "m_red = m/2 (two equal spheres)" if pair
+                    else "m_red = m (the wall's mass is set in block 2)"),
+            f"ehd_dt_max = math.pi * math.sqrt({'0.5 * ' if pair else ''}ehd_mass / (ehd_young * ehd_radius)) / {steps}",
+        ]
+    lines.append("# set O.dt = ehd_dt_max or smaller")
     if walls:
         lines += [
             "# ---- BLOCK 2, after the bodies (before O.run) ----",

@@ -19,7 +19,8 @@ for k, v in enumerate(SPEEDS):
         pairs.append((a, None, v))
     else:
         a = O.bodies.append(sphere((x, 0, -r1 - gap / 2), r1, material=ehd_mat))
-        b = O.bodies.append(sphere((x, 0, r2 + gap / 2), r2, material=ehd_mat))
+        b = O.bodies.append(sphere((x, 0, r2 + gap / 2), r2,
+                                   material=globals().get("ehd_mat2", ehd_mat)))
         O.bodies[a].state.vel = Vector3(0, 0, v / 2)
         O.bodies[b].state.vel = Vector3(0, 0, -v / 2)
         pairs.append((a, b, v))
