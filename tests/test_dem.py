@@ -317,3 +317,21 @@ def test_fit_range_fits_only_there_and_reports_every_row(tmp_path):
     for code in ("liggghts", "openfoam", "yade"):  # errors still reported on every row
         assert sum(b["n"] for b in g_near[code]["realised_error_by_St"]) == 6
     assert main(["export-dem", str(store), "--out", str(out_near), "--fit-range", "30", "10"]) == 2
+
+
+def test_store_with_a_further_axis_groups_by_it(tmp_path):
+    # a cavitation store (St, eps, Pi): one group per (eps, Pi), each with its own settings
+    from pipeline.sweeps.config import parse_sweep
+    from pipeline.sweeps.run import run_sweep
+
+    text = ('name = "dem-pi"\nstore = "x.zarr"\n[grid]\nSt = [10.0, 15.0, 30.0, 60.0]\n'
+            'eps = [0.01]\nPi = [0.01, 1.0]\n[physics]\ncavitation = "jfo"\n'
+            '[numerics]\naccuracy = "fast"\n')
+    sweep = parse_sweep(text).with_store(tmp_path / "s.zarr")
+    run_sweep(sweep, runner="serial", progress=None)
+    assert main(["export-dem", str(sweep.store), "--out", str(tmp_path / "o")]) == 0
+    rows = read_csv(tmp_path / "o" / "restitution.csv")
+    assert {r["group"] for r in rows} == {"eps=0.01 Pi=0.01", "eps=0.01 Pi=1"}
+    assert len(rows) == 8
+    doc = json.loads((tmp_path / "o" / "restitution.json").read_text())
+    assert set(doc["groups"]) == {"eps=0.01 Pi=0.01", "eps=0.01 Pi=1"}

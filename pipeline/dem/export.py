@@ -64,26 +64,33 @@ def _blank():
 
 
 def store_rows(ds, density_ratio: float = 0.0) -> list[dict]:
-    """One row per ok scene of a sweep store with (St, eps) axes; groups are the eps values."""
+    """One row per ok scene of a sweep store with (St, eps) axes; groups are the eps values
+    (and the values of any further axis, e.g. ``eps=0.0001 Pi=0.1``)."""
+    import itertools
+
     solver_version = ds.attrs.get("solver_version", "")
+    extra = [d for d in ds["status"].dims if d not in ("eps", "St")]
     st_values, eps_values = ds["St"].values, ds["eps"].values
     # whole arrays at once (a .sel per cell took 16 s for 448 scenes)
-    grid = {k: np.asarray(ds[k].transpose("eps", "St").values)
+    grid = {k: np.asarray(ds[k].transpose("eps", "St", *extra).values)
             for k in ("status", "e_wet", "h_m_x1", "p_max")}
     out = []
-    for i, eps in enumerate(eps_values):
-        for j, st in enumerate(st_values):
-            if int(grid["status"][i, j]) != 1:
-                continue
-            row = _blank()
-            row.update(store_stokes_numbers(float(st), density_ratio))
-            e = float(grid["e_wet"][i, j])
-            row.update(group=f"eps={float(eps):.3g}", geometry="either", eps=float(eps),
-                       x_ref_x0=1.0, e_wet=e, sticks=bool(e == 0.0),
-                       closest_approach_x1=float(grid["h_m_x1"][i, j]),
-                       peak_pressure=float(grid["p_max"][i, j]), status="ok",
-                       solver_version=solver_version)
-            out.append(row)
+    for idx in itertools.product(*(range(ds.sizes[d]) for d in extra)):
+        label = "".join(f" {d}={float(ds[d].values[i]):.3g}" for d, i in zip(extra, idx))
+        for i, eps in enumerate(eps_values):
+            for j, st in enumerate(st_values):
+                cell = (i, j, *idx)
+                if int(grid["status"][cell]) != 1:
+                    continue
+                row = _blank()
+                row.update(store_stokes_numbers(float(st), density_ratio))
+                e = float(grid["e_wet"][cell])
+                row.update(group=f"eps={float(eps):.3g}{label}", geometry="either",
+                           eps=float(eps), x_ref_x0=1.0, e_wet=e, sticks=bool(e == 0.0),
+                           closest_approach_x1=float(grid["h_m_x1"][cell]),
+                           peak_pressure=float(grid["p_max"][cell]), status="ok",
+                           solver_version=solver_version)
+                out.append(row)
     return out
 
 
