@@ -200,18 +200,33 @@ def group_settings(rows: list[dict], fit_range=None) -> dict:
     # LIGGGHTS: the law never sticks; calibrated on the rebounding rows of the range
     exp_fit = out["fits"]["St"]["exponential"]
     plain = liggghts.replica_many(ef[em > 0], exp_fit["e_max"], exp_fit["c"])
-    e_max, c, err, _ = liggghts.calibrate(ef, em, exp_fit["e_max"], exp_fit["c"])
+    ls_e, ls_c, _, _ = liggghts.calibrate(ef, em, exp_fit["e_max"], exp_fit["c"])
+    ls_realised = liggghts.replica_many(st, ls_e, ls_c)
+    # refined to the smallest largest error over the range (sticking rows included): that is
+    # what the JSON states, and near the threshold the least-squares pair leaves it 20-30 %
+    # larger (measured on the paper store: 0.051-0.100 against 0.043-0.077)
+    mm_e, mm_c, _ = liggghts.calibrate_minimax(ef, em, ls_e, ls_c)
+    mm_realised = liggghts.replica_many(st, mm_e, mm_c)
+    use_mm = (np.max(np.abs(mm_realised - e)[fit_mask])
+              < np.max(np.abs(ls_realised - e)[fit_mask]))
+    e_max, c, realised = (mm_e, mm_c, mm_realised) if use_mm else (ls_e, ls_c, ls_realised)
+    rebound = fit_mask & (e > 0)
     out["liggghts"] = {
         "convention": "St", "geometry": "both (meff, reff: a wall counts as infinite)",
         "MaximumRestitution": e_max, "CriticalStokes": c,
-        "calibration_max_error": err,
+        "calibration": "minimax" if use_mm else "least_squares",
+        "calibration_max_error": float(np.max(np.abs(realised - e)[rebound])),
         "uncalibrated_max_error": float(np.max(np.abs(plain - em[em > 0]))),
-        **_realised(st, liggghts.replica_many(st, e_max, c), e, fit_mask),
+        "least_squares": {"MaximumRestitution": ls_e, "CriticalStokes": ls_c,
+                          **_realised(st, ls_realised, e, fit_mask)},
+        **_realised(st, realised, e, fit_mask),
         "steps_per_contact": liggghts.STEPS_PER_CONTACT,
         "time_step_error_measured": liggghts.TIME_STEP_ERROR,
         "note": "CriticalStokes is the constant C of e = e_max exp(-C/St) with St from the "
                 "instantaneous normal velocity; values calibrated against the replica "
-                "(pipeline/dem/liggghts.py) so the realised e matches the model at impact. "
+                "(pipeline/dem/liggghts.py) so the realised e matches the model at impact: "
+                "least squares over the rebounding rows, then (calibration: minimax) the pair "
+                "of smallest largest error over every row of the range. "
                 "calibration_max_error: rebounding rows of the fit; realised_max_error: every "
                 "row, where the model sticks too (the law never sticks). Needs dt <= "
                 "tc/steps_per_contact, at which LIGGGHTS 3.8.0 was measured to differ from the "
