@@ -41,12 +41,18 @@ SEPARATED = 1e-12
 CONTACT_STEPS = 60 * liggghts.STEPS_PER_CONTACT  # 60 contact times: separation even when stuck
 
 
-def _program(name, package):
-    exe = shutil.which(name)
-    if exe is None:
-        pytest.skip(f"{name} not installed: `make test-dem` installs the Debian package "
-                    f"{package} (apt-get install -y, as root)")
-    return exe
+def _needs(name):
+    """Skip (before the fixtures' sweeps and solves) where the program is not installed."""
+    return pytest.mark.skipif(shutil.which(name) is None, reason=(
+        f"{name} not installed: `make test-dem` installs the Debian package {name} "
+        "(apt-get install -y, as root)"))
+
+
+needs_liggghts, needs_yade = _needs("liggghts"), _needs("yade")
+
+
+def _program(name):
+    return shutil.which(name)
 
 
 def _run(cmd, cwd, timeout=120):
@@ -140,7 +146,7 @@ def _check(rows, realised, stated, name, extra=None):
 # ---- LIGGGHTS ------------------------------------------------------------------------------
 
 def _liggghts(out, geometry, tmp_path):
-    exe = _program("liggghts", "liggghts")
+    exe = _program("liggghts")
     rows, s, placeholders = _collisions(out)
     lig = s["liggghts"]
     (snippet_file,) = [p for p in out.glob("liggghts_*.in") if not p.name.endswith("_wall.in")]
@@ -213,24 +219,29 @@ def _liggghts(out, geometry, tmp_path):
     return realised
 
 
+@needs_liggghts
 def test_liggghts_store_export_two_spheres(store_export, tmp_path):
     _liggghts(store_export, "sphere-sphere", tmp_path)
 
 
+@needs_liggghts
 def test_liggghts_store_export_sphere_on_wall(store_export, tmp_path):
     _liggghts(store_export, "sphere-wall", tmp_path)
 
 
+@needs_liggghts
 def test_liggghts_scene_export_two_spheres(pair_export, tmp_path):
     assert not list(pair_export.glob("liggghts_*_wall.in"))  # no wall for two spheres
     assert not list(pair_export.glob("openfoam_*"))  # a patch (wall) model
     _liggghts(pair_export, "sphere-sphere", tmp_path)
 
 
+@needs_liggghts
 def test_liggghts_scene_export_sphere_on_wall(wall_export, tmp_path):
     _liggghts(wall_export, "sphere-wall", tmp_path)
 
 
+@needs_liggghts
 def test_liggghts_scene_export_unequal_spheres(unequal_export, tmp_path):
     _liggghts(unequal_export, "sphere-sphere", tmp_path)
 
@@ -238,7 +249,7 @@ def test_liggghts_scene_export_unequal_spheres(unequal_export, tmp_path):
 # ---- YADE ----------------------------------------------------------------------------------
 
 def _yade(out, geometry, tmp_path):
-    exe = _program("yade", "yade")
+    exe = _program("yade")
     rows, s, placeholders = _collisions(out)
     (snippet_file,) = out.glob("yade_*.py")
     snippet = snippet_file.read_text()
@@ -263,21 +274,26 @@ def _yade(out, geometry, tmp_path):
     return realised
 
 
+@needs_yade
 def test_yade_store_export_two_spheres(store_export, tmp_path):
     _yade(store_export, "sphere-sphere", tmp_path)
 
 
+@needs_yade
 def test_yade_store_export_sphere_on_wall(store_export, tmp_path):
     _yade(store_export, "sphere-wall", tmp_path)
 
 
+@needs_yade
 def test_yade_scene_export_two_spheres(pair_export, tmp_path):
     _yade(pair_export, "sphere-sphere", tmp_path)
 
 
+@needs_yade
 def test_yade_scene_export_sphere_on_wall(wall_export, tmp_path):
     _yade(wall_export, "sphere-wall", tmp_path)
 
 
+@needs_yade
 def test_yade_scene_export_unequal_spheres(unequal_export, tmp_path):
     _yade(unequal_export, "sphere-sphere", tmp_path)

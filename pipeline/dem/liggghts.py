@@ -294,12 +294,22 @@ def snippet(lig: dict, *, types: list[str], values: dict, placeholders: bool) ->
             "variable ehd_yeff equal v_ehd_youngs/(2.0*(1.0-v_ehd_poisson^2))",
             "variable ehd_kn equal 16.0/15.0*sqrt(v_ehd_reff)*v_ehd_yeff*"
             "(15.0*v_ehd_meff*v_ehd_vchar^2/(16.0*sqrt(v_ehd_reff)*v_ehd_yeff))^0.2",
-            f"variable ehd_dt_max equal PI*sqrt(v_ehd_meff/v_ehd_kn)/{STEPS_PER_CONTACT}",
+            f"variable ehd_dt_max equal PI*sqrt(v_ehd_meff/v_ehd_kn)/{STEPS_PER_CONTACT}"
+            f"  # {_example_dt(v):.3g} s with the values above; use timestep ${{ehd_dt_max}} or smaller",
         ]
     else:
         lines.append(f"variable ehd_dt_max equal {v['dt_max']:.6g}  # [s], tc = "
                      f"{v['dt_max'] * STEPS_PER_CONTACT:.4g} s; use timestep ${{ehd_dt_max}} or smaller")
     return "\n".join(lines) + "\n"
+
+
+def _example_dt(v) -> float:
+    """``ehd_dt_max`` of a store snippet's example values (two equal spheres)."""
+    m = 4.0 / 3.0 * math.pi * v["radius"] ** 3 * v["density"]
+    yeff = effective_modulus(v["youngs"][0], v["poisson"][0], v["youngs"][0], v["poisson"][0])
+    tc = contact_time(0.5 * m, 0.5 * v["radius"], yeff,
+                      max(v["v_char"], MIN_CHARACTERISTIC_VELOCITY))
+    return tc / STEPS_PER_CONTACT
 
 
 def wall_snippet(wall_type: int, *, placeholders: bool) -> str:

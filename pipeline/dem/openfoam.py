@@ -65,9 +65,13 @@ def snippet(s: dict, *, store: bool) -> str:
     """The controlDict line and the kinematicCloudProperties entries of group settings ``s``."""
     o = s["openfoam"]
     rep = "  // REPLACE: " if store else "  // "
-    rho_note = ("REPLACE: (rho_f/rho_p of the export, " + f"{o['density_ratio']:.3g}" +
-                ") x your particle density; 0 keeps St_L = St_exp as the fit assumed"
-                if store else "the scene's fluid density, as in the fit's St_L")
+    if not store:
+        rho_note = "the scene's fluid density, as in the fit's St_L"
+    elif o["density_ratio"] == 0.0:
+        rho_note = "keep 0: the fit's St_L has no added mass (--density-ratio 0)"
+    else:
+        rho_note = (f"REPLACE: {o['density_ratio']:.3g} (the export's rho_f/rho_p) x your "
+                    "particle density, as in the fit's St_L")
     return f"""// ehd-collision wet restitution for OpenFOAM: patchInteractionModel localInteractionHW
 // Library: {LIBRARY} (third party; build it for your OpenFOAM).
 // Law applied at impact: St_L = (rho_p + rhoF/2) Un d / (9 muP),  e = e exp(-coeffStc/St_L),

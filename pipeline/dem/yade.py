@@ -40,6 +40,11 @@ def law(st_yade, en, st_c):
     return np.maximum(E_FLOOR, en * (1.0 - st_c / st_yade))
 
 
+def _dt(v, pair, steps) -> float:
+    mass = 4.0 / 3.0 * math.pi * v["radius"] ** 3 * v["density"]
+    return math.pi * math.sqrt((0.5 if pair else 1.0) * mass / (v["young"] * v["radius"])) / steps
+
+
 def snippet(y: dict, *, geometry: str, values: dict, placeholders: bool, steps: int) -> str:
     """Two blocks: the materials and time step (before the bodies) and, where walls occur, the
     wall mass (after them). ``values``: density, radius, young, poisson, viscosity (the scene's,
@@ -114,7 +119,8 @@ def snippet(y: dict, *, geometry: str, values: dict, placeholders: bool, steps: 
             "# " + ("the shorter of the geometries (two equal spheres: m_red = m/2; a wall: m)"
                     if pair and walls else "m_red = m/2 (two equal spheres)" if pair
                     else "m_red = m (the wall's mass is set in block 2)"),
-            f"ehd_dt_max = math.pi * math.sqrt({'0.5 * ' if pair else ''}ehd_mass / (ehd_young * ehd_radius)) / {steps}",
+            f"ehd_dt_max = math.pi * math.sqrt({'0.5 * ' if pair else ''}ehd_mass / (ehd_young * ehd_radius)) / {steps}"
+            f"  # {_dt(v, pair, steps):.3g} s with the values above",
         ]
     lines.append("# set O.dt = ehd_dt_max or smaller")
     if walls:
