@@ -614,3 +614,141 @@ def test_a_real_ctrl_c_during_the_compiled_solve_is_exit_130_one_line(tmp_path):
     assert proc.returncode == EXIT_INTERRUPTED, (proc.returncode, err)
     assert "Traceback" not in err
     assert err.strip().splitlines()[-1] == "ehd run: interrupted; everything finished so far is kept"
+
+
+# ==== issue 19: nothing wrong is ever stored or shown ============================================
+# ---- silent corruption: checksummed chunks, coordinates and metadata in the integrity check ----
+def _flip(rel, back=3):
+    """Flip one bit of the byte ``back`` bytes from the end of a chunk (its checksum no longer
+    matches; before schema 6 the chunk decoded to another number)."""
+    def make(ws):
+        p = ws / rel
+        data = bytearray(p.read_bytes())
+        data[-back] ^= 0x01
+        p.write_bytes(bytes(data))
+    return make
+
+
+def _edit_root(edit):
+    def make(ws):
+        p = ws / "s.zarr" / "zarr.json"
+        meta = json.loads(p.read_text())
+        meta = edit(meta)
+        p.write_text(json.dumps(meta))
+    return make
+
+
+def _set_attr(key, value):
+    def edit(meta):
+        meta["attributes"][key] = value
+        return meta
+    return _edit_root(edit)
+
+
+def _status_code(code):
+    def make(ws):
+        import zarr
+
+        from pipeline.sweeps.layout import zarr_warnings
+
+        with zarr_warnings():
+            zarr.open_group(str(ws / "s.zarr"), mode="r+")["status"][0, 0] = code
+    return make
+
+
+@pytest.mark.parametrize("damage, where", [
+    (_flip("s.zarr/v_r/c/1/0"), "v_r (unreadable)"),
+    (_flip("s.zarr/steps/c/2/0", 5), "steps (unreadable)"),
+    (_status_code(99), "status (unknown code 99)"),
+], ids=["flipped-byte-data", "flipped-byte-count", "status-code-99"])
+def test_damaged_data_is_listed_refused_raised_and_recomputed(ws, base, capsys, damage, where):
+    from pipeline import open_results
+    from pipeline.errors import StoreDamaged
+
+    damage(ws)
+    code, out, err = ehd(capsys, "status", "s.zarr")
+    assert code == EXIT_DAMAGED and where in err and "Traceback" not in err, err
+    code, _, err = ehd(capsys, "figures", "s.zarr", "--out", "fig")
+    assert code == EXIT_DAMAGED and "damaged" in err and not (ws / "fig").exists()
+    with pytest.raises(StoreDamaged, match="damaged"):
+        open_results(ws / "s.zarr")
+    code, out, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    assert code == 0 and "repaired" in out, err
+    assert 1 <= len(CALLS) <= len(EPS)  # one chunk: one St row at most
+    xr.testing.assert_identical(_stored(ws / "s.zarr"), _stored(base / "s.zarr"))
+    assert ehd(capsys, "status", "s.zarr")[0] == 0
+
+
+@pytest.mark.parametrize("damage, how", [
+    (_truncate("s.zarr/St/c/0", 3), "unreadable"),
+    (_remove("s.zarr/eps/c/0"), "missing"),
+    (_flip("s.zarr/St/c/0"), "unreadable"),
+], ids=["truncated-St", "deleted-eps", "flipped-St"])
+def test_a_damaged_coordinate_is_listed_refused_and_rewritten(ws, base, capsys, damage, how):
+    from pipeline import open_results
+    from pipeline.errors import StoreDamaged
+
+    damage(ws)
+    code, out, err = ehd(capsys, "status", "s.zarr")
+    assert code == EXIT_DAMAGED and f"({how}" in err and "Traceback" not in err, err
+    assert "nan" not in out  # the rows are shown at their true coordinates (the store's copy)
+    assert ehd(capsys, "figures", "s.zarr", "--out", "fig")[0] == EXIT_DAMAGED
+    with pytest.raises(StoreDamaged, match="coordinate"):
+        open_results(ws / "s.zarr")
+    code, out, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    assert code == 0 and "coordinate" in out + err and CALLS == [], err
+    xr.testing.assert_identical(_stored(ws / "s.zarr"), _stored(base / "s.zarr"))
+    assert ehd(capsys, "status", "s.zarr")[0] == 0
+
+
+METADATA = [
+    ("root-is-a-list", _edit_root(lambda m: []), EXIT_USAGE, "not a zarr group"),
+    ("root-is-a-number", _edit_root(lambda m: 5), EXIT_USAGE, "not a zarr group"),
+    ("attributes-a-list", _set_attr_root := _edit_root(lambda m: {**m, "attributes": []}),
+     EXIT_DAMAGED, "attributes"),
+    ("fixed-physics-a-string", _set_attr("fixed_physics", "St=5"), EXIT_DAMAGED, "fixed_physics"),
+    ("axes-a-string", _set_attr("axes", "St"), EXIT_DAMAGED, "axes"),
+    ("schema-a-string", _set_attr("store_schema", "6"), EXIT_DAMAGED, "store_schema"),
+    ("schema-5-old", _set_attr("store_schema", 5), EXIT_USAGE, "checksum"),
+    ("schema-true", _set_attr("store_schema", True), EXIT_DAMAGED, "store_schema"),
+    ("grid-copy-short", _set_attr("grid", {"St": ["1.0"], "eps": ["0.0001", "0.01"]}),
+     EXIT_DAMAGED, "grid.St"),
+    ("an-edited-number", _set_attr("accuracy", "fine"), EXIT_DAMAGED, "checksum"),
+    ("fill-value-edited", _edit_root(lambda m: (m["consolidated_metadata"]["metadata"]["v_r"]
+                                                .update(fill_value=0.0), m)[1]),
+     EXIT_DAMAGED, "checksum"),
+    ("codecs-stripped", _edit_root(lambda m: (m["consolidated_metadata"]["metadata"]["v_r"]
+                                              .update(codecs=[{"name": "bytes"}]), m)[1]),
+     EXIT_DAMAGED, "no checksummed chunks"),
+    ("variable-dropped", _edit_root(lambda m: (m["consolidated_metadata"]["metadata"]
+                                               .pop("status"), m)[1]), EXIT_DAMAGED, "missing"),
+]
+
+
+@pytest.mark.parametrize("setup, code, keyword", [c[1:] for c in METADATA],
+                         ids=[c[0] for c in METADATA])
+def test_metadata_of_the_wrong_shape_is_one_line_for_every_reader(ws, capsys, setup, code, keyword):
+    from pipeline import open_results
+    from pipeline.errors import EhdError
+
+    setup(ws)
+    before = tree_hash(ws / "s.zarr")
+    for argv in (["status", "s.zarr"], ["figures", "s.zarr", "--out", "fig"],
+                 ["sweep", "s.toml", "--executor", "serial"]):
+        got, out, err = ehd(capsys, *argv)
+        assert got == code, (argv, err)
+        assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+        assert keyword in err, err
+    with pytest.raises(EhdError, match=keyword):
+        open_results(ws / "s.zarr")
+    assert tree_hash(ws / "s.zarr") == before and CALLS == []
+
+
+def test_every_chunk_of_every_array_is_checksummed(ws):
+    from pipeline.sweeps.layout import VARIABLES
+
+    root = json.loads((ws / "s.zarr" / "zarr.json").read_text())
+    arrays = root["consolidated_metadata"]["metadata"]
+    assert set(arrays) == set(VARIABLES) | {"St", "eps"}
+    for name, meta in arrays.items():
+        assert [c["name"] for c in meta["codecs"]][-1] == "crc32c", name

@@ -89,22 +89,19 @@ def cmd_sweep(args) -> int:
 
 
 def _open_checked(store: str):
-    """``(dataset, damage, journal lines skipped)`` of the store at ``store``, read whole; a
-    missing or unreadable store is a one-line error (exit 2)."""
-    from ..errors import PathError, UsageError
+    """``(dataset, damage, journal lines skipped)`` of the store at ``store``, read whole and
+    checked (pipeline/sweeps/integrity.py); a missing or unreadable store is a one-line error
+    (exit 2), metadata that cannot be trusted one line too (exit 5)."""
+    from ..errors import EhdError, PathError, UsageError
     from .integrity import load_checked
     from .journal import _journal_path, read_journal
-    from .store import open_results
 
     if not str(store).strip():
         raise PathError("STORE: empty path; give a store directory such as results/paper.zarr")
-    import warnings
-
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)  # a pending journal is reported
-            open_results(store, chunks=None)  # is it a sweep store at all?
         ds, damage = load_checked(store)
+    except EhdError:
+        raise
     except FileNotFoundError as exc:
         raise UsageError(str(exc)) from None
     except (ValueError, KeyError, OSError) as exc:
@@ -124,7 +121,7 @@ def cmd_status(args) -> int:
     from .analysis import PlaneError, planes
     from .journal import pending_journal
     from .layout import MODEL_CODES, STATUS_CODES
-    from .run import format_physics
+    from .config import format_physics
 
     ds, damage, skipped = _open_checked(args.store)
     fixed = ds.attrs.get("fixed_physics") or {}
@@ -158,9 +155,12 @@ def cmd_status(args) -> int:
               "next ehd sweep")
     if skipped:
         print(f"  journal   {skipped:6d}   bad lines skipped (their scenes run again)")
-    if damage:
+    if len(damage):
         print(f"  damaged   {len(damage):6d}   counted as not run above; the next ehd sweep "
               "computes them again")
+    for coord, how in sorted(damage.coords.items()):
+        print(f"  damaged   coordinate {coord} ({how}): shown from the store's copy; the next ehd "
+              "sweep rewrites it")
     try:
         for extra, plane in planes(ds):
             _status_table(plane, extra, format_physics)
@@ -218,7 +218,7 @@ def cmd_figures(args) -> int:
     if not (checked["status"].values == STATUS_CODES["ok"]).any():
         raise UsageError(f"store {args.store} holds no finished scene yet: nothing to draw; run "
                          "its sweep first (ehd sweep SWEEP_FILE)")
-    ds = open_results(args.store, chunks=None)
+    ds = open_results(args.store, check=False, chunks=None)  # checked whole just above
     try:
         paths, rendered = update_figures(ds, args.out)
     except PlaneError as exc:

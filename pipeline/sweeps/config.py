@@ -40,7 +40,7 @@ import numpy as np
 from ..errors import UsageError
 
 __all__ = ["Sweep", "load_sweep", "parse_sweep", "cache_key", "canonical_json", "ConfigError",
-           "physics_json", "physics_from_json"]
+           "physics_json", "physics_from_json", "format_physics"]
 
 _TOP_KEYS = {"name", "store", "grid", "physics", "numerics"}
 _RANGE_KEYS = {"start", "stop", "num"}
@@ -49,6 +49,12 @@ MAX_SCENES = 10**7  # a typo guard (num = 1e9), far above any real sweep
 
 class ConfigError(UsageError, ValueError):
     """A sweep file is malformed; the message names the file and the offending key."""
+
+
+def format_physics(physics: dict) -> str:
+    """``St=20 eps=1e-08``: a scene's physics in one short line."""
+    return " ".join(f"{k}={v:.6g}" if isinstance(v, float) else f"{k}={v}"
+                    for k, v in physics.items())
 
 
 def canonical_json(obj) -> str:

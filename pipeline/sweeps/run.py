@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import EXIT_OK, EXIT_SWEEP_FAILED
+from .config import format_physics
 from .layout import MODEL_CODES, STATUS_CODES
 from .progress import Progress
 from .runners import check_runner, open_runner
@@ -21,8 +23,9 @@ from .tasks import MasterSolve, solve_scene, warm
 
 __all__ = ["run_sweep", "Summary", "EXIT_OK", "EXIT_FAILED", "format_physics"]
 
-EXIT_OK = 0
-EXIT_FAILED = 3  # the sweep finished, but some of its scenes are stored as failed
+# the one exit-code table is pipeline/errors.py; EXIT_FAILED is its EXIT_SWEEP_FAILED (3): the
+# sweep finished, but some of its scenes are stored as failed
+EXIT_FAILED = EXIT_SWEEP_FAILED
 
 _CODE_NAMES = {v: k for k, v in STATUS_CODES.items()}
 
@@ -44,6 +47,7 @@ class Summary:
     failed: int = 0  # stored as failed (this run or before)
     not_run: int = 0  # still missing (an interrupted run)
     repaired: int = 0  # damaged cells found when the store was opened (recomputed if in the grid)
+    repaired_coords: tuple = ()  # damaged coordinates rewritten from the store's copy
     journal_skipped: int = 0  # journal lines that were not scene records (their scenes rerun)
     rigid: int = 0  # answered by the rigid solution, no PDE solve
     rigid_computed: int = 0
@@ -73,6 +77,9 @@ class Summary:
         if self.repaired:
             lines.append(f"  repaired    {self.repaired:6d}   (damaged cells found in the store, "
                          "computed again)")
+        if self.repaired_coords:
+            lines.append(f"  repaired    coordinate(s) {', '.join(self.repaired_coords)} (damaged, "
+                         "rewritten from the store's copy)")
         if self.journal_skipped:
             lines.append(f"  journal     {self.journal_skipped:6d}   bad lines skipped (their "
                          "scenes computed again)")
@@ -144,6 +151,7 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         summary = Summary(name=sweep.name, store=st.shown, shape=sweep.shape,
                           axes=sweep.axis_names)
         summary.repaired = len(st.damage)
+        summary.repaired_coords = tuple(sorted(st.damage.coords))
         summary.journal_skipped = st.journal_skipped
         if st.damage and progress is not None:
             print(f"store {st.shown} is damaged: {st.damage_text}; "
@@ -209,12 +217,6 @@ class _Warm:
 
     def __call__(self):
         return warm(self.accuracy, self.overrides)
-
-
-def format_physics(physics: dict) -> str:
-    """``St=20 eps=1e-08``: a scene's physics in one short line."""
-    return " ".join(f"{k}={v:.6g}" if isinstance(v, float) else f"{k}={v}"
-                    for k, v in physics.items())
 
 
 def _count(summary: Summary, st, cells) -> None:
