@@ -45,16 +45,31 @@ def _remove(path) -> None:
             pass
 
 
+def _quiet_asyncio() -> None:
+    """zarr writes chunks from tasks on its own event loop; after one of them failed, the others
+    are destroyed pending and asyncio logs each at exit ("Task was destroyed but it is
+    pending!"): the one line of the failure says what happened."""
+    import logging
+    import sys
+
+    logging.getLogger("asyncio").setLevel(logging.CRITICAL + 1)
+    # and its coroutines closed with the loop at exit ("Exception ignored in ... Event loop is
+    # closed"): only after a failed write, when the process is about to exit with its one line
+    sys.unraisablehook = lambda unraisable: None
+
+
 @contextmanager
-def writing(cleanup, what: str):
+def writing(cleanup, what: str, path=None):
     """Run a write; on ``OSError`` remove ``cleanup`` (a temporary file or folder, or None) and
-    raise ``WriteError`` naming ``what``, the path and the free space. Other errors remove
-    ``cleanup`` too and propagate."""
+    raise ``WriteError`` naming ``what``, the path (the error's file name, else ``path``, else
+    ``cleanup``) and the free space. Other errors remove ``cleanup`` too and propagate."""
     try:
         yield
     except OSError as exc:
         _remove(cleanup)
-        raise write_error(exc, what) from None
+        _quiet_asyncio()
+        where = exc.filename or path or cleanup
+        raise write_error(exc, what, where) from None
     except BaseException:
         _remove(cleanup)
         raise
@@ -68,7 +83,7 @@ def atomic_path(path, what: str):
     path = Path(path)
     tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     _remove(tmp)
-    with writing(tmp, what):
+    with writing(tmp, what, path):
         yield tmp
         if tmp.is_dir() and path.is_dir():
             old = path.with_name(f".{path.name}.old-{os.getpid()}")
@@ -116,5 +131,6 @@ def guarded_dir(folder, what: str):
             except OSError:
                 pass
         if isinstance(exc, OSError):
-            raise write_error(exc, what) from None
+            _quiet_asyncio()
+            raise write_error(exc, what, exc.filename or folder) from None
         raise

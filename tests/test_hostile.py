@@ -752,3 +752,248 @@ def test_every_chunk_of_every_array_is_checksummed(ws):
     assert set(arrays) == set(VARIABLES) | {"St", "eps"}
     for name, meta in arrays.items():
         assert [c["name"] for c in meta["codecs"]][-1] == "crc32c", name
+
+
+# ---- a full disk: one line naming the path and the free space, nothing partial left -----------
+def _enospc(*args, **kwargs):
+    import errno
+
+    raise OSError(errno.ENOSPC, "No space left on device")
+
+
+def _leftovers(ws, before):
+    return sorted(str(p.relative_to(ws)) for p in ws.rglob("*") if p not in before)
+
+
+def _assert_full_disk_line(code, err):
+    from pipeline.errors import EXIT_WRITE
+
+    assert code == EXIT_WRITE, err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    assert "No space left on device" in err and "free on its file system" in err, err
+
+
+def test_a_full_disk_while_laying_out_a_store_leaves_nothing(ws, capsys, monkeypatch):
+    import pipeline.sweeps.store as store
+
+    (ws / "n.toml").write_text(sweep_text(ST, EPS, store="n.zarr"))
+    before = set(ws.rglob("*"))
+    monkeypatch.setattr(store, "seal", _enospc)  # after xarray wrote the temporary layout
+    code, _, err = ehd(capsys, "sweep", "n.toml", "--executor", "serial")
+    _assert_full_disk_line(code, err)
+    assert "n.zarr" in err and _leftovers(ws, before) == [] and CALLS == []
+
+
+def test_a_full_disk_while_merging_keeps_every_finished_scene(ws, capsys, monkeypatch):
+    """The store cannot take the merge: the journal keeps the scenes; the next sweep merges
+    them and computes nothing again."""
+    (ws / "s.toml").write_text(sweep_text(ST + [40.0], EPS, store="s.zarr"))
+    code, _, _ = ehd(capsys, "sweep", "s.toml", "--executor", "serial")  # the new layout
+    assert code == 0 and len(CALLS) == len(EPS)
+    _remove("s.zarr/v_r/c/1/0")(ws)  # a damaged row: recomputed, then merged (fails)
+    CALLS.clear()
+    real = xr.Dataset.to_zarr
+
+    def full(self, *a, **k):
+        if k.get("region") is not None and CALLS:  # the merge of the recomputed scenes
+            _enospc()
+        return real(self, *a, **k)
+
+    monkeypatch.setattr(xr.Dataset, "to_zarr", full)
+    code, _, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    _assert_full_disk_line(code, err)
+    computed = list(CALLS)
+    assert computed and (ws / "s.zarr.journal").exists()
+    monkeypatch.setattr(xr.Dataset, "to_zarr", real)
+    CALLS.clear()
+    code, out, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    assert code == 0, err
+    assert CALLS == []  # nothing finished was lost: the journal had every scene
+    assert ehd(capsys, "status", "s.zarr")[0] == 0
+
+
+def test_a_full_disk_at_the_journal_cuts_it_back_to_whole_records(ws, capsys, monkeypatch):
+    (ws / "s.toml").write_text(sweep_text(ST + [40.0], EPS, store="s.zarr"))
+
+    class Full:
+        def __init__(self, f):
+            self.f, self.n = f, 0
+
+        def write(self, text):
+            self.n += 1
+            if self.n > 1:  # the first record fits, the second half does not
+                self.f.write(text[: len(text) // 2])
+                self.f.flush()
+                _enospc()
+            return self.f.write(text)
+
+        def __getattr__(self, name):
+            return getattr(self.f, name)
+
+    import pathlib
+
+    real_path_open = pathlib.Path.open
+
+    def path_open(self, mode="r", *a, **k):
+        f = real_path_open(self, mode, *a, **k)
+        return Full(f) if self.name.endswith(".journal") and "a" in mode else f
+
+    monkeypatch.setattr(pathlib.Path, "open", path_open)
+    monkeypatch.setattr("pipeline.sweeps.store.FLUSH_SECONDS", 1e9)
+    code, _, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    _assert_full_disk_line(code, err)
+    assert "journal" in err
+    journal = ws / "s.zarr.journal"  # merged and dropped, or cut back to whole records
+    assert not journal.exists() or all(json.loads(line) for line in
+                                       journal.read_text().splitlines())
+    assert ehd(capsys, "status", "s.zarr")[0] == 0
+
+
+def test_run_save_on_a_full_disk_leaves_no_file(ws, capsys, monkeypatch):
+    def partial(self, path, *a, **k):
+        Path(path).write_bytes(b"CDF\x01")  # a few bytes, then the disk is full
+        _enospc()
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", partial)
+    before = set(ws.rglob("*"))
+    code, out, err = ehd(capsys, "run", "--St", "5", "--eps", "0.01", "--accuracy", "fast",
+                         "--save", "r.nc")
+    _assert_full_disk_line(code, err)
+    assert "r.nc" in err and "v_r" in out  # the result was shown before the save failed
+    assert _leftovers(ws, before) == []
+
+
+def test_run_save_replaces_an_old_file_only_when_complete(ws, capsys, monkeypatch):
+    (ws / "r.nc").write_bytes(b"old")
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", _enospc)
+    code, _, err = ehd(capsys, "run", "--St", "5", "--eps", "0.01", "--accuracy", "fast",
+                       "--save", "r.nc")
+    _assert_full_disk_line(code, err)
+    assert (ws / "r.nc").read_bytes() == b"old"
+    assert [p.name for p in ws.iterdir() if "r.nc" in p.name] == ["r.nc"]
+
+
+@pytest.mark.parametrize("argv, target", [
+    (["run", "--St", "5", "--eps", "0.01", "--accuracy", "fast", "--plot", "figs/run"],
+     "pipeline.plots.scene_plots.plot_scene"),
+    (["figures", "s.zarr", "--out", "figs/sweep"], "pipeline.plots.sweep_maps.update_figures"),
+])
+def test_figures_on_a_full_disk_leave_nothing_new(ws, capsys, monkeypatch, argv, target):
+    import importlib
+
+    module, name = target.rsplit(".", 1)
+    folder = ws / argv[-1]
+
+    def half(*a, **k):
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "fig.png").write_bytes(b"\x89PNG")  # one figure half written
+        _enospc()
+
+    monkeypatch.setattr(importlib.import_module(module), name, half)
+    before = set(ws.rglob("*"))
+    code, _, err = ehd(capsys, *argv)
+    _assert_full_disk_line(code, err)
+    assert _leftovers(ws, before) == []
+
+
+def _can_mount_tmpfs(path) -> bool:
+    if os.geteuid() != 0 or shutil.which("mount") is None:
+        return False
+    return subprocess.run(["mount", "-t", "tmpfs", "-o", "size=200k", "tmpfs", str(path)],
+                          capture_output=True, timeout=10).returncode == 0
+
+
+def test_a_sweep_on_a_real_full_disk(tmp_path):
+    """The issue's reproduction on a 200 KiB tmpfs (root only; the simulated cases above hold
+    everywhere)."""
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    if not _can_mount_tmpfs(disk):
+        pytest.skip("needs root and mount to make a small tmpfs")
+    try:
+        (disk / "s.toml").write_text(sweep_text(ST, EPS, store="s.zarr"))
+        env = {**os.environ, "PYTHONPATH": str(REPO), "OPENBLAS_NUM_THREADS": "1"}
+        proc = subprocess.run([sys.executable, "-m", "pipeline.cli", "sweep", "s.toml",
+                               "--executor", "serial"], cwd=disk, env=env, capture_output=True,
+                              text=True, timeout=120)
+        _assert_full_disk_line(proc.returncode, proc.stderr)
+        assert sorted(p.name for p in disk.iterdir()) == ["s.toml"]
+    finally:
+        subprocess.run(["umount", str(disk)], capture_output=True, timeout=10)
+
+
+# ---- stdout closed or full ------------------------------------------------------------------------
+def _ehd_subprocess(args, stdout, timeout=120, **kw):
+    env = {**os.environ, "PYTHONPATH": str(REPO), "OPENBLAS_NUM_THREADS": "1"}
+    return subprocess.run([sys.executable, "-m", "pipeline.cli", *map(str, args)], env=env,
+                          stdout=stdout, stderr=subprocess.PIPE, text=True, timeout=timeout,
+                          **kw)
+
+
+@pytest.mark.parametrize("args", [["info"], ["run", "--St", "5", "--eps", "0.01"],
+                                  ["scene", EXAMPLE], ["status", "none.zarr"]],
+                         ids=["info", "run", "scene", "status"])
+def test_a_closed_stdout_is_one_line_before_any_work(tmp_path, args):
+    from pipeline.errors import EXIT_WRITE
+
+    t = time.monotonic()
+    proc = _ehd_subprocess(args, None, cwd=tmp_path, preexec_fn=lambda: os.close(1))
+    assert proc.returncode == EXIT_WRITE, proc.stderr
+    assert "Traceback" not in proc.stderr and "stdout is closed" in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+    assert time.monotonic() - t < 60  # nothing solved (a bound, not a speed target)
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+@pytest.mark.parametrize("args", [["info"], ["run", "--St", "5", "--eps", "0.01", "--accuracy",
+                                             "fast"]], ids=["info", "run"])
+def test_a_full_stdout_is_one_line(tmp_path, args):
+    from pipeline.errors import EXIT_WRITE
+
+    with open("/dev/full", "w") as full:
+        proc = _ehd_subprocess(args, full, cwd=tmp_path)
+    assert proc.returncode == EXIT_WRITE, proc.stderr
+    assert "Traceback" not in proc.stderr and "cannot write to stdout" in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_the_error_boundary_never_raises(monkeypatch, capsys):
+    import pipeline.cli
+
+    class Nasty(Exception):
+        def __str__(self):
+            raise RuntimeError("no text either")
+
+    def broken(args):
+        raise Nasty()
+
+    monkeypatch.setattr(pipeline.cli, "cmd_info", broken)
+    monkeypatch.setattr(sys, "stderr", None)  # and nowhere to say it
+    assert main(["info"]) == EXIT_INTERNAL
+
+
+# ---- SIGTERM: like Ctrl-C, its own code ---------------------------------------------------------
+def test_sigterm_is_exit_143_one_line_and_keeps_every_finished_scene(tmp_path, capsys):
+    from pipeline.errors import EXIT_TERMINATED
+
+    env = _fault_setup(tmp_path)
+    err_path = tmp_path / "err.txt"
+    with err_path.open("w") as err_file:
+        proc = subprocess.Popen([sys.executable, "slow.py", "sweep", "f.toml", "--executor",
+                                 "threads", "--workers", "2"], cwd=tmp_path, env=env,
+                                stdout=subprocess.DEVNULL, stderr=err_file)
+        _wait_for(proc, tmp_path)
+        proc.send_signal(signal.SIGTERM)  # kill PID, or a batch system's time limit
+        proc.wait(timeout=60)
+    err = err_path.read_text()
+    assert proc.returncode == EXIT_TERMINATED, err
+    assert "Traceback" not in err and "terminated" in err.splitlines()[-1]
+    kept = _finished_kept(tmp_path, capsys)
+    assert 1 <= kept < len(FAULT_ST) * len(EPS)
+    os.chdir(tmp_path)
+    try:
+        summary = run_module.run_sweep(load_sweep("f.toml"), runner="serial", solve=fake_solve,
+                                       progress=None)
+    finally:
+        os.chdir(REPO)
+    assert summary.computed == len(FAULT_ST) * len(EPS) - kept and summary.done == summary.scenes

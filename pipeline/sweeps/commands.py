@@ -204,6 +204,7 @@ def cmd_figures(args) -> int:
     from ..cli import check_output_dir
     from ..errors import StoreDamaged, UsageError
     from ..plots.sweep_maps import update_figures
+    from ..writes import guarded_dir
     from .analysis import PlaneError
     from .layout import STATUS_CODES
     from .store import open_results
@@ -220,7 +221,8 @@ def cmd_figures(args) -> int:
                          "its sweep first (ehd sweep SWEEP_FILE)")
     ds = open_results(args.store, check=False, chunks=None)  # checked whole just above
     try:
-        paths, rendered = update_figures(ds, args.out)
+        with guarded_dir(args.out, f"--out {args.out}"):
+            paths, rendered = update_figures(ds, args.out)
     except PlaneError as exc:
         raise UsageError(f"no figures for {args.store}: {exc}") from None
     if not rendered:

@@ -40,7 +40,7 @@ from solver.observables import MODEL_CODES, STATUS_CODES
 from solver.physics import Physics
 
 from ..errors import EhdError, PathError, StoreDamaged, StoreMismatch, UsageError
-from ..writes import writing
+from ..writes import write_error, writing
 from .config import physics_from_json, physics_json
 from .integrity import DIGEST_KEY, Damage, load_checked, metadata_digest
 from .journal import _journal_path, pending_journal, read_journal
@@ -149,7 +149,7 @@ def _write_new(ds, path: Path) -> None:
     shutil.rmtree(tmp, ignore_errors=True)
     ds = ds.copy()
     ds.attrs["grid"] = grid_copy(ds)
-    with writing(tmp, f"store {path}"):
+    with writing(tmp, "writing the store", path):
         with zarr_warnings():
             # one call is enough: nobody sees the temporary directory until the rename below
             ds.to_zarr(tmp, mode="w-", consolidated=True, encoding=_encoding(ds))
@@ -176,6 +176,20 @@ def _recover(path: Path) -> None:
     if path.exists():  # a kill during zarr's atomic write leaves its temporary file behind
         for partial in path.rglob("*.partial"):
             partial.unlink(missing_ok=True)
+
+
+def _reopen_truncated(f, path: Path, size: int):
+    """Close ``f`` (its buffer dropped), cut ``path`` to ``size`` bytes, return None (the journal
+    is opened again by the next record)."""
+    try:
+        f.close()
+    except OSError:
+        pass
+    try:
+        os.truncate(path, size)
+    except OSError:
+        pass
+    return None
 
 
 def _union(old: np.ndarray, new) -> np.ndarray:
@@ -262,14 +276,29 @@ class SweepStore:
         path = path if path is not None else sweep.store
         self = cls(path, sweep.cache_key(), flush_seconds, worker_key=sweep.worker_key(),
                    fixed=sweep.fixed)
+        new_store = not self.path.exists()
         self._acquire_lock()
         try:
-            self._prepare(sweep, add_sweep)
+            try:
+                self._prepare(sweep, add_sweep)
+            except BaseException:
+                if new_store and not self.path.exists():
+                    # nothing was made (a full disk, a mismatch): no lock file of ours is left
+                    # either (unlinked while we hold it: no other sweep can be waiting on it)
+                    _lock_path(self.path).unlink(missing_ok=True)
+                raise
             try:
                 yield self
-            finally:
-                # also on Ctrl-C or an error: everything finished so far is merged (and if this
-                # flush fails, the journal still holds it for the next run)
+            except BaseException:
+                # also on Ctrl-C or an error: everything finished so far is merged; if this
+                # flush fails too (a full disk), the journal still holds it for the next run,
+                # and the first failure is the one reported
+                try:
+                    self.flush()
+                except Exception:  # noqa: BLE001
+                    pass
+                raise
+            else:
                 self.flush()
         finally:
             self._close_journal()
@@ -283,9 +312,11 @@ class SweepStore:
                       Path("/"))
         if not parent.is_dir():
             raise PathError(f"{where}: {str(parent)!r} is not a directory")
+        lock = _lock_path(self.path)
+        new_lock = not lock.exists()
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            f = _lock_path(self.path).open("a+")
+            f = lock.open("a+")
         except OSError as exc:
             raise PathError(f"{where}: cannot write next to the store in {str(self.path.parent)!r} "
                             f"({exc.strerror}); choose a writable --store") from None
@@ -297,10 +328,16 @@ class SweepStore:
             f.close()
             raise StoreBusy(f"store {self.shown!r} is being written by {holder}; wait for it "
                             "to finish (only one sweep writes a store)") from None
-        f.seek(0)
-        f.truncate()
-        f.write(f"pid {os.getpid()}\n")
-        f.flush()
+        try:
+            f.seek(0)
+            f.truncate()
+            f.write(f"pid {os.getpid()}\n")
+            f.flush()
+        except OSError as exc:  # a full disk: no lock file of ours left behind
+            f.close()
+            if new_lock:
+                lock.unlink(missing_ok=True)
+            raise write_error(exc, "writing the store's lock", lock) from None
         self._lock = f
 
     def _release_lock(self) -> None:
@@ -412,7 +449,7 @@ class SweepStore:
         import zarr
 
         self.require_writable()
-        with writing(None, f"store {self.shown}"), zarr_warnings():
+        with writing(None, "writing the store", self.path), zarr_warnings():
             group = zarr.open_group(str(self.path), mode="r+", use_consolidated=False)
             for name in damage.coords:
                 group[name][:] = self.ds[name].values
@@ -480,7 +517,7 @@ class SweepStore:
         import zarr
 
         self.require_writable()
-        with writing(None, f"store {self.shown}"), zarr_warnings():
+        with writing(None, "writing the store", self.path), zarr_warnings():
             group = zarr.open_group(str(self.path), mode="r+", use_consolidated=False)
             group.attrs.update(attrs)
             seal(self.path)
@@ -534,11 +571,23 @@ class SweepStore:
         import time
 
         physics = self.scene(cell)
-        if self._journal is None:
-            self.require_writable()
-            self._journal = _journal_path(self.path).open("a")
-        self._journal.write(json.dumps({"physics": physics, "key": self.key, **rec}) + "\n")
-        self._journal.flush()  # in the OS page cache: survives the process being killed
+        jpath = _journal_path(self.path)
+        line = json.dumps({"physics": physics, "key": self.key, **rec}) + "\n"
+        try:
+            if self._journal is None:
+                self.require_writable()
+                self._journal = jpath.open("a")
+            start = self._journal.tell()
+            try:
+                self._journal.write(line)
+                self._journal.flush()  # in the OS page cache: survives the process being killed
+            except OSError:
+                # a full disk: cut the journal back to its last whole record (a part of a line
+                # would be skipped anyway, but nothing partial is left behind)
+                self._journal = _reopen_truncated(self._journal, jpath, start)
+                raise
+        except OSError as exc:
+            raise write_error(exc, "writing the store's journal", jpath) from None
         self._apply(cell, rec)
         now = time.monotonic() if now is None else now
         if now - self._last_flush >= self.flush_seconds:
@@ -609,7 +658,8 @@ class SweepStore:
                       for k, a in enumerate(axes[:-1])}
             region[axes[-1]] = slice(None)
             block = self.ds.isel({a: r for a, r in region.items()}).drop_vars(list(axes))
-            with zarr_warnings():
+            # zarr writes each chunk through a temporary file it removes on failure
+            with writing(None, "writing the store", self.path), zarr_warnings():
                 block.drop_vars("status").to_zarr(self.path, region=region, mode="r+",
                                                   consolidated=False)
                 block[["status"]].to_zarr(self.path, region=region, mode="r+",
