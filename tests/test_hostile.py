@@ -417,7 +417,6 @@ def test_an_unreachable_scheduler_gives_up_with_one_line(ws, capsys):
     code, _, err = ehd(capsys, "sweep", "more.toml", "--scheduler",
                        f"tcp://127.0.0.1:{_closed_port()}", "--connect-timeout", "1")
     assert code == EXIT_USAGE and time.monotonic() - t < 15
-    assert "waiting for the dask scheduler at tcp://127.0.0.1" in err
     assert "cannot reach" in err.splitlines()[-1] and "Traceback" not in err
 
 
@@ -997,3 +996,104 @@ def test_sigterm_is_exit_143_one_line_and_keeps_every_finished_scene(tmp_path, c
     finally:
         os.chdir(REPO)
     assert summary.computed == len(FAULT_ST) * len(EPS) - kept and summary.done == summary.scenes
+
+
+# ---- the scheduler: every wait bounded, only a dask scheduler accepted, nothing made before ----
+@pytest.fixture
+def silent_peer():
+    """A TCP server on 127.0.0.1 that accepts and never speaks."""
+    import socket
+    import threading
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(8)
+    held = []
+    stop = threading.Event()
+
+    def accept():
+        server.settimeout(0.2)
+        while not stop.is_set():
+            try:
+                held.append(server.accept()[0])
+            except OSError:
+                continue
+
+    thread = threading.Thread(target=accept, daemon=True)
+    thread.start()
+    yield f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    stop.set()
+    thread.join(2)
+    for conn in held:
+        conn.close()
+    server.close()
+
+
+@pytest.fixture
+def http_peer():
+    """An HTTP server on 127.0.0.1 (answers requests with HTML, never speaks first)."""
+    import http.server
+    import threading
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0),
+                                             http.server.SimpleHTTPRequestHandler)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    yield f"tcp://127.0.0.1:{server.server_address[1]}"
+    server.shutdown()
+    server.server_close()
+
+
+@pytest.mark.parametrize("peer", ["silent_peer", "http_peer"])
+def test_a_peer_that_is_no_scheduler_is_refused_within_the_timeout(ws, capsys, request, peer):
+    address = request.getfixturevalue(peer)
+    (ws / "m.toml").write_text(sweep_text([7.0], EPS, store="m.zarr"))
+    t = time.monotonic()
+    code, _, err = ehd(capsys, "sweep", "m.toml", "--scheduler", address,
+                       "--connect-timeout", "1")
+    assert code == EXIT_USAGE and time.monotonic() - t < 10, err  # 1 s, and slack for a loaded CI
+    assert "dask" in err and "Traceback" not in err
+    assert [line for line in err.splitlines() if "error" in line][0].count("error") >= 1
+    assert not any(p.name.startswith("m.zarr") for p in ws.iterdir())  # no store, no lock
+
+
+def test_an_unreachable_scheduler_leaves_no_store_and_no_lock(ws, capsys):
+    (ws / "m.toml").write_text(sweep_text([7.0], EPS, store="m.zarr"))
+    code, _, err = ehd(capsys, "sweep", "m.toml", "--scheduler",
+                       f"tcp://127.0.0.1:{_closed_port()}", "--connect-timeout", "1")
+    assert code == EXIT_USAGE and "cannot reach" in err
+    assert not any(p.name.startswith("m.zarr") for p in ws.iterdir())
+
+
+def test_a_scheduler_without_workers_is_reported_after_the_wait(ws, capsys):
+    from distributed import LocalCluster
+
+    (ws / "m.toml").write_text(sweep_text([7.0], EPS, store="m.zarr"))
+    with LocalCluster(n_workers=0, processes=False, protocol="tcp://", host="127.0.0.1",
+                      dashboard_address=None) as cluster:
+        t = time.monotonic()
+        code, _, err = ehd(capsys, "sweep", "m.toml", "--scheduler", cluster.scheduler_address,
+                           "--connect-timeout", "5", "--wait-workers", "1")
+    assert code == EXIT_USAGE and time.monotonic() - t < 20, err
+    assert "no workers" in err and CALLS == []
+
+
+@pytest.mark.parametrize("argv, keyword", [
+    (["--scheduler", "tcp://127.0.0.1"], "no port"),
+    (["--scheduler", "tcp://127.0.0.1:99999"], "65535"),
+    (["--scheduler", "nonsense"], "not a scheduler address"),
+    (["--scheduler", "tcp://127.0.0.1:1", "--connect-timeout", "nan"], "finite"),
+    (["--scheduler", "tcp://127.0.0.1:1", "--connect-timeout", "-1"], "> 0"),
+    (["--scheduler", "tcp://127.0.0.1:1", "--connect-timeout", "0"], "> 0"),
+    (["--scheduler", "tcp://127.0.0.1:1", "--connect-timeout", "inf"], "finite"),
+    (["--scheduler", "tcp://127.0.0.1:1", "--wait-workers", "nan"], "finite"),
+    (["--scheduler", "tcp://127.0.0.1:1", "--wait-workers", "-5"], ">= 0"),
+], ids=["no-port", "port-too-big", "not-an-address", "timeout-nan", "timeout-negative",
+        "timeout-zero", "timeout-inf", "wait-nan", "wait-negative"])
+def test_scheduler_options_are_checked_before_any_work(ws, capsys, argv, keyword):
+    (ws / "m.toml").write_text(sweep_text([7.0], EPS, store="m.zarr"))
+    t = time.monotonic()
+    code, _, err = ehd(capsys, "sweep", "m.toml", *argv)
+    assert code == EXIT_USAGE and keyword in err and "Traceback" not in err, err
+    assert time.monotonic() - t < 5  # nothing waited for
+    assert not any(p.name.startswith("m.zarr") for p in ws.iterdir())

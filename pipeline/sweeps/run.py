@@ -17,7 +17,7 @@ from ..errors import EXIT_OK, EXIT_SWEEP_FAILED
 from .config import format_physics
 from .layout import MODEL_CODES, STATUS_CODES
 from .progress import Progress
-from .runners import check_runner, open_runner
+from .runners import check_runner, open_runner, probe_scheduler
 from .store import SweepStore
 from .tasks import MasterSolve, solve_scene, warm
 
@@ -143,7 +143,13 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         warm_up = solve is solve_scene
     overrides = dict(sweep.overrides)
     # the executor's settings and a scheduler file are checked before the store is touched
-    address = check_runner(runner, workers, address, scheduler_file)
+    address = check_runner(runner, workers, address, scheduler_file, connect_seconds,
+                           wait_workers)
+    if address is not None:  # the scheduler answers before any store or lock is made
+        target = address + (f" (from {scheduler_file})" if scheduler_file else "")
+        if progress is not None:
+            print(f"checking the dask scheduler at {target}...", file=progress, flush=True)
+        probe_scheduler(address, connect_seconds, target)
     runner_kw = {} if wait_workers is None else {"wait_workers": wait_workers}
     if connect_seconds is not None:
         runner_kw["connect_seconds"] = connect_seconds
