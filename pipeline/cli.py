@@ -354,7 +354,7 @@ def _main(argv=None) -> int:
 
     stdout_closed = _closed_stdout()
     _handle_sigterm()
-    args = _parser().parse_args(argv)
+    args = _parser().parse_args(_negative_values(sys.argv[1:] if argv is None else list(argv)))
     name = f"ehd {args.command}"
     if stdout_closed:
         _say(f"{name}: error: stdout is closed (>&-): the results would be lost; run with stdout "
@@ -430,6 +430,29 @@ class _Stdout:
 
     def __getattr__(self, name):
         return getattr(self._stream, name)
+
+
+def _negative_values(argv: list) -> list:
+    """``--Pi -inf`` as ``--Pi=-inf``: argparse takes a value that starts with '-' and is not
+    a plain negative number (``-inf``, ``-1e3``, ``-nan``) for an unknown option ("expected one
+    argument"); joined to its flag, the value reaches the check that names it."""
+    out = []
+    for token in argv:
+        prev = out[-1] if out else ""
+        if (token.startswith("-") and prev.startswith("--") and "=" not in prev
+                and prev != "--" and _is_number(token)):
+            out[-1] = f"{prev}={token}"
+        else:
+            out.append(token)
+    return out
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
 
 
 def _stdout_ok() -> bool:

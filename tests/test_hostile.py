@@ -1097,3 +1097,126 @@ def test_scheduler_options_are_checked_before_any_work(ws, capsys, argv, keyword
     assert code == EXIT_USAGE and keyword in err and "Traceback" not in err, err
     assert time.monotonic() - t < 5  # nothing waited for
     assert not any(p.name.startswith("m.zarr") for p in ws.iterdir())
+
+
+# ---- scenes and sweep files: text is read, never evaluated; absurd values refused -------------
+def _scene_with(ws, name, **fields):
+    text = EXAMPLE.read_text()
+    for key, value in fields.items():
+        lines = [line for line in text.splitlines() if not line.startswith(f"{key} =")]
+        text = "\n".join(lines)
+        text = text.replace("[body1]", f"[body1]\n{key} = {value}") if key == "radius" \
+            else f"{key} = {value}\n{text}"
+    (ws / name).write_text(text)
+    return name
+
+
+SCENE_CASES = [
+    ("v0-import", dict(v0="'__import__(\"os\")'"), "cannot read"),
+    ("v0-semicolon", dict(v0="'1 m/s; import os'"), "cannot read"),
+    ("v0-lambda", dict(v0="'lambda: 1'"), "cannot read"),
+    ("v0-units-only", dict(v0="'m/s'"), "cannot read"),
+    ("v0-unknown-unit", dict(v0="'1 furlong__x/s'"), "cannot read"),
+    ("radius-subnormal", dict(radius="1e-320"), "subnormal"),
+    ("radius-subnormal-text", dict(radius="'1e-320 m'"), "subnormal"),
+    ("radius-absurd", dict(radius="1e-40"), "valid range"),
+    ("v0-absurd", dict(v0="'1e40 m/s'"), "valid range"),
+]
+
+
+@pytest.mark.parametrize("fields, keyword", [c[1:] for c in SCENE_CASES],
+                         ids=[c[0] for c in SCENE_CASES])
+def test_scene_values_are_read_never_evaluated(ws, capsys, fields, keyword):
+    name = _scene_with(ws, "bad.toml", **fields)
+    code, _, err = ehd(capsys, "scene", name)
+    assert code == EXIT_USAGE and keyword in err and "Traceback" not in err, err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_a_scene_file_with_a_byte_order_mark_is_read(ws):
+    from pipeline.scenes.commands import load_scene
+
+    (ws / "bom.toml").write_bytes(b"\xef\xbb\xbf" + EXAMPLE.read_bytes())
+    assert load_scene("bom.toml", {}, ()) == load_scene(EXAMPLE, {}, ())
+
+
+def test_a_sweep_file_with_a_byte_order_mark_is_read(ws, capsys):
+    (ws / "bom.toml").write_bytes(b"\xef\xbb\xbf" + (ws / "s.toml").read_bytes())
+    code, out, err = ehd(capsys, "sweep", "bom.toml", "--executor", "serial")
+    assert code == 0 and "cached 8" in out, err
+
+
+SWEEP_CASES = [
+    ("range-one-value-two-ends", "{start = 1.0, stop = 5.0, num = 1}", "one value but two ends"),
+]
+
+
+@pytest.mark.parametrize("grid, keyword", [c[1:] for c in SWEEP_CASES],
+                         ids=[c[0] for c in SWEEP_CASES])
+def test_sweep_grids_are_honest(ws, capsys, grid, keyword):
+    (ws / "g.toml").write_text(sweep_text(grid, EPS, store="g.zarr"))
+    code, _, err = ehd(capsys, "sweep", "g.toml", "--executor", "serial")
+    assert code == EXIT_USAGE and keyword in err, err
+    assert not (ws / "g.zarr").exists()
+
+
+def test_a_range_of_one_value_with_equal_ends_is_that_value():
+    sweep = load_sweep_text(sweep_text("{start = 5.0, stop = 5.0, num = 1}", EPS))
+    assert sweep.axes["St"] == (5.0,)
+
+
+def load_sweep_text(text):
+    from pipeline.sweeps.config import parse_sweep
+
+    return parse_sweep(text)
+
+
+RUN_CASES = [
+    ("Pi-minus-inf", ["--Pi", "-inf"], "got -inf"),
+    ("St-minus-1e3", ["--St", "-1e3"], "valid range"),
+    ("table-and-barus", ["--viscosity", "barus", "--beta", "1", "--viscosity-table", "0:1,1:2"],
+     "not both"),
+    ("table-and-constant", ["--viscosity", "constant", "--viscosity-table", "0:1,1:2"],
+     "not both"),
+    ("table-overflows", ["--viscosity-table", "0:1,1:1e308"], "overflows"),
+]
+
+
+@pytest.mark.parametrize("extra, keyword", [c[1:] for c in RUN_CASES],
+                         ids=[c[0] for c in RUN_CASES])
+def test_run_refuses_conflicts_and_names_the_value(ws, capsys, extra, keyword):
+    args = ["run", "--St", "5", "--eps", "0.01"]
+    if extra[0] == "--St":
+        args = ["run", "--eps", "0.01"]
+    code, _, err = ehd(capsys, *args, *extra)
+    assert code == EXIT_USAGE and keyword in err and "Traceback" not in err, err
+    assert "expected one argument" not in err
+
+
+@pytest.mark.parametrize("value", ["5", True, b"5", None, [5]])
+def test_physics_takes_numbers_only(value):
+    from solver.physics import Physics
+
+    with pytest.raises(ValueError, match="must be a number"):
+        Physics(St=value, eps=1e-2)
+
+
+# ---- a grid too large: refused before any allocation, with its size --------------------------
+def test_a_grid_too_large_for_memory_is_refused_before_any_allocation(ws, capsys, monkeypatch):
+    monkeypatch.setattr(run_module, "available_memory", lambda: 2**30)  # a 1 GiB machine
+    eps = json.dumps([float(v) for v in np.geomspace(1e-8, 1e-2, 1000)])
+    (ws / "big.toml").write_text(sweep_text("{start = 1.0, stop = 50.0, num = 10000}", [])
+                                 .replace("eps = []", f"eps = {eps}").replace(
+                                     "results/test.zarr", "big.zarr"))
+    t = time.monotonic()
+    code, _, err = ehd(capsys, "sweep", "big.toml", "--executor", "serial")
+    assert code == EXIT_USAGE and "10000000 scenes" in err and "GiB" in err, err
+    assert time.monotonic() - t < 10 and not (ws / "big.zarr").exists() and CALLS == []
+
+
+def test_planning_a_large_grid_is_announced(capsys):
+    import io
+
+    stream = io.StringIO()
+    run_module.check_memory(run_module.PLANNING_NOTE, stream)
+    assert f"planning {run_module.PLANNING_NOTE} scenes" in stream.getvalue()

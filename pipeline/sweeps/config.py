@@ -171,7 +171,7 @@ def load_sweep(path) -> Sweep:
     """
     path = Path(path)
     try:
-        text = path.read_bytes().decode("utf-8")
+        text = path.read_bytes().decode("utf-8-sig")  # a UTF-8 byte-order mark is no TOML
     except UnicodeDecodeError as exc:
         raise ConfigError(f"sweep file {str(path)!r} is not a text file (byte {exc.start} is not "
                           "UTF-8): give a TOML sweep file such as sweeps/quick.toml") from None
@@ -306,6 +306,10 @@ def _axis(where: str, name: str, spec) -> tuple:
         start, stop = (_number(where, f"{name}.{k}", spec[k]) for k in ("start", "stop"))
         check(f"{name}.start", start)
         check(f"{name}.stop", stop)
+        if spec["num"] == 1 and start != stop:
+            raise ConfigError(f"{where}: grid.{name} = {{start = {start:g}, stop = {stop:g}, num = "
+                              f"1}} is one value but two ends: give num >= 2, or the one value as "
+                              f"a list ({name} = [{start:g}])")
         values = np.geomspace(start, stop, spec["num"])
     else:
         values = np.array([_number(where, name, v) for v in spec])

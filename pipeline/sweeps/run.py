@@ -7,6 +7,7 @@ each to the store's single writer and updates the progress bar.
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 from dataclasses import dataclass, field
@@ -138,6 +139,7 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         Counts; ``summary.exit_code`` is ``EXIT_FAILED`` (3) when failed scenes remain.
     """
     t0 = time.monotonic()
+    check_memory(sweep.n_scenes, progress)  # before any allocation
     kwargs = {} if flush_seconds is None else {"flush_seconds": flush_seconds}
     if warm_up is None:
         warm_up = solve is solve_scene
@@ -201,6 +203,57 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         _count(summary, st, cells)
     summary.wall_s = time.monotonic() - t0
     return summary
+
+
+# bytes one scene takes while a sweep is planned and run: its cell in the in-memory store (every
+# variable of the layout) plus the work list (the cell's index tuple, its job with the physics
+# dict; measured ~0.5 kB with sys.getsizeof on CPython 3.11)
+PLAN_BYTES_PER_SCENE = 500
+MEMORY_SHARE = 0.5  # of the memory available: a sweep planning more is refused
+PLANNING_NOTE = 100_000  # scenes above which planning is announced (it takes seconds)
+
+
+def plan_bytes(n_scenes: int) -> int:
+    """Memory a sweep of ``n_scenes`` needs to be planned: the layout's bytes per cell (dtype
+    sizes; strings as a pointer) plus ``PLAN_BYTES_PER_SCENE``."""
+    from .layout import FLAGS, VARIABLES
+
+    per_cell = sum(8 if dtype == "str" else (4 if name in FLAGS else int(dtype[1:]))
+                   for name, (dtype, _, _) in VARIABLES.items())
+    return int(n_scenes) * (per_cell + PLAN_BYTES_PER_SCENE)
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available to a new allocation (MemAvailable of /proc/meminfo), or None
+    where it cannot be read."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def check_memory(n_scenes: int, progress=None) -> None:
+    """UsageError, before anything is allocated, when a grid of ``n_scenes`` would take more
+    than ``MEMORY_SHARE`` of the available memory to plan; a large grid is announced."""
+    from ..errors import UsageError
+    from ..errors import _bytes as size
+
+    need = plan_bytes(n_scenes)
+    have = available_memory()
+    if have is not None and need > MEMORY_SHARE * have:
+        raise UsageError(f"the sweep has {n_scenes} scenes; planning them needs about "
+                         f"{size(need)} of memory and {size(have)} is available: split it into "
+                         "smaller sweeps (fewer values per axis), or run it on a larger machine")
+    if progress is not None and n_scenes >= PLANNING_NOTE:
+        print(f"planning {n_scenes} scenes (about {size(need)} of memory)...", file=progress,
+              flush=True)
 
 
 def _master_solve(sweep, progress) -> MasterSolve:
