@@ -147,6 +147,13 @@ def cmd_run(args) -> int:
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     d = result.to_dict()
+    from .sweeps.tasks import nonfinite_reason
+
+    failed = not result.ok
+    reason = "" if failed else nonfinite_reason(lambda n: getattr(result, n, None))
+    if reason:  # an overflow is no result: a failed scene with its reason
+        d.update(status="error", message=reason)
+        failed = True
     if args.json:
         print(json.dumps(d))
     else:
@@ -155,7 +162,7 @@ def cmd_run(args) -> int:
         _save_dataset(result.to_xarray(), args.save)
         if not args.json:
             print(f"saved {args.save}")
-    if args.plot and result.ok:
+    if args.plot and not failed:
         from .plots.scene_plots import plot_scene
         from .writes import guarded_dir
 
@@ -163,7 +170,7 @@ def cmd_run(args) -> int:
             paths = plot_scene(result, args.plot)
         if not args.json:
             print(f"figures: {', '.join(str(p) for p in paths if p.suffix == '.png')}")
-    return 0 if result.ok else EXIT_SCENE_FAILED
+    return EXIT_SCENE_FAILED if failed else 0
 
 
 def _save_dataset(ds, path: str) -> None:

@@ -1220,3 +1220,27 @@ def test_planning_a_large_grid_is_announced(capsys):
     stream = io.StringIO()
     run_module.check_memory(run_module.PLANNING_NOTE, stream)
     assert f"planning {run_module.PLANNING_NOTE} scenes" in stream.getvalue()
+
+
+# ---- a non-finite result is a failed scene with its reason ---------------------------------------
+def test_a_non_finite_result_is_a_failure_with_its_reason(ws, capsys, monkeypatch):
+    import math as m
+
+    import solver
+
+    real = solver.collide
+
+    def overflowing(*a, **k):
+        c = real(*a, **k)
+        c.viscosity_ratio_max_approach = m.inf  # what a table reaching 1e308 gave, status ok
+        return c
+
+    monkeypatch.setattr(solver, "collide", overflowing)
+    code, out, err = ehd(capsys, "run", "--St", "5", "--eps", "0.01", "--accuracy", "fast",
+                         "--json")
+    d = json.loads(out)
+    assert code == 1 and d["status"] == "error" and "non-finite" in d["message"], err
+    from pipeline.sweeps.tasks import solve_scene
+
+    rec = solve_scene({"St": 5.0, "eps": 0.01}, "fast", {})
+    assert rec["status"] == "error" and "viscosity_ratio_max_approach = inf" in rec["message"]
