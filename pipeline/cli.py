@@ -287,13 +287,17 @@ def _on_sigterm(signum, frame):
     raise Terminated()
 
 
-def _handle_sigterm() -> None:
-    """SIGTERM unwinds like Ctrl-C (the journal keeps every finished scene; exit 143)."""
+def _handle_sigterm():
+    """SIGTERM unwinds like Ctrl-C (the journal keeps every finished scene; exit 143). Returns
+    a function that puts the previous handler back (``main`` called from Python code, e.g. a
+    test, leaves the process as it found it)."""
     import signal
     import threading
 
-    if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGTERM, _on_sigterm)
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+    previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    return lambda: signal.signal(signal.SIGTERM, previous)
 
 
 def _closed_stdout() -> bool:
@@ -343,6 +347,7 @@ def _to_devnull() -> None:
 def main(argv=None) -> int:
     """Run one ``ehd`` command: the error boundary of them all (see the module docstring).
     Never raises but ``SystemExit`` of argparse (``--help``, a bad flag: exit 2)."""
+    restore = _handle_sigterm()
     try:
         return _main(argv)
     except SystemExit:
@@ -351,16 +356,24 @@ def main(argv=None) -> int:
         if _caused_by_interrupt(exc) is not None:
             return EXIT_TERMINATED if isinstance(_caused_by_interrupt(exc), Terminated) \
                 else EXIT_INTERRUPTED
-        _say(f"ehd: internal error ({type(exc).__name__}: {exc}): this is a bug in "
-             f"ehd-collision; please report it at {BUG_REPORT}")
+        try:
+            what = f"{type(exc).__name__}: {exc}"
+        except Exception:  # noqa: BLE001 - an exception whose text fails too
+            what = type(exc).__name__
+        _say(f"ehd: internal error ({what}): this is a bug in ehd-collision; please report it "
+             f"at {BUG_REPORT}")
         return EXIT_INTERNAL
+    finally:
+        try:
+            restore()
+        except Exception:  # noqa: BLE001 - the boundary never raises
+            pass
 
 
 def _main(argv=None) -> int:
     import errno
 
     stdout_closed = _closed_stdout()
-    _handle_sigterm()
     args = _parser().parse_args(_negative_values(sys.argv[1:] if argv is None else list(argv)))
     name = f"ehd {args.command}"
     if stdout_closed:

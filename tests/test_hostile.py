@@ -1244,3 +1244,9 @@ def test_a_non_finite_result_is_a_failure_with_its_reason(ws, capsys, monkeypatc
 
     rec = solve_scene({"St": 5.0, "eps": 0.01}, "fast", {})
     assert rec["status"] == "error" and "viscosity_ratio_max_approach = inf" in rec["message"]
+
+
+def test_main_leaves_the_sigterm_handler_as_it_found_it(capsys):
+    before = signal.getsignal(signal.SIGTERM)
+    assert ehd(capsys, "info")[0] == 0
+    assert signal.getsignal(signal.SIGTERM) is before

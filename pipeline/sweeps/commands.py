@@ -5,7 +5,9 @@ another solver version/numerics/sweep file, busy store, unreachable scheduler), 
 stderr, nothing computed; 3 the sweep finished but failed scenes remain in it (stored with status
 and message; rerun them with ``--retry-failed``); 4 the scheduler went away mid-sweep (finished
 scenes kept); 5 ``status``/``figures``: the store is damaged (the cells are listed; ``ehd sweep``
-recomputes them); 130 interrupted (everything finished so far is kept).
+recomputes them; ``sweep``: metadata it cannot repair); 74 a write failed (a full disk: the path
+and the free space, nothing partial left; stdout closed or full); 130 interrupted, 143 terminated
+(SIGTERM; everything finished so far is kept).
 """
 
 from __future__ import annotations
@@ -32,7 +34,8 @@ def register(sub) -> None:
         "sweep", help="compute a sweep (grid over Physics fields) into its zarr store (cached, resumable)",
         description="Compute every scene of a sweep file that its store lacks. Exit codes: 0 all "
                     "scenes ok, 2 bad input, 3 finished with failed scenes, 4 scheduler lost "
-                    "mid-sweep, 130 interrupted.")
+                    "mid-sweep, 5 damaged metadata the sweep cannot repair, 74 a write failed "
+                    "(disk full), 130 interrupted, 143 terminated (SIGTERM).")
     p.add_argument("sweep_file", metavar="SWEEP_FILE", help="sweep definition, e.g. sweeps/paper.toml")
     p.add_argument("--store", metavar="PATH", default=None,
                    help="zarr store to use instead of the one named in the sweep file")
