@@ -1208,10 +1208,12 @@ def test_a_grid_too_large_for_memory_is_refused_before_any_allocation(ws, capsys
     (ws / "big.toml").write_text(sweep_text("{start = 1.0, stop = 50.0, num = 10000}", [])
                                  .replace("eps = []", f"eps = {eps}").replace(
                                      "results/test.zarr", "big.zarr"))
-    t = time.monotonic()
-    code, _, err = ehd(capsys, "sweep", "big.toml", "--executor", "serial")
-    assert code == EXIT_USAGE and "10000000 scenes" in err and "GiB" in err, err
-    assert time.monotonic() - t < 10 and not (ws / "big.zarr").exists() and CALLS == []
+    for confirm in ([], ["--allow-large"]):  # too large to run unconfirmed; too large for 1 GiB
+        t = time.monotonic()
+        code, _, err = ehd(capsys, "sweep", "big.toml", "--executor", "serial", *confirm)
+        assert code == EXIT_USAGE and "10000000 scenes" in err and "GiB" in err, err
+        assert ("--allow-large" in err) == (not confirm)
+        assert time.monotonic() - t < 10 and not (ws / "big.zarr").exists() and CALLS == []
 
 
 def test_planning_a_large_grid_is_announced(capsys):

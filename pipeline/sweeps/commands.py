@@ -57,6 +57,9 @@ def register(sub) -> None:
     p.add_argument("--connect-timeout", metavar="SECONDS", type=float, default=None,
                    help="with --scheduler/--scheduler-file: give up (exit 2) when the scheduler "
                         "does not answer within SECONDS (default 30)")
+    p.add_argument("--allow-large", action="store_true",
+                   help="run a grid of more than 10^6 scenes (refused otherwise, before anything "
+                        "is allocated)")
     p.add_argument("--add-sweep", action="store_true",
                    help="write this sweep file into a store that another sweep file wrote "
                         "(recorded in the store's 'sweeps' attr)")
@@ -86,7 +89,7 @@ def cmd_sweep(args) -> int:
                         workers=args.workers, address=args.scheduler,
                         scheduler_file=args.scheduler_file, retry_failed=args.retry_failed,
                         wait_workers=args.wait_workers, add_sweep=args.add_sweep,
-                        connect_seconds=args.connect_timeout)
+                        connect_seconds=args.connect_timeout, allow_large=args.allow_large)
     print(summary.text())
     return summary.exit_code
 
@@ -178,7 +181,8 @@ def cmd_status(args) -> int:
         print(f"  ... {len(cells) - 20} more failed scenes")
     if damage:
         print(f"ehd status: error: store {args.store} is damaged: {damage_text}; run its sweep "
-              "again (ehd sweep SWEEP_FILE) to compute them again", file=sys.stderr)
+              "again (ehd sweep SWEEP_FILE) to repair it (damaged cells are computed again)",
+              file=sys.stderr)
         return EXIT_DAMAGED
     return 0
 
@@ -218,7 +222,7 @@ def cmd_figures(args) -> int:
         raise StoreDamaged(f"store {args.store} is damaged: "
                            f"{damage.describe(checked, checked.attrs.get('fixed_physics') or {})}; no "
                            "figures drawn from it: run its sweep again (ehd sweep SWEEP_FILE) to "
-                           "compute those cells again")
+                           "repair it (damaged cells are computed again)")
     if not (checked["status"].values == STATUS_CODES["ok"]).any():
         raise UsageError(f"store {args.store} holds no finished scene yet: nothing to draw; run "
                          "its sweep first (ehd sweep SWEEP_FILE)")

@@ -82,17 +82,13 @@ class Damage:
 
     def describe(self, ds, fixed: dict | None = None, limit: int = 3) -> str:
         """One line: damaged coordinates; how many cells, which variables, the first few
-        cells' physics."""
+        cells' coordinates (the fixed physics, the same for every cell, is not repeated)."""
         parts = [f"coordinate {name} ({how}; its copy in the store's metadata is used)"
                  for name, how in sorted(self.coords.items())]
         cells = self.cells
         if cells:
-            shown = []
-            fixed = fixed if isinstance(fixed, dict) else {}
-            for cell in cells[:limit]:
-                physics = {**fixed,
-                           **{d: float(ds[d].values[i]) for d, i in zip(self.dims, cell)}}
-                shown.append(format_physics(physics))
+            shown = [format_physics({d: float(ds[d].values[i]) for d, i in zip(self.dims, cell)})
+                     for cell in cells[:limit]]
             more = f" and {len(cells) - limit} more" if len(cells) > limit else ""
             parts.append(f"{len(cells)} damaged cell(s) ({', '.join(self.variables())}): "
                          f"{'; '.join(shown)}{more}")

@@ -100,7 +100,7 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
               retry_failed: bool = False, solve=solve_scene, warm_up: bool | None = None,
               progress=sys.stderr, flush_seconds: float | None = None,
               wait_workers: float | None = None, add_sweep: bool = False,
-              connect_seconds: float | None = None) -> Summary:
+              connect_seconds: float | None = None, allow_large: bool = False) -> Summary:
     """Compute every scene of ``sweep`` that its store lacks.
 
     Parameters
@@ -132,6 +132,9 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         Allow another sweep file to write into an existing store (recorded in its ``sweeps``).
     connect_seconds : float, optional
         With a scheduler: seconds to try to reach it (default ``runners.CONNECT_SECONDS``).
+    allow_large : bool
+        Run a grid of more than ``LARGE_SCENES`` scenes (refused otherwise, before anything is
+        allocated: a typo in ``num`` should not start weeks of work).
 
     Returns
     -------
@@ -139,7 +142,7 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         Counts; ``summary.exit_code`` is ``EXIT_FAILED`` (3) when failed scenes remain.
     """
     t0 = time.monotonic()
-    check_memory(sweep.n_scenes, progress)  # before any allocation
+    check_memory(sweep.n_scenes, progress, allow_large)  # before any allocation
     kwargs = {} if flush_seconds is None else {"flush_seconds": flush_seconds}
     if warm_up is None:
         warm_up = solve is solve_scene
@@ -164,6 +167,9 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         if st.damage and progress is not None:
             print(f"store {st.shown} is damaged: {st.damage_text}; "
                   "those cells are computed again", file=progress, flush=True)
+        if progress is not None and sweep.n_scenes >= PLANNING_NOTE:
+            print(f"store {st.shown} ready; listing the scenes it lacks...", file=progress,
+                  flush=True)
         cells = st.cells(sweep)
         status = st.status_of(cells)
         rerun = (status == 0) | (retry_failed & (status >= 2))
@@ -211,6 +217,7 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
 PLAN_BYTES_PER_SCENE = 500
 MEMORY_SHARE = 0.5  # of the memory available: a sweep planning more is refused
 PLANNING_NOTE = 100_000  # scenes above which planning is announced (it takes seconds)
+LARGE_SCENES = 1_000_000  # scenes above which a sweep needs allow_large (--allow-large)
 
 
 def plan_bytes(n_scenes: int) -> int:
@@ -239,13 +246,19 @@ def available_memory() -> int | None:
         return None
 
 
-def check_memory(n_scenes: int, progress=None) -> None:
+def check_memory(n_scenes: int, progress=None, allow_large: bool = False) -> None:
     """UsageError, before anything is allocated, when a grid of ``n_scenes`` would take more
-    than ``MEMORY_SHARE`` of the available memory to plan; a large grid is announced."""
+    than ``MEMORY_SHARE`` of the available memory to plan, or has more than ``LARGE_SCENES``
+    scenes without ``allow_large`` (``--allow-large``); a large grid is announced."""
     from ..errors import UsageError
     from ..errors import _bytes as size
 
     need = plan_bytes(n_scenes)
+    if n_scenes > LARGE_SCENES and not allow_large:
+        raise UsageError(f"the sweep has {n_scenes} scenes (planning them takes about "
+                         f"{size(need)} of memory; at 0.1 s a scene, {n_scenes * 0.1 / 86400:.0f} "
+                         f"core-days): more than {LARGE_SCENES}, so it needs --allow-large to "
+                         "run; check the grid's num values")
     have = available_memory()
     if have is not None and need > MEMORY_SHARE * have:
         raise UsageError(f"the sweep has {n_scenes} scenes; planning them needs about "

@@ -114,7 +114,7 @@ def open_results(path, check: bool = True, **open_kwargs):
         if damage:
             raise StoreDamaged(f"store {str(path)!r} is damaged: "
                                f"{damage.describe(checked, checked.attrs.get('fixed_physics'))}; "
-                               "run its sweep again (ehd sweep SWEEP_FILE) to compute them again")
+                               "run its sweep again (ehd sweep SWEEP_FILE) to repair it")
     else:
         read_root(path)
     with zarr_warnings():
