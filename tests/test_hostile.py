@@ -1069,8 +1069,9 @@ def test_a_scheduler_without_workers_is_reported_after_the_wait(ws, capsys):
     from distributed import LocalCluster
 
     (ws / "m.toml").write_text(sweep_text([7.0], EPS, store="m.zarr"))
+    # its HTTP server on a free local port (8787 may be taken by another cluster)
     with LocalCluster(n_workers=0, processes=False, protocol="tcp://", host="127.0.0.1",
-                      dashboard_address=None) as cluster:
+                      dashboard_address="127.0.0.1:0") as cluster:
         t = time.monotonic()
         code, _, err = ehd(capsys, "sweep", "m.toml", "--scheduler", cluster.scheduler_address,
                            "--connect-timeout", "5", "--wait-workers", "1")
