@@ -1243,6 +1243,9 @@ def test_a_non_finite_result_is_a_failure_with_its_reason(ws, capsys, monkeypatc
                          "--json")
     d = json.loads(out)
     assert code == 1 and d["status"] == "error" and "non-finite" in d["message"], err
+    code, out, err = ehd(capsys, "scene", EXAMPLE, "--accuracy", "fast", "--json")
+    d = json.loads(out)
+    assert code == 1 and d["status"] == "error" and "non-finite" in d["message"], err
     from pipeline.sweeps.tasks import solve_scene
 
     rec = solve_scene({"St": 5.0, "eps": 0.01}, "fast", {})

@@ -243,13 +243,20 @@ def cmd_scene(args) -> int:
               f"{type(exc).__name__}: {exc}", file=sys.stderr)
         return EXIT_SCENE_FAILED
     d = result.to_dict()
+    from ..sweeps.tasks import nonfinite_reason
+
+    failed = not result.collision.ok
+    reason = "" if failed else nonfinite_reason(lambda n: getattr(result.collision, n, None))
+    if reason:  # an overflow is no result: a failed scene with its reason
+        d.update(status="error", message=reason)
+        failed = True
     if args.json:
         print(json.dumps(d))
         for w in d["warnings"]:
             print(f"warning: [{w['check']}] {w['message']}", file=sys.stderr)
     else:
         print(format_report(d))
-    if args.plot and result.collision.ok:
+    if args.plot and not failed:
         from ..plots.scene_plots import plot_scene
 
         from ..writes import guarded_dir
@@ -258,7 +265,7 @@ def cmd_scene(args) -> int:
             paths = plot_scene(result.collision, args.plot, title=scene.title)
         if not args.json:
             print(f"figures: {', '.join(str(p) for p in paths if p.suffix == '.png')}")
-    if not result.collision.ok:
+    if failed:
         return EXIT_SCENE_FAILED
     if args.strict and d["warnings"]:
         print(f"ehd scene: {len(d['warnings'])} validity warning(s) (--strict)", file=sys.stderr)
