@@ -124,11 +124,11 @@ class MasterSolve:
 
     def __call__(self, physics: dict, accuracy: str, overrides: dict) -> dict:
         try:
-            from solver.model import rigid
             from solver.physics import Physics
+            from solver.shortcuts import plan
 
             scene = Physics.from_mapping(physics)
-            if rigid.exact_for(scene):
+            if plan(scene).classic:
                 c = self.curve.collide(scene)
             else:  # the master curve holds the classic film only: never answer with it
                 from solver import collide
