@@ -229,11 +229,12 @@ class SweepStore:
         Store directory.
     key : str
         Cache key of the sweep (sha256 hex).
-    flush_seconds : float
-        Interval of journal -> store merges.
+    flush_seconds : float, optional
+        Interval of journal -> store merges (default ``FLUSH_SECONDS``, read when the store is
+        made, so a test that sets the module's value is obeyed).
     """
 
-    def __init__(self, path: Path, key: str, flush_seconds: float = FLUSH_SECONDS,
+    def __init__(self, path: Path, key: str, flush_seconds: float | None = None,
                  worker_key: str | None = None, fixed: dict | None = None):
         if not str(path).strip():
             raise PathError("--store: empty path; give a store directory such as "
@@ -245,7 +246,7 @@ class SweepStore:
         self.key = key
         self.worker_key = worker_key  # what records of this installation carry (None: any)
         self.fixed = dict(fixed or {})
-        self.flush_seconds = flush_seconds
+        self.flush_seconds = FLUSH_SECONDS if flush_seconds is None else flush_seconds
         self._journal = None
         self._lock = None
         self._dirty: set[tuple] = set()  # leading indices (all axes but the last) to write
@@ -259,7 +260,7 @@ class SweepStore:
     # ---- opening --------------------------------------------------------------------------------
     @classmethod
     @contextmanager
-    def open(cls, sweep, path=None, flush_seconds: float = FLUSH_SECONDS,
+    def open(cls, sweep, path=None, flush_seconds: float | None = None,
              add_sweep: bool = False):
         """Lock, recover, check, extend and load the store of ``sweep``; flush and unlock on exit.
 
