@@ -30,7 +30,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from solver.physics import Physics
+from solver.physics import Physics, codes
 
 from ..errors import UsageError
 from .materials import FluidProps, Solid
@@ -40,11 +40,12 @@ __all__ = ["SceneError", "Body", "Scene", "STANDARD_ATMOSPHERE", "CAVITATION_CHO
            "VISCOSITY_CHOICES", "DENSITY_CHOICES"]
 
 STANDARD_ATMOSPHERE = 101325.0  # Pa: the default ambient pressure of a scene (a liquid at sea level)
-CAVITATION_CHOICES = ("auto", "off", "reynolds", "jfo")
+CAVITATION_CHOICES = Physics.group("cavitation").choices
 # a scene's viscosity and density laws: "auto" is the automatic switch (run.run_scene), the
-# others are forced; the laws are the solver's (solver.physics.VISCOSITY_LAWS, DENSITY_LAWS)
-VISCOSITY_CHOICES = ("auto", "constant", "barus", "roelands")
-DENSITY_CHOICES = ("auto", "constant", "dowson-higginson")
+# others are forced; the laws are the solver's (solver.physics.codes), but a table, which a
+# fluid does not ship
+VISCOSITY_CHOICES = ("auto", *(law for law in codes("viscosity_law") if law != "table"))
+DENSITY_CHOICES = ("auto", *codes("density_law"))
 
 
 class SceneError(UsageError, ValueError):
