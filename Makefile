@@ -63,6 +63,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_accuracy.py
 	$(PY) benchmarks/bench_cavitation.py
 	$(PY) benchmarks/bench_piezoviscous.py
+	$(PY) benchmarks/bench_versus.py
 
 bench-sweep: $(STAMP)
 	$(PY) benchmarks/bench_sweep.py
