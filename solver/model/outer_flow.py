@@ -199,7 +199,8 @@ def equal_spheres_resistance(gap: float, tol: float = TOL) -> float:
     def terms(n):
         p, q, m = n - 0.5, n + 1.5, 2.0 * n + 1.0
         k, kp = _k(n, alpha)
-        # everything times exp(-m alpha); Delta e^{-m a} = 2 e^{-m a}(sinh(m a) - m sinh a) ... / 2
+        # numerator and Delta both times 2 exp(-m alpha), Delta written as
+        # (sinh(m a) - m sinh a) - m sinh a (cosh a - 1) to keep its O(alpha^3) digits
         delta = 2.0 * _sinh_excess(m, alpha) - m * sh * cm1 * 2.0 * np.exp(-m * alpha)
         # 2 e^{-m a} cosh(s a) = e^{(s-m) a} + e^{-(s+m) a}, likewise sinh
         cq = np.exp((q - m) * alpha) + np.exp(-(q + m) * alpha)
