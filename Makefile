@@ -15,11 +15,11 @@ export MKL_NUM_THREADS := 1
 
 .PHONY: install test sweep quick figures bench bench-sweep bench-accuracy clean-cache clean
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml setup.py
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "error: $(PYTHON) not found; set PYTHON=/path/to/python3.11"; exit 1; }
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e .
+	$(PY) -m pip install --quiet -e .[test]
 	touch $(STAMP)
 
 install: $(STAMP)

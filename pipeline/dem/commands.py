@@ -115,19 +115,26 @@ def register(sub) -> None:
     p.add_argument("--out", default="dem_export", help="output folder (default dem_export)")
     p.add_argument("--density-ratio", type=float, default=0.0,
                    help="stores only: rho_f/rho_p for Legendre's St_L (default 0)")
-    p.add_argument("--n", type=int, default=13, help="scenes only: speeds from 0.1 to 10 v0")
-    p.add_argument("--accuracy", default="standard")
-    p.add_argument("--materials", action="append", default=None, metavar="FILE")
+    p.add_argument("--n", type=int, default=13,
+                   help="scenes only: speeds, log-spaced from 0.1 to 10 v0 (default 13)")
+    p.add_argument("--accuracy", default="standard",
+                   help="numerical preset of the solves: fast, standard, fine (default standard)")
+    p.add_argument("--materials", action="append", default=None, metavar="FILE",
+                   help="extra materials/fluids TOML file (repeatable; overrides shipped entries)")
     p.set_defaults(func=cmd_export_dem)
 
     p = sub.add_parser("restitution", help="e(St) of a scene along a path in impact speed or size")
-    p.add_argument("scene", help="scene file")
-    p.add_argument("--vary", choices=("v0", "radius"), default="v0")
+    p.add_argument("scene", help="scene file (TOML; see docs/scenes.md)")
+    p.add_argument("--vary", choices=("v0", "radius"), default="v0",
+                   help="what moves along the path: the impact speed v0 or both radii "
+                        "(default v0)")
     p.add_argument("--from", dest="start", type=float, default=0.1,
                    help="first factor on v0 or the radii (default 0.1)")
     p.add_argument("--to", dest="stop", type=float, default=10.0, help="last factor (default 10)")
     p.add_argument("--n", type=int, default=9, help="points, log-spaced (default 9)")
     p.add_argument("--out", default=None, help="also write the DEM export into this folder")
-    p.add_argument("--accuracy", default="standard")
-    p.add_argument("--materials", action="append", default=None, metavar="FILE")
+    p.add_argument("--accuracy", default="standard",
+                   help="numerical preset of the solves: fast, standard, fine (default standard)")
+    p.add_argument("--materials", action="append", default=None, metavar="FILE",
+                   help="extra materials/fluids TOML file (repeatable; overrides shipped entries)")
     p.set_defaults(func=cmd_restitution)

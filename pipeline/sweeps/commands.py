@@ -33,7 +33,8 @@ def register(sub) -> None:
         description="Compute every scene of a sweep file that its store lacks. Exit codes: 0 all "
                     "scenes ok, 2 bad input, 3 finished with failed scenes, 4 scheduler lost "
                     "mid-sweep, 130 interrupted.")
-    p.add_argument("sweep_file", metavar="SWEEP_FILE", help="sweep definition, e.g. sweeps/paper.toml")
+    p.add_argument("sweep_file", metavar="SWEEP_FILE", help="sweep definition, e.g. sweeps/paper.toml, or the name of a "
+                        "shipped one: paper, quick, cavitation, piezoviscous")
     p.add_argument("--store", metavar="PATH", default=None,
                    help="zarr store to use instead of the one named in the sweep file")
     where = p.add_mutually_exclusive_group()
@@ -75,10 +76,11 @@ def register(sub) -> None:
 
 
 def cmd_sweep(args) -> int:
+    from ..shipped import resolve_sweep
     from .config import load_sweep
     from .run import run_sweep
 
-    sweep = load_sweep(args.sweep_file)  # ConfigError: one line, exit 2 (pipeline/errors.py)
+    sweep = load_sweep(resolve_sweep(args.sweep_file))  # ConfigError: one line, exit 2 (pipeline/errors.py)
     summary = run_sweep(sweep, store=args.store, runner=args.executor or "processes",
                         workers=args.workers, address=args.scheduler,
                         scheduler_file=args.scheduler_file, retry_failed=args.retry_failed,
