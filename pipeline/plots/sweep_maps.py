@@ -40,7 +40,6 @@ from pathlib import Path
 
 import numpy as np
 
-from solver.collision import SOLID_VISCOSITY_RATIO
 from solver.physics import Physics
 
 from ..sweeps.analysis import (EXPERIMENT_REFERENCE, EXPERIMENT_ST_C, critical_stokes,
@@ -53,7 +52,7 @@ FIGURES = ("fig12_rebound_velocity", "fig12b_wet_restitution", "fig13_closest_ap
            "fig14_equilibrium_separation", "map_rebound_velocity", "map_closest_approach",
            "map_equilibrium_separation", "stick_or_rebound", "wet_restitution_experiments")
 CSV_NAME = "critical_stokes.csv"
-STAMP_NAME = ".sweep-figures.sha256"  # fingerprint of what the figures in a folder were drawn from
+from .stamp import STAMP_NAME  # noqa: E402  (what the figures in a folder were drawn from)
 FORMATS = ("png", "pdf")
 DPI = 150
 FAILED_COLOR = "#d62728"
@@ -130,23 +129,30 @@ def fingerprint(ds) -> str:
     return h.hexdigest()
 
 
-def update_figures(ds, out) -> tuple[list, bool]:
+def update_figures(ds, out, store=None) -> tuple[list, bool]:
     """Render the figures of ``ds`` into ``out`` unless that folder already holds them for the
     same store contents and figure code (a rerun of ``make sweep`` with nothing new then takes a
-    second, not the ten a full render needs). Returns ``(paths, rendered)``."""
+    second, not the ten a full render needs). ``store``: the path ``ds`` was read from, whose
+    file state the stamp then records (``stamp.up_to_date`` checks it without reading the
+    store). Returns ``(paths, rendered)``."""
+    from .stamp import read_stamp, stamp_text, store_state
+
     out = Path(out)
+    state = None if store is None else store_state(store)  # before the read: a conservative key
     ds = ds.load()
     key = fingerprint(ds)
     stamp = out / STAMP_NAME
     expected = [out / f"{n}{_suffix(extra)}.{f}" for extra, _ in planes(ds) for n in FIGURES
                 for f in FORMATS] + [out / f"{n}.{f}" for n, _ in axis_figures(ds)
                                      for f in FORMATS] + [out / CSV_NAME]
-    if stamp.is_file() and stamp.read_text().strip() == key and all(p.is_file() for p in expected):
+    if read_stamp(out).get("fingerprint") == key and all(p.is_file() for p in expected):
+        if state is not None:  # the same figures: record the store's file state for next time
+            stamp.write_text(stamp_text(key, state, expected))
         return expected, False
     out.mkdir(parents=True, exist_ok=True)
     stamp.unlink(missing_ok=True)  # a render cut short must not leave a valid stamp behind
     paths = render_all(ds, out)
-    stamp.write_text(key + "\n")
+    stamp.write_text(stamp_text(key, state, expected))
     return paths, True
 
 
@@ -517,8 +523,13 @@ class Panel:
     log: bool = False  # log y axis
     bottom: float | None = None  # fixed lower y limit
     top: float | None = None  # fixed upper y limit (with ``bottom``)
-    reference: float | None = None  # a dotted horizontal line (ln(x_e/x0) = 0: the threshold)
-    reference_label: str = ""  # written on that line
+    # a dotted horizontal line (ln(x_e/x0) = 0: the threshold), or a function giving it (read
+    # when drawn: the solver's solidification level is defined beside its compiled code)
+    reference: float | object | None = None
+    reference_label: str = ""  # written on that line; "{reference_exponent}": log10 of it
+
+    def reference_value(self) -> float | None:
+        return self.reference() if callable(self.reference) else self.reference
     window: tuple | None = None  # (floor, top): y shown from max(lowest, floor) - 0.5 up to top
     cap: float | None = None  # the axis stops here when a value passes it (a note says how far)
 
@@ -571,6 +582,12 @@ class AxisFigures:
                 for v in values]
 
 
+def _solid_viscosity_ratio() -> float:
+    from solver.collision import SOLID_VISCOSITY_RATIO
+
+    return SOLID_VISCOSITY_RATIO
+
+
 _V_R = Panel("v_r", r"maximum rebound velocity $v_r/v_0$", bottom=0.0)
 _LN_X_E = Panel("ln_x_e_x0", r"equilibrium separation $\ln(x_e/x_0)$ ($> 0$: rebound)",
                 reference=0.0, window=(-20.0, 10.0))  # ln(x_e/x0) grows ~ St past escape
@@ -586,9 +603,9 @@ AXES = {a.axis: a for a in (
                 (_V_R, Panel("h_m_x1", r"closest approach $h_m/x_1$", log=True), _LN_X_E,
                  Panel("viscosity_ratio_max_approach",
                        r"peak viscosity on approach $\mu_{max}/\mu_0$", log=True,
-                       reference=SOLID_VISCOSITY_RATIO,
-                       reference_label=rf"solidified above ($\mu > "
-                                       rf"10^{{{math.log10(SOLID_VISCOSITY_RATIO):g}}} \mu_0$)",
+                       reference=_solid_viscosity_ratio,
+                       reference_label=r"solidified above ($\mu > 10^{{reference_exponent}} "
+                                       r"\mu_0$)",
                        # up to beta = 10 the curves stay below 1e28 but where the film first
                        # solidifies (1e43 to 1e136 and beyond the float range): off scale
                        cap=1e30)),
@@ -648,10 +665,14 @@ def _axis_curves(spec, cube, extra):
             ax.set_ylim(panel.bottom, panel.top)
         elif panel.bottom is not None:
             ax.set_ylim(bottom=panel.bottom)
-        if panel.reference is not None:
-            ax.axhline(panel.reference, color="0.3", lw=0.8, ls=":")
+        reference = panel.reference_value()
+        if reference is not None:
+            ax.axhline(reference, color="0.3", lw=0.8, ls=":")
         if panel.reference_label:
-            ax.text(0.01, panel.reference, panel.reference_label, fontsize=7, color="0.3",
+            label = panel.reference_label.replace(
+                "{reference_exponent}", f"{math.log10(reference):g}") if reference > 0 else \
+                panel.reference_label
+            ax.text(0.01, reference, label, fontsize=7, color="0.3",
                     va="bottom", transform=ax.get_yaxis_transform())
         if panel.window is not None and np.isfinite(y).any():
             ax.set_ylim(max(float(np.nanmin(y)), panel.window[0]) - 0.5, panel.window[1])

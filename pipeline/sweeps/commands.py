@@ -204,13 +204,17 @@ def _status_table(plane, extra: dict, format_physics) -> None:
 
 def cmd_figures(args) -> int:
     from ..cli import check_output_dir
+    from ..plots.stamp import up_to_date
+
+    check_output_dir("--out", args.out)
+    if up_to_date(args.store, args.out):  # the store's files unchanged since the last render
+        print(f"figures in {args.out} are up to date with {args.store}")
+        return 0
     from ..errors import StoreDamaged, UsageError
     from ..plots.sweep_maps import update_figures
     from .analysis import PlaneError
     from .layout import STATUS_CODES
-    from .store import open_results
 
-    check_output_dir("--out", args.out)
     checked, damage, _skipped = _open_checked(args.store)
     if damage:
         raise StoreDamaged(f"store {args.store} is damaged: "
@@ -220,9 +224,8 @@ def cmd_figures(args) -> int:
     if not (checked["status"].values == STATUS_CODES["ok"]).any():
         raise UsageError(f"store {args.store} holds no finished scene yet: nothing to draw; run "
                          "its sweep first (ehd sweep SWEEP_FILE)")
-    ds = open_results(args.store, chunks=None)
-    try:
-        paths, rendered = update_figures(ds, args.out)
+    try:  # the store as read and checked above: one read per command
+        paths, rendered = update_figures(checked, args.out, store=args.store)
     except PlaneError as exc:
         raise UsageError(f"no figures for {args.store}: {exc}") from None
     if not rendered:
