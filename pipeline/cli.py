@@ -76,6 +76,9 @@ def cmd_run(args) -> int:
 
     check_output_paths(args.save, args.plot)
     physics = physics_from_args(args)
+    from .environment import compile_notice
+
+    compile_notice()
     try:
         result = collide(physics, accuracy=args.accuracy, x_ref_x0=args.x_ref,
                          save_profiles=bool(args.save or args.plot), **_numerics_overrides(args))

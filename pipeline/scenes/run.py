@@ -145,6 +145,9 @@ def run_scene(scene: Scene, accuracy: str = "standard", **overrides) -> SceneRes
     """
     from solver import collide
 
+    from ..environment import compile_notice
+
+    compile_notice()  # one line when the solver is about to compile (a silent minute otherwise)
     auto_cav = scene.cavitation == "auto"
     auto_visc = scene.viscosity_law == "auto"
     auto_dens = scene.density_law == "auto"
