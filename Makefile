@@ -34,8 +34,9 @@ sweep: $(STAMP)
 	if [ $$rc -eq 0 ] || [ $$rc -eq 3 ]; then \
 	  $(VENV)/bin/ehd figures results/paper.zarr --out figures || exit $$?; fi; exit $$rc
 
+# 24 small scenes: local threads start in a fraction of the time a process cluster needs
 quick: $(STAMP)
-	@rc=0; $(VENV)/bin/ehd sweep sweeps/quick.toml || rc=$$?; \
+	@rc=0; $(VENV)/bin/ehd sweep sweeps/quick.toml --executor threads || rc=$$?; \
 	if [ $$rc -eq 0 ] || [ $$rc -eq 3 ]; then \
 	  $(VENV)/bin/ehd figures results/quick.zarr --out figures/quick || exit $$?; fi; exit $$rc
 
@@ -44,6 +45,7 @@ figures: $(STAMP)
 	$(VENV)/bin/ehd paper-figures --out figures
 
 bench: $(STAMP)
+	$(PY) benchmarks/bench_startup.py
 	$(PY) benchmarks/bench_solver.py
 	$(PY) benchmarks/bench_accuracy.py
 	$(PY) benchmarks/bench_cavitation.py

@@ -12,9 +12,10 @@ child processes):
 Targets (issue 20): ``ehd --help`` within 1.5x of the bare Python; the no-op ``make sweep`` in at
 most 2 s on 2 cores. The machine is shared, so CPU time is the steadier measure; both are shown.
 
-``--source DIR`` measures another checkout (e.g. ``git worktree add /tmp/main main``) with this
-venv: ``python -m pipeline.cli`` with ``PYTHONPATH=DIR`` instead of the ``ehd`` script; that is how
-the "before" column of benchmarks/startup.md was measured.
+``--source DIR`` measures another checkout (e.g. ``git archive main | tar -x -C DIR``) with this
+venv's packages: ``python -S -P -m pipeline.cli`` with ``PYTHONPATH=DIR:site-packages`` instead of
+the ``ehd`` script; that is how the "before" columns of benchmarks/startup.md were measured
+(``--before FILE`` shows them).
 
 Usage: ``make bench`` (writes ``benchmarks/startup.md`` and ``startup.json``) or
 ``python benchmarks/bench_startup.py [--repeat N] [--store S] [--source DIR] [--out FILE]``.
@@ -45,18 +46,24 @@ def _child_cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
-def _timed(cmd, env, cwd=REPO, ok=(0,)) -> tuple[float, float]:
-    """Wall and CPU seconds of one run of ``cmd``."""
+def _timed(cmd, env, cwd=REPO, ok=(0,), optional=False) -> tuple[float, float] | None:
+    """Wall and CPU seconds of one run of ``cmd`` (None: it failed and is ``optional``, e.g.
+    ``--version`` of a checkout that has none)."""
     cpu = _child_cpu()
     t = time.perf_counter()
     proc = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True)
     wall = time.perf_counter() - t
     if proc.returncode not in ok:
+        if optional:
+            return None
         sys.exit(f"{' '.join(map(str, cmd))} failed ({proc.returncode}):\n{proc.stderr[-2000:]}")
     return wall, _child_cpu() - cpu
 
 
-def _median(runs) -> dict:
+def _median(runs) -> dict | None:
+    runs = [r for r in runs if r is not None]
+    if not runs:
+        return None
     return {"wall_s": statistics.median(w for w, _ in runs),
             "cpu_s": statistics.median(c for _, c in runs), "runs": len(runs)}
 
@@ -73,11 +80,11 @@ def measure(repeat: int, store: Path, figures: Path, ehd: list[str], env: dict) 
     out = {}
     for _ in range(2):  # warm the file system cache and the .pyc files; not counted
         for cmd in cases.values():
-            _timed(cmd, env)
+            _timed(cmd, env, optional=True)
     runs = {name: [] for name in cases}
     for _ in range(repeat):  # interleaved: a burst of load on the machine hits every case
         for name, cmd in cases.items():
-            runs[name].append(_timed(cmd, env))
+            runs[name].append(_timed(cmd, env, optional=True))
     out.update({name: _median(r) for name, r in runs.items()})
     sweep = [*ehd, "sweep", "sweeps/paper.toml", "--store", str(store)]
     figs = [*ehd, "figures", str(store), "--out", str(figures)]
@@ -108,6 +115,8 @@ def render(results: dict, meta: dict, before: dict | None) -> str:
         "|---|---:|---:|---:|---:|" + ("---:|---:|" if before else ""),
     ]
     for name, r in results.items():
+        if r is None:
+            continue
         row = (f"| `{name}` | {r['wall_s']:.3f} | {r['cpu_s']:.3f} | "
                f"{r['wall_s'] / base['wall_s']:.2f} | {r['cpu_s'] / base['cpu_s']:.2f} |")
         if before:
@@ -151,9 +160,17 @@ def main(argv=None) -> int:
                    help="markdown file for the table ('-': print only); the JSON goes beside it")
     args = p.parse_args(argv)
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    # as after a pip install, which writes the .pyc files: a PYTHONDONTWRITEBYTECODE in the
+    # environment would make every run compile every module again
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
     if args.source:
-        env["PYTHONPATH"] = str(Path(args.source).resolve())
-        ehd = [sys.executable, "-m", "pipeline.cli"]
+        import sysconfig
+
+        # -S: no .pth files (this venv's editable install would shadow the other checkout), -P: nor
+        # the working directory
+        env["PYTHONPATH"] = os.pathsep.join([str(Path(args.source).resolve()),
+                                             sysconfig.get_paths()["purelib"]])
+        ehd = [sys.executable, "-S", "-P", "-m", "pipeline.cli"]
     else:
         ehd = [str(Path(sys.executable).parent / "ehd")]
     tmp = Path(tempfile.mkdtemp(prefix="ehd-bench-startup-"))
