@@ -39,6 +39,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 HELP_TARGET = 1.5  # ehd --help over the bare Python start (issue 20)
 NOOP_TARGET_S = 2.0  # the no-op make sweep, seconds on 2 cores (issue 20)
+BASE = "python -c 'import argparse'"
 
 
 def _child_cpu() -> float:
@@ -71,7 +72,7 @@ def _median(runs) -> dict | None:
 def measure(repeat: int, store: Path, figures: Path, ehd: list[str], env: dict) -> dict:
     python = [sys.executable]
     cases = {
-        "python -c 'import argparse'": [*python, "-c", "import argparse"],
+        BASE: [*python, "-c", "import argparse"],
         "ehd --help": [*ehd, "--help"],
         "ehd --version": [*ehd, "--version"],
         "ehd run --help": [*ehd, "run", "--help"],
@@ -103,7 +104,7 @@ def measure(repeat: int, store: Path, figures: Path, ehd: list[str], env: dict) 
 
 
 def render(results: dict, meta: dict, before: dict | None) -> str:
-    base = results["python -c 'import argparse'"]
+    base = results[BASE]
     lines = [
         "# Start-up of `ehd` (`benchmarks/bench_startup.py`)", "",
         f"{meta['date']}, {meta['cores']} cores (shared: load average {meta['load']} at the "
@@ -136,8 +137,10 @@ def render(results: dict, meta: dict, before: dict | None) -> str:
         "includes waiting for the cores other processes hold).",
     ]
     if before:
-        lines += ["", f"Before: {meta.get('before_source')}, run as `python -m pipeline.cli` "
-                  "with this venv."]
+        lines += ["", f"Before: {meta.get('before_source')}, run as `python -S -P -m "
+                  "pipeline.cli` with this venv's packages (`--source`), in a separate run of "
+                  "this script shortly before; its own bare-Python start was "
+                  f"{before[BASE]['wall_s']:.3f} s wall, {before[BASE]['cpu_s']:.3f} s CPU."]
     lines += ["", "Where the time goes: `ehd --help` imports only the command registry "
               "(`pipeline/cli.py`); a command imports its own module when chosen. The no-op "
               "`ehd sweep` reads the store once, whole (its integrity check: 40 arrays of 64 "
