@@ -227,7 +227,8 @@ class _Version(argparse.Action):
         super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
 
     def __call__(self, parser, namespace, values, option_string=None):
-        parser.exit(message=version_line() + "\n")
+        print(version_line())  # on stdout, as argparse's own version action
+        parser.exit()
 
 
 def version_line() -> str:

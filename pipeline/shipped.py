@@ -46,15 +46,19 @@ def sweep_names() -> list[str]:
 
 def resolve_sweep(text: str) -> str:
     """``SWEEP_FILE`` as given: an existing path is itself; a bare name without a folder or
-    suffix (``paper``) is the shipped ``sweeps/paper.toml``; anything else is returned unchanged
-    (reading it names the problem)."""
+    suffix (``paper``) is the shipped ``sweeps/paper.toml``, and a bare name that is neither a
+    UsageError listing the shipped names; any other path is returned unchanged (reading it names
+    the problem)."""
     path = Path(text)
     if path.exists() or path.suffix or len(path.parts) != 1:
         return text
     where = folder("sweeps")
     if where is not None and (where / f"{text}.toml").is_file():
         return str(where / f"{text}.toml")
-    return text
+    from .errors import UsageError
+
+    raise UsageError(f"no sweep file {text!r} here and no shipped sweep of that name (shipped: "
+                     f"{', '.join(sweep_names()) or 'none'}); give a path, e.g. sweeps/paper.toml")
 
 
 def copy_examples(target: str | Path, force: bool = False) -> list[Path]:
