@@ -13,7 +13,7 @@ export OMP_NUM_THREADS := 1
 export OPENBLAS_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: install test sweep quick figures bench bench-sweep bench-accuracy clean-cache clean
+.PHONY: install test test-install sweep quick figures bench bench-sweep bench-accuracy clean-cache clean
 
 $(STAMP): pyproject.toml setup.py
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "error: $(PYTHON) not found; set PYTHON=/path/to/python3.11"; exit 1; }
@@ -26,6 +26,11 @@ install: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m pytest -q
+
+# pip install of the clone into a fresh venv, then the README's first commands from an empty
+# folder (tests/install_from_pip.py; a few minutes: the fresh install compiles the solver)
+test-install: $(STAMP)
+	$(PY) -m pytest -q tests/install_from_pip.py
 
 # The sweep's figures are drawn also when some scenes failed (exit 3: failures are masked in
 # them); make still reports the sweep's exit code. Exit 2 (bad input) draws nothing.
