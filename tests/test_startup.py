@@ -152,3 +152,33 @@ def test_figures_stamp_skips_reading_an_unchanged_store(tmp_path):
     assert not rendered and stamp.up_to_date(store, tmp_path / "f") is not None
     (tmp_path / "f" / paths[0].name).unlink()  # a figure deleted: not up to date
     assert stamp.up_to_date(store, tmp_path / "f") is None
+
+
+def test_scene_figures_carry_si_axes_in_the_scene_units(tmp_path):
+    from matplotlib.figure import Figure
+
+    from pipeline.plots.scene_plots import plot_motion, plot_profiles, si_scales
+    from pipeline.scenes.commands import load_scene
+    from pipeline.scenes.run import run_scene
+
+    scene = load_scene(str(REPO / "examples" / "glass_beads_water.toml"))
+    r = run_scene(scene, accuracy="fast", save_profiles=True)
+    scales = si_scales(scene)
+    assert scales["H"] == scene.x1 and scales["tau"] == scene.x0 / scene.v0
+    fig = Figure(layout="constrained")
+    ax = fig.subplots()
+    plot_profiles(ax, r.collision, "P", scales=scales)
+    axes = [*fig.axes, *(c for a in fig.axes for c in a.child_axes)]  # SI axes are children
+    labels = [a.get_ylabel() for a in axes] + [a.get_xlabel() for a in axes]
+    assert "pressure [MPa]" in labels and "radius [µm]" in labels  # 100s of MPa, um radii
+    # the SI axis is the dimensionless one times the scale: the top of both agree
+    fig.draw_without_rendering()  # secondary axes take their limits when drawn
+    sec = next(a for a in axes if a.get_ylabel() == "pressure [MPa]")
+    top = ax.get_ylim()[1]
+    assert sec.get_ylim()[1] == pytest.approx(top * scene.pressure_scale / 1e6, rel=1e-9)
+    fig = Figure(layout="constrained")
+    plot_motion(fig, r.collision, scales=scales)
+    axes = [*fig.axes, *(c for a in fig.axes for c in a.child_axes)]
+    labels = [a.get_ylabel() for a in axes] + [a.get_xlabel() for a in axes]
+    assert "force [µN]" in labels and "time [µs]" in labels
+    assert any("= 4.319 nm" in lab for lab in labels)  # the symlog separation: x1 in its label

@@ -248,9 +248,9 @@ def cmd_scene(args) -> int:
     else:
         print(format_report(d))
     if args.plot and result.collision.ok:
-        from ..plots.scene_plots import plot_scene
+        from ..plots.scene_plots import plot_scene, si_scales
 
-        paths = plot_scene(result.collision, args.plot, title=scene.title)
+        paths = plot_scene(result.collision, args.plot, title=scene.title, scales=si_scales(scene))
         if not args.json:
             print(f"figures: {', '.join(str(p) for p in paths if p.suffix == '.png')}")
     if not result.collision.ok:
