@@ -200,3 +200,16 @@ def test_the_registry_is_the_one_list_of_commands():
         rec = Recorder()
         importlib.import_module(module).register(rec)
         assert rec.names == [n for n, (m, _) in COMMANDS.items() if m == module], module
+
+
+def test_python_example_runs_from_a_copy_of_the_examples(tmp_path):
+    """examples/scene_in_python.py, as a newcomer runs it (from a folder of ``ehd examples``)."""
+    import shutil
+    import subprocess
+    import sys
+
+    shutil.copytree(REPO / "examples", tmp_path / "examples")
+    p = subprocess.run([sys.executable, "examples/scene_in_python.py"], cwd=tmp_path,
+                       capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stderr[-2000:]
+    assert "sticking threshold: St_c = " in p.stdout and "e_wet = " in p.stdout

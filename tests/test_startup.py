@@ -182,3 +182,32 @@ def test_scene_figures_carry_si_axes_in_the_scene_units(tmp_path):
     labels = [a.get_ylabel() for a in axes] + [a.get_xlabel() for a in axes]
     assert "force [µN]" in labels and "time [µs]" in labels
     assert any("= 4.319 nm" in lab for lab in labels)  # the symlog separation: x1 in its label
+
+
+def test_sticking_threshold_separates_sticking_from_rebounding(tmp_path, capsys):
+    from pipeline.cli import main
+    from pipeline.dem.export import scene_path
+    from pipeline.scenes.commands import load_scene
+    from pipeline.scenes.run import run_scene
+    from pipeline.scenes.threshold import RTOL, sticking_threshold
+
+    path = str(REPO / "examples" / "glass_beads_water.toml")
+    scene = load_scene(path)
+    t = sticking_threshold(scene, "v0", "fast", start=0.3, stop=3.0, n=5)
+    assert t.St_c is not None and t.bracket[1] / t.bracket[0] - 1.0 <= RTOL
+    # just outside the final bracket: one side sticks, the other rebounds
+    below, above = scene_path(scene, "v0", [t.bracket[0] * (1 - RTOL), t.bracket[1] * (1 + RTOL)])
+    assert run_scene(below, accuracy="fast").collision.e_wet == 0.0
+    assert run_scene(above, accuracy="fast").collision.e_wet > 0.0
+    assert below.stokes < t.St_c < above.stokes
+    assert t.value == pytest.approx(scene.v0 * t.factor)
+    # a path that never changes says so
+    none = sticking_threshold(scene, "v0", "fast", start=5.0, stop=10.0, n=2)
+    assert none.St_c is None and "rebound at every v0" in none.note
+    # the command: the table, the threshold line, the figure
+    code = main(["restitution", path, "--accuracy", "fast", "--from", "0.3", "--to", "3",
+                 "--n", "5", "--threshold", "--plot", str(tmp_path / "fig")])
+    out = capsys.readouterr().out
+    assert code == 0 and f"St_c = {t.St_c:.4g}" in out
+    assert (tmp_path / "fig" / "restitution.png").stat().st_size > 1000
+    assert (tmp_path / "fig" / "restitution.pdf").is_file()
