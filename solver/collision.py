@@ -6,11 +6,11 @@ radii by ``sqrt(a x1)``, time by ``x1/v0`` (``T``; ``tau = v0 t / x0 = T eps^0.4
 Forces are reported in units of ``6 pi mu a^2 v0 / x1`` (the rigid film force at gap ``x1`` and
 speed ``v0``), so ``F = (1/3) Int P R dR`` and ``dV/dT = -F / St``.
 
-Only the physics a scene needs is switched on: where the classic film applies
-(``rigid.exact_for(physics)``), the rigid solution is exact until ``W(0)/X`` reaches ``switch`` (a
-scene that never gets there is answered analytically, ``model = "rigid"``), and again once the
-deformation has relaxed below ``release`` on the way out, which gives the equilibrium separation in
-closed form.
+Only the physics a scene needs is switched on, and every analytic piece is used only where
+``shortcuts.plan(physics)`` says it is exact: for the classic film the rigid solution is exact
+until ``W(0)/X`` reaches ``switch`` (a scene that never gets there is answered analytically,
+``model = "rigid"``), and again once the deformation has relaxed below ``release`` on the way
+out, which gives the equilibrium separation in closed form.
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ from .integration import stepper
 from .integration.grid import reference_grid, scaled_grid
 from .integration.events import RELAXED_FULL
 from .model import cavitation, liquid, piezoviscous, rigid
+from .shortcuts import plan
 from .observables import SERIES, STATUS, failure_message
 from .physics import Physics
 from .result import JSON_KEYS, SOLVER_VERSION, Collision
@@ -181,7 +182,7 @@ def rigid_head(physics, numerics) -> RigidHead:
     (model/piezoviscous.py, a scalar ODE with a closed-form force), up to the hand-over on the
     Barus ``W(0)/X`` or near the glass gap."""
     stokes, x_start, tau_per_t = physics.St, physics.x_start, physics.tau_per_t
-    if physics.viscosity_law == "barus" and piezoviscous.exact_for(physics):
+    if plan(physics).approach == "barus":
         path = piezoviscous.approach(x_start, 1.0, 0.0, stokes, physics.beta, numerics.switch)
         rests = path.event == "rest"
         # the path without its end when a coupled phase follows (the phase starts there), and
@@ -310,12 +311,12 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
     stokes, x_start, tau_per_t = physics.St, physics.x_start, physics.tau_per_t
     x_switch, v_switch, t_switch = head.x, head.v, head.t
 
-    grid = scene_grid(stokes, x_switch, numerics, physics.Pi if not physics.classic else math.inf)
+    shortcuts = plan(physics)
+    grid = scene_grid(stokes, x_switch, numerics, physics.Pi if shortcuts.floor else math.inf)
     p_init = head.pressure(grid.s)  # the rigid film's pressure; K p = asymptotic W
     time_scale = x_switch / max(v_switch, 1e-3)
-    stop_kind, stop_params = rigid.release_event(numerics.release, stokes, physics)
-    if physics.cavitation == "jfo" and not _floor_departure(physics):
-        stop_kind = RELAXED_FULL  # its cavity has a memory: rigid only once the film is full
+    _, stop_params = rigid.release_event(numerics.release, stokes, physics)
+    stop_kind = shortcuts.end_event  # a JFO cavity has a memory: rigid once the film is full
     with deferred_interrupt():
         code, counters, rows, p_hist, w_hist, theta_hist = stepper.integrate(
             grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, physics.as_array(),
@@ -336,8 +337,9 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
 
     result = Collision(
         physics=physics, accuracy=accuracy, numerics=numerics, model="ehd", status=name,
-        message=message, steps=int(counters[0]), rejected_steps=int(counters[1]),
-        newton_iterations=int(counters[2]), lu_factorizations=int(counters[3]),
+        message=message, steps=int(counters[stepper.STEPS]), rejected_steps=int(counters[stepper.REJECTED]),
+        newton_iterations=int(counters[stepper.NEWTON]),
+        lu_factorizations=int(counters[stepper.LU]),
         tau_handover=t_switch * tau_per_t, radius=grid.radius)
     if numerics.save_profiles:
         result.profile_tau = t_c * tau_per_t
@@ -350,7 +352,7 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
         result.v_r = result.dimple_depth_x1 = math.nan
         result.dimple = result.cavitated = None
         result.series = _concat(blocks)
-        result.message = (f"{message} (St={stokes:g}, eps={physics.eps:g}, after {counters[0]} "
+        result.message = (f"{message} (St={stokes:g}, eps={physics.eps:g}, after {counters[stepper.STEPS]} "
                           f"steps at tau={t_c[-1] * tau_per_t:.4g})")
         return result
 
@@ -358,7 +360,7 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
     # cavity closes (model/cavitation.py), then the classic closed form
     t_rel, x_rel, v_rel = t_c[-1], x_c[-1], v_c[-1]
     lost = cols["dissipated"][-1] + cols["void_work"][-1]  # energy lost by the release
-    if _floor_departure(physics) and v_rel < 0.0:
+    if shortcuts.departure == "floor" and v_rel < 0.0:
         x_rel, u_rel, t_rel, path = cavitation.departure(x_rel, -v_rel, t_rel, stokes, physics.Pi)
         v_rel = -u_rel
         blocks.append(_floor_block(path, physics, tau_per_t, lost, v_c[-1]))
@@ -391,14 +393,6 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
     return result
 
 
-def _floor_departure(physics):
-    """Whether the departure after the release is the floor's rigid ODE (model/cavitation.py):
-    exact for the Reynolds condition, which has no memory, and for any model at ``Pi = 0``, where
-    the film pulls with no force at all (nothing refills, the spheres never stop). A JFO cavity
-    with ``Pi > 0`` has a memory: the coupled phase goes on until the film is full again."""
-    return physics.cavitation == "reynolds" or (physics.cavitation == "jfo" and physics.Pi == 0.0)
-
-
 def _wet_restitution(physics, x_c, v_c, x_ref, cavity=None):
     """``e_wet`` at ``x_ref`` from the coupled phase's end: the rigid departure (rigid.restitution)
     from the release state; when the release lies beyond ``x_ref`` (the deformation relaxed only
@@ -410,9 +404,10 @@ def _wet_restitution(physics, x_c, v_c, x_ref, cavity=None):
         inside = np.nonzero((x_c <= x_ref) & (v_c < 0.0))[0]
         if inside.size:
             j = int(inside[-1])
-    if _floor_departure(physics):
+    shortcuts = plan(physics)
+    if shortcuts.departure == "floor":
         return cavitation.restitution(x_c[j], v_c[j], physics, x_ref)
-    if physics.cavitation == "jfo":
+    if shortcuts.end_event == RELAXED_FULL:
         # the coupled phase ran until the film is full again (RELAXED_FULL), from where the
         # classic rigid departure is exact; when it ends beyond x_ref the spheres passed x_ref
         # inside the coupled phase (possibly with a cavity): its speed there, interpolated

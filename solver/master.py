@@ -30,6 +30,7 @@ from .model import rigid
 from .observables import OBSERVABLES
 from .physics import Physics
 from .settings import resolve
+from .shortcuts import plan
 
 __all__ = ["MasterCurve"]
 
@@ -102,7 +103,7 @@ class MasterCurve:
         """
         if not isinstance(physics, Physics):
             physics = Physics(St=physics, eps=eps)
-        if not rigid.exact_for(physics):
+        if not plan(physics).classic:
             raise ValueError(f"the master curve holds the classic film only; solve {physics} "
                              "directly with solver.collide")
         numerics = resolve(self.accuracy, **dict(self.overrides), save_profiles=False)

@@ -16,13 +16,15 @@ value must not recompile anything.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields, replace
+import textwrap
+from dataclasses import asdict, dataclass, field, make_dataclass, replace
 
 import numpy as np
 
 __all__ = ["Physics", "Group", "GROUPS", "ST", "EPS", "PI", "CAVITATION", "CAVITATION_MODELS",
            "DEFAULT_CAVITATION", "BETA", "VISCOSITY", "ROELANDS_Z", "ROELANDS_PR", "DENSITY",
-           "DH_C1", "DH_C2", "TABLE", "TENSION", "TENSION_CHOICES", "VISCOSITY_LAWS", "DENSITY_LAWS"]
+           "DH_C1", "DH_C2", "TABLE", "TENSION", "TENSION_CHOICES", "VISCOSITY_LAWS", "DENSITY_LAWS",
+           "INDEX", "codes"]
 
 
 @dataclass(frozen=True)
@@ -41,6 +43,8 @@ class Group:
     choices: tuple = ()  # a named choice instead of a number (e.g. a model)
     flag: str = ""  # the command-line flag, when not ``--name``
     table: bool = False  # a table of (P, value) points as text "P:value, ..." instead of a number
+    off: float | str | None = None  # the value that switches the physics off (None: always on)
+    doc: str = ""  # what the docstring of Physics says beyond the long name and range
 
     @property
     def numeric(self) -> bool:
@@ -125,34 +129,45 @@ GROUPS = (
     Group("St", "Stokes number m v0 / (6 pi mu a^2)", "Stokes number", 0.0, 1.0e4),
     # eps << 1 is the model's premise; at 0.1 the start x0 is only 2.5 x1
     Group("eps", "elasticity parameter 4 theta mu v0 a^1.5 / x0^2.5", "elasticity parameter",
-          0.0, 0.1),
+          0.0, 0.1, doc="``(x1/x0)^2.5``."),
     # the film cannot pull harder than the liquid allows: P >= -Pi (inf: unlimited tension)
     Group("Pi", "cavitation number (p_amb - p_cav) x1^2 / (mu a v0)", "cavitation number",
-          0.0, math.inf, closed_lo=True, default=math.inf, allow_inf=True),
+          0.0, math.inf, closed_lo=True, default=math.inf, allow_inf=True, off=math.inf,
+          doc="The film pressure cannot fall below ``-Pi`` (gauge, in ``mu a v0 / x1^2``); inf "
+              "is the classic film, which carries any tension."),
     Group("cavitation", "cavitation model: off, reynolds (Swift-Stieber) or jfo (mass-conserving "
           "Elrod-Adams); auto: the default model where Pi is finite", "cavitation model",
-          math.nan, math.nan, default="auto", choices=("auto", "off", "reynolds", "jfo")),
+          math.nan, math.nan, default="auto", choices=("auto", "off", "reynolds", "jfo"),
+          off="off", doc="\"auto\" becomes ``DEFAULT_CAVITATION`` where ``Pi`` is finite and "
+                         "\"off\" where it is inf; \"off\" ignores ``Pi``."),
     # the liquid thickens under pressure: d ln(mu)/dp = alpha at p = 0 (0: constant viscosity)
     Group("beta", "piezoviscous number alpha mu a v0 / x1^2 (alpha = d ln mu / dp at p = 0)",
-          "piezoviscous number", 0.0, 50.0, closed_lo=True, default=0.0),
+          "piezoviscous number", 0.0, 50.0, closed_lo=True, default=0.0, off=0.0,
+          doc="The slope of ``ln(mu/mu0)`` against the dimensionless pressure at ``P = 0`` "
+              "(docs/model.md, \"Pressure-dependent viscosity and density\")."),
     Group("viscosity_law", "viscosity against pressure: constant, barus (exp(beta P)), roelands "
           "or table (viscosity_table); auto: table where one is given, else barus where "
           "beta > 0", "viscosity law", math.nan, math.nan, default="auto",
-          choices=("auto", "constant", "barus", "roelands", "table"), flag="viscosity"),
+          choices=("auto", "constant", "barus", "roelands", "table"), flag="viscosity",
+          off="constant", doc="With ``beta = 0`` and no table every law is \"constant\"."),
     # a liquid in tension keeps its ambient viscosity (the default) or, for comparison, the law's
     Group("viscosity_in_tension", "viscosity where the gauge pressure is negative: ambient (mu0, "
           "the default; a liquid cavitates long before the law's thinning) or law (the law's "
           "formula read at P < 0, for comparison)", "viscosity in tension", math.nan, math.nan,
-          default="ambient", choices=("ambient", "law")),
+          default="ambient", choices=("ambient", "law"),
+          doc="The density's compressibility fades in tension over ``0.01`` (model/liquid.py)."),
     # Roelands: ln(mu/mu0) = (beta P_R / Z) ((1 + P/P_R)^Z - 1), slope beta at P = 0; defaults:
     # a mineral oil's Z = 0.6 and p_R = 1.96e8 Pa at the pressure scale p* = 5e8 Pa
     Group("roelands_Z", "Roelands pressure-viscosity index Z", "Roelands index", 0.0, 2.0,
           default=0.6),
     Group("roelands_PR", "Roelands reference pressure p_R x1^2 / (mu a v0)",
-          "Roelands reference pressure", 0.0, 1.0e6, default=0.392),
+          "Roelands reference pressure", 0.0, 1.0e6, default=0.392,
+          doc="Default: a mineral oil's 1.96e8 Pa at ``p* = 5e8 Pa``."),
     Group("density_law", "density against pressure: constant or dowson-higginson "
           "(1 + c1 P / (1 + c2 P))", "density law", math.nan, math.nan, default="constant",
-          choices=("constant", "dowson-higginson"), flag="density"),
+          choices=("constant", "dowson-higginson"), flag="density", off="constant",
+          doc="In tension the compressibility ``c1`` fades over ``P = -0.01``; with "
+              "``dh_c1 = 0`` the law is \"constant\"."),
     # Dowson-Higginson: rho/rho0 = 1 + c1 P / (1 + c2 P); defaults: 0.6e-9 and 1.7e-9 1/Pa
     # at p* = 5e8 Pa
     Group("dh_c1", "Dowson-Higginson c1 p* (0.6e-9 1/Pa times the pressure scale)",
@@ -162,93 +177,72 @@ GROUPS = (
     # measured mu(p): ln(mu/mu0) linear between the points, extended with the last slope
     Group("viscosity_table", "measured viscosity against pressure, \"P:mu/mu0, ...\" from 0:1 "
           "with P increasing (P in mu a v0 / x1^2)", "viscosity table", math.nan, math.nan,
-          default="", table=True),
+          default="", table=True, off="",
+          doc=f"At most {MAX_TABLE_POINTS} points; ``ln(mu/mu0)`` is linear between them and "
+              "extended beyond the last with its slope. Used by ``viscosity_law = \"table\"`` "
+              "(\"auto\" where a table is given; ``beta`` is then not used)."),
 )
-# positions in Physics.as_array(), read by the compiled kernels
-ST, EPS, PI, CAVITATION = 0, 1, 2, 3
-BETA, VISCOSITY, TENSION, ROELANDS_Z, ROELANDS_PR, DENSITY, DH_C1, DH_C2 = 4, 5, 6, 7, 8, 9, 10, 11
-# the viscosity table: its number of points K there, then K pressures, then K values ln(mu/mu0)
-TABLE = 12
-# the laws' codes in that array (0: constant, the classic film)
-VISCOSITY_LAWS = ("constant", "barus", "roelands", "table")
-DENSITY_LAWS = ("constant", "dowson-higginson")
-TENSION_CHOICES = ("ambient", "law")
-# the models' codes in that array (0: the classic film, no floor)
-CAVITATION_MODELS = ("off", "reynolds", "jfo")
+# positions in Physics.as_array(), read by the compiled kernels: one slot per group in GROUPS
+# order; the table (which must be the last group) takes its number of points K there, then K
+# pressures, then K values ln(mu/mu0)
+INDEX = {g.name: k for k, g in enumerate(GROUPS)}
+assert [g.name for g in GROUPS if g.table] == [GROUPS[-1].name], "a table group must be last"
+ST, EPS, PI, CAVITATION = INDEX["St"], INDEX["eps"], INDEX["Pi"], INDEX["cavitation"]
+BETA, VISCOSITY, TENSION = INDEX["beta"], INDEX["viscosity_law"], INDEX["viscosity_in_tension"]
+ROELANDS_Z, ROELANDS_PR = INDEX["roelands_Z"], INDEX["roelands_PR"]
+DENSITY, DH_C1, DH_C2 = INDEX["density_law"], INDEX["dh_c1"], INDEX["dh_c2"]
+TABLE = INDEX["viscosity_table"]
+
+
+def codes(name: str) -> tuple:
+    """The named choices of a group in the order of their codes in the kernels' array (a choice's
+    code is its place here; "auto" is resolved before and has none): e.g. ``codes("cavitation")``
+    is ``("off", "reynolds", "jfo")``, code 0 the classic film."""
+    return tuple(c for c in GROUPS[INDEX[name]].choices if c != "auto")
+
+
+VISCOSITY_LAWS = codes("viscosity_law")
+DENSITY_LAWS = codes("density_law")
+TENSION_CHOICES = codes("viscosity_in_tension")
+CAVITATION_MODELS = codes("cavitation")
 # the model "auto" resolves to where Pi is finite: the mass-conserving one, which the measured
 # difference decides (docs/model.md, "Cavitation": the two agree while a cavity grows and differ
 # where it refills, which only JFO conserves; benchmarks/cavitation.md)
 DEFAULT_CAVITATION = "jfo"
 
 
-@dataclass(frozen=True)
-class Physics:
-    """Every dimensionless group of one scene (docs/model.md).
+def _docstring() -> str:
+    """The docstring of ``Physics``, from ``GROUPS``."""
+    lines = ["Every dimensionless group of one scene (docs/model.md).", "",
+             "Generated from ``solver.physics.GROUPS``, which declares each group once.", "",
+             "Parameters", "----------"]
+    for g in GROUPS:
+        if g.choices:
+            kind = "{" + ", ".join(f'"{c}"' for c in g.choices) + "}"
+        else:
+            kind = "str" if g.table else "float"
+        lines.append(f"{g.name} : {kind}")
+        text = g.long_name[0].upper() + g.long_name[1:] + "."
+        if g.numeric:
+            lb = "[" if g.closed_lo else "("
+            text += f" In {lb}{g.lo:g}, {g.hi:g}]."
+        if g.default is not None:
+            text += f" Default {g.default!r}."
+        if g.off is not None:
+            text += f" {g.off!r} switches it off."
+        if g.doc:
+            text += " " + g.doc
+        lines += ["    " + line for line in textwrap.wrap(text, 92)]
+    lines += ["", "Raises", "------", "ValueError",
+              "    A value that is not a valid number (or choice) or lies outside its group's "
+              "range; the", "    message names the group."]
+    return "\n".join(lines)
 
-    Parameters
-    ----------
-    St : float
-        Stokes number ``m v0 / (6 pi mu a^2)``, in (0, 1e4].
-    eps : float
-        Elasticity parameter ``4 theta mu v0 a^1.5 / x0^2.5 = (x1/x0)^2.5``, in (0, 0.1].
-    Pi : float
-        Cavitation number ``(p_amb - p_cav) x1^2 / (mu a v0)``: the film pressure cannot fall below
-        ``-Pi`` (gauge, in ``mu a v0 / x1^2``). In [0, inf]; inf (the default) is the classic film,
-        which carries any tension.
-    cavitation : {"auto", "off", "reynolds", "jfo"}
-        The cavitation model. "auto" (the default) becomes ``DEFAULT_CAVITATION`` where ``Pi`` is
-        finite and "off" where it is inf; "off" ignores ``Pi``. A finite ``Pi`` is needed for a
-        model to act: with ``Pi = inf`` the model is "off".
-    beta : float
-        Piezoviscous number ``alpha mu0 a v0 / x1^2``: the slope of ``ln(mu/mu0)`` against the
-        dimensionless pressure at ``P = 0`` (docs/model.md, "Pressure-dependent viscosity and
-        density"). In [0, 50]; 0 (the default) is the constant viscosity of the classic film.
-    viscosity_law : {"auto", "constant", "barus", "roelands"}
-        ``mu/mu0`` against ``P``: "barus" ``exp(beta P)``, "roelands" (with ``roelands_Z`` and
-        ``roelands_PR``). "auto" (the default) is "barus" where ``beta > 0``; with ``beta = 0``
-        every law is "constant".
-    viscosity_in_tension : {"ambient", "law"}
-        "ambient" (the default): the law applies to compression only, ``mu = mu0`` where
-        ``P <= 0`` (the Barus formula would thin a liquid in tension by orders of magnitude, which
-        real liquids do not: they cavitate first). "law": the formula at every pressure, to
-        measure what that choice changes. (The density's compressibility fades in tension
-        over ``0.01``, model/liquid.py.)
-    roelands_Z, roelands_PR : float
-        Roelands index ``Z`` in (0, 2] and reference pressure ``p_R / p*`` in (0, 1e6]
-        (defaults: a mineral oil at ``p* = 5e8 Pa``).
-    density_law : {"constant", "dowson-higginson"}
-        ``rho/rho0`` against ``P``: "dowson-higginson" ``1 + c1 P / (1 + c2 P)`` in compression
-        (in tension its compressibility ``c1`` fades over ``P = -0.01``); with ``dh_c1 = 0`` it
-        is "constant".
-    dh_c1, dh_c2 : float
-        Dowson-Higginson constants times the pressure scale, in [0, 100] (defaults
-        ``0.6e-9, 1.7e-9 1/Pa`` at ``p* = 5e8 Pa``).
-    viscosity_table : str
-        Measured ``mu/mu0`` against ``P``, ``"P:mu/mu0, ..."`` starting at ``0:1`` with ``P``
-        increasing (at most 64 points); ``ln(mu/mu0)`` is linear between the points and
-        extended beyond the last with its slope. Used by ``viscosity_law = "table"`` ("auto"
-        where a table is given; ``beta`` is then not used).
 
-    Raises
-    ------
-    ValueError
-        A value that is not a valid number (or choice) or lies outside its group's range; the
-        message names the group.
-    """
+class _PhysicsMethods:
+    """What every ``Physics`` does beyond holding its groups (the fields come from ``GROUPS``)."""
 
-    St: float
-    eps: float
-    Pi: float = math.inf
-    cavitation: str = "auto"
-    beta: float = 0.0
-    viscosity_law: str = "auto"
-    viscosity_in_tension: str = "ambient"
-    roelands_Z: float = 0.6
-    roelands_PR: float = 0.392
-    density_law: str = "constant"
-    dh_c1: float = 0.3
-    dh_c2: float = 0.85
-    viscosity_table: str = ""
+    __slots__ = ()
 
     def __post_init__(self):
         for group in GROUPS:
@@ -276,17 +270,16 @@ class Physics:
     @staticmethod
     def names() -> tuple:
         """Field names in kernel-array order."""
-        return tuple(f.name for f in fields(Physics))
+        return tuple(g.name for g in GROUPS)
 
     @staticmethod
     def group(name: str) -> Group:
-        for g in GROUPS:
-            if g.name == name:
-                return g
-        raise KeyError(f"unknown physics field {name!r}; valid: {list(Physics.names())}")
+        if name not in INDEX:
+            raise KeyError(f"unknown physics field {name!r}; valid: {list(INDEX)}")
+        return GROUPS[INDEX[name]]
 
     @classmethod
-    def from_mapping(cls, values: dict) -> "Physics":
+    def from_mapping(cls, values: dict):
         """A Physics from ``{name: value}``; unknown names are refused, naming the valid ones."""
         unknown = set(values) - set(cls.names())
         if unknown:
@@ -301,19 +294,24 @@ class Physics:
         return asdict(self)
 
     def as_array(self) -> np.ndarray:
-        """The groups as a flat float array in ``names()`` order (what the kernels read); a
-        choice is its index (``CAVITATION_MODELS``)."""
-        return np.array([self.St, self.eps, self.Pi, CAVITATION_MODELS.index(self.cavitation),
-                         self.beta, VISCOSITY_LAWS.index(self.viscosity_law),
-                         TENSION_CHOICES.index(self.viscosity_in_tension), self.roelands_Z,
-                         self.roelands_PR, DENSITY_LAWS.index(self.density_law), self.dh_c1,
-                         self.dh_c2, *self._table_array()], dtype=float)
+        """The groups as a flat float array in ``names()`` order (what the kernels read): a
+        number as it is, a choice as its code (``codes``), the table as its points."""
+        values = []
+        for g in GROUPS:
+            value = getattr(self, g.name)
+            if g.table:
+                values += self._table_array()
+            elif g.choices:
+                values.append(codes(g.name).index(value))
+            else:
+                values.append(value)
+        return np.array(values, dtype=float)
 
     def _table_array(self) -> list:
         points = parse_table(self.viscosity_table)
         return [len(points), *(p for p, _ in points), *(math.log(r) for _, r in points)]
 
-    def replace(self, **changes) -> "Physics":
+    def replace(self, **changes):
         return replace(self, **changes)
 
     # ---- what the groups imply ---------------------------------------------------------------
@@ -338,3 +336,15 @@ class Physics:
     def tau_per_t(self) -> float:
         """``tau = v0 t / x0`` per ``T = v0 t / x1``: ``x1/x0 = eps^(2/5)``."""
         return self.eps ** 0.4
+
+
+def _field(g: Group):
+    kind = str if (g.choices or g.table) else float
+    if g.default is None:
+        return (g.name, kind)
+    return (g.name, kind, field(default=g.default))
+
+
+Physics = make_dataclass(
+    "Physics", [_field(g) for g in GROUPS], bases=(_PhysicsMethods,), frozen=True,
+    namespace={"__module__": __name__, "__qualname__": "Physics", "__doc__": _docstring()})

@@ -24,10 +24,10 @@ RELAXED_FULL = 2
 
 
 @jit
-def reached(kind, params, steps, x, v, w_absmax, cavity_radius):
+def reached(kind, params, steps, x, v, w_absmax, active_radius):
     """True when the event ``kind`` with ``params`` has happened at the accepted state
-    (``steps`` accepted steps so far, separation ``x``, velocity ``v``, largest ``|W|``, radius of
-    the cavity, 0 without)."""
+    (``steps`` accepted steps so far, separation ``x``, velocity ``v``, largest ``|W|``, radius out
+    to which the film's active set reaches, 0 without: model/step.py, ``record``)."""
     relaxed = (steps > 0 and x > 0.0 and w_absmax < params[0] * x
                and (v < 0.0 or v < params[1]))
     slope = params[2] if v > 0.0 else params[3]
@@ -36,5 +36,5 @@ def reached(kind, params, steps, x, v, w_absmax, cavity_radius):
     if kind == RELAXED:
         return relaxed
     if kind == RELAXED_FULL:
-        return relaxed and cavity_radius == 0.0
+        return relaxed and active_radius == 0.0
     return False

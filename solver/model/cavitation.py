@@ -28,7 +28,8 @@ import math
 import numpy as np
 from scipy import integrate, optimize
 
-__all__ = ["cavity_fraction", "separation_force", "departure", "speed_at", "restitution"]
+__all__ = ["cavity_fraction", "separation_force", "departure", "speed_at", "restitution",
+           "exact_for"]
 
 _SERIES_FROM = 10.0  # sigma above which f is summed as a series (the closed form cancels)
 
@@ -145,3 +146,11 @@ def restitution(x_from, v_from, physics, x_ref):
         return 0.0
     speed = speed_at(x_from, -v_from, physics.St, physics.Pi, x_ref)
     return speed / (impact_stokes(physics.St, physics.x_start, x_ref) / physics.St)
+
+
+def exact_for(physics) -> bool:
+    """Whether ``departure`` is the exact departure of ``physics`` (a ``solver.Physics``): the
+    Reynolds condition, which has no memory, and any model at ``Pi = 0``, where the film pulls
+    with no force at all (nothing refills, the spheres never stop). A JFO cavity with ``Pi > 0``
+    has a memory: its coupled phase goes on until the film is full again."""
+    return physics.cavitation == "reynolds" or (physics.cavitation == "jfo" and physics.Pi == 0.0)

@@ -31,8 +31,12 @@ import numpy as np
 
 from .._jit import jit
 from ..integration.linalg import matvec
-from ..physics import CAVITATION, DENSITY, PI, ST
-from .liquid import CONSTANT, compression_energy, density, kirchhoff_difference, volume_difference
+from ..physics import CAVITATION, CAVITATION_MODELS, DENSITY, PI, ST
+from .liquid import (CONSTANT, compression_energy, density, isoviscous, kirchhoff_difference,
+                     volume_difference)
+
+# the cavitation models' codes in the physics array (solver/physics.py: codes("cavitation"))
+NO_FLOOR, REYNOLDS, JFO = (float(CAVITATION_MODELS.index(m)) for m in ("off", "reynolds", "jfo"))
 
 
 # ---- the terms ------------------------------------------------------------------------------------
@@ -101,7 +105,7 @@ def cavitated(p, r_film, was_cavitated, phys):
     primal-dual active set: a full cell cavitates when its pressure falls below the floor, a
     cavitated cell refills when its film equation would draw liquid in (``r < 0``); otherwise a
     cell keeps its state. The classic film never cavitates."""
-    if phys[CAVITATION] == 0.0:
+    if phys[CAVITATION] == NO_FLOOR:
         return False
     if was_cavitated:
         return r_film >= 0.0
@@ -244,7 +248,17 @@ def strain_energy(weight, s_last, p, w, phys):
 # ---- assembled from the terms ---------------------------------------------------------------------
 @jit
 def face_fluxes(s, s_face, p, h, phys, q_out):
-    """Face fluxes ``q_f`` of every face into ``q_out`` (N-1 entries)."""
+    """Face fluxes ``q_f`` of every face into ``q_out`` (N-1 entries). The liquid's law is
+    decided once, outside the loop: for an isoviscous liquid the drive is ``P_hi - P_lo`` and
+    the loop is ``face_flux``'s formula, in the same order of operations, which the compiler
+    vectorises (a call per face cost 20x the loop, measured: benchmarks/solver.md)."""
+    if isoviscous(phys):
+        for f in range(s.size - 1):
+            h_lo = h[f]
+            h_hi = h[f + 1]
+            q_out[f] = s_face[f] * h_lo * h_lo * h_hi * h_hi / (
+                3.0 * (s[f + 1] - s[f]) * (h_lo + h_hi)) * (p[f + 1] - p[f])
+        return
     for f in range(s.size - 1):
         q_out[f] = face_flux(s[f], s[f + 1], s_face[f], p[f], p[f + 1], h[f], h[f + 1], phys)[0]
 
@@ -260,9 +274,14 @@ def residual(s, s_face, area, weight, phys, bh, c_hist, x_hist, v_hist, x, v, p,
     rows in its cavitated cells, where the unknown is ``theta``."""
     n = s.size
     face_fluxes(s, s_face, p, h, phys, q)
-    for i in range(n - 1):
-        dq = q[i] - (q[i - 1] if i > 0 else 0.0)
-        res[i] = cell_content(theta[i], h[i], p[i], phys)[0] - c_hist[i] - bh / area[i] * dq
+    if phys[DENSITY] == CONSTANT:  # the content is theta H (cell_content with rho = 1)
+        for i in range(n - 1):
+            dq = q[i] - (q[i - 1] if i > 0 else 0.0)
+            res[i] = theta[i] * h[i] - c_hist[i] - bh / area[i] * dq
+    else:
+        for i in range(n - 1):
+            dq = q[i] - (q[i - 1] if i > 0 else 0.0)
+            res[i] = cell_content(theta[i], h[i], p[i], phys)[0] - c_hist[i] - bh / area[i] * dq
     res[n - 1] = far_field_row(p[n - 2], p[n - 1], h[n - 2], h[n - 1])[0]
     res[n] = x - x_hist + bh * v
     res[n + 1] = v - v_hist + bh * film_force(weight, p) / (3.0 * phys[ST])
@@ -320,9 +339,21 @@ def jacobian(s, s_face, area, weight, influence, phys, bh, p, theta, h, active, 
     n = s.size
     jac[:, :] = 0.0
     dres_dh[:, :] = 0.0
+    classic_flux = isoviscous(phys)
     for f in range(n - 1):
-        _, dq_dpi, dq_dpj, dq_dhi, dq_dhj = face_flux(s[f], s[f + 1], s_face[f], p[f], p[f + 1],
-                                                      h[f], h[f + 1], phys)
+        if classic_flux:  # face_flux's partials with the drive P_hi - P_lo, without the call
+            h_lo = h[f]
+            h_hi = h[f + 1]
+            k = s_face[f] / (3.0 * (s[f + 1] - s[f]))
+            sum_h = h_lo + h_hi
+            dq_dpj = k * h_lo * h_lo * h_hi * h_hi / sum_h
+            dq_dpi = -dq_dpj
+            dp = p[f + 1] - p[f]
+            dq_dhi = dp * k * h_hi * h_hi * h_lo * (h_lo + 2.0 * h_hi) / (sum_h * sum_h)
+            dq_dhj = dp * k * h_lo * h_lo * h_hi * (h_hi + 2.0 * h_lo) / (sum_h * sum_h)
+        else:
+            _, dq_dpi, dq_dpj, dq_dhi, dq_dhj = face_flux(s[f], s[f + 1], s_face[f], p[f],
+                                                          p[f + 1], h[f], h[f + 1], phys)
         # row f: -bh/area_f * (+q_f);  row f+1 (if a cell row): -bh/area_{f+1} * (-q_f)
         g = bh / area[f]
         jac[f, f] -= g * dq_dpi
@@ -335,16 +366,20 @@ def jacobian(s, s_face, area, weight, influence, phys, bh, p, theta, h, active, 
             jac[f + 1, f + 1] += g * dq_dpj
             dres_dh[f + 1, 0] += g * dq_dhi
             dres_dh[f + 1, 1] += g * dq_dhj
-    for i in range(n - 1):
-        _, _, dc_dh, dc_dp = cell_content(theta[i], h[i], p[i], phys)
-        dres_dh[i, 1] += dc_dh
-        jac[i, i] += dc_dp
+    if phys[DENSITY] == CONSTANT:  # cell_content's partials with rho = 1
+        for i in range(n - 1):
+            dres_dh[i, 1] += theta[i]
+    else:
+        for i in range(n - 1):
+            _, _, dc_dh, dc_dp = cell_content(theta[i], h[i], p[i], phys)
+            dres_dh[i, 1] += dc_dh
+            jac[i, i] += dc_dp
     _, dr_dpi, dr_dpo, dr_dhi, dr_dho = far_field_row(p[n - 2], p[n - 1], h[n - 2], h[n - 1])
     jac[n - 1, n - 1] += dr_dpo
     jac[n - 1, n - 2] += dr_dpi
     dres_dh[n - 1, 0] = dr_dhi
     dres_dh[n - 1, 1] = dr_dho
-    jfo = phys[CAVITATION] == 2.0
+    jfo = phys[CAVITATION] == JFO
     if not jfo:
         for i in range(n - 1):  # an active constraint replaces the whole row
             if active[i]:

@@ -33,12 +33,15 @@ import math
 import numpy as np
 
 from .._jit import jit
-from ..physics import (BETA, DENSITY, DH_C1, DH_C2, ROELANDS_PR, ROELANDS_Z, TABLE, TENSION,
-                       VISCOSITY)
+from ..physics import (BETA, DENSITY, DENSITY_LAWS, DH_C1, DH_C2, ROELANDS_PR, ROELANDS_Z, TABLE,
+                       TENSION, TENSION_CHOICES, VISCOSITY, VISCOSITY_LAWS)
 
-# codes in the physics array (solver/physics.py: VISCOSITY_LAWS, DENSITY_LAWS, TENSION_CHOICES)
-CONSTANT, BARUS, ROELANDS, TABULATED = 0.0, 1.0, 2.0, 3.0
-LAW_IN_TENSION = 1.0
+# codes in the physics array (solver/physics.py: a choice's code is its place in codes(name));
+# CONSTANT is the code of the constant viscosity and of the constant density alike
+CONSTANT, BARUS, ROELANDS, TABULATED = (float(VISCOSITY_LAWS.index(law))
+                                        for law in ("constant", "barus", "roelands", "table"))
+assert DENSITY_LAWS.index("constant") == CONSTANT
+LAW_IN_TENSION = float(TENSION_CHOICES.index("law"))
 # Roelands read in tension ("law") is undefined at P <= -P_R; it is held at this fraction of it
 ROELANDS_TENSION_LIMIT = 0.99
 # Tension over which a compressible liquid's compressibility fades (in p*; ~5 MPa at

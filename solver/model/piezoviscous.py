@@ -59,6 +59,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import integrate, optimize
 
+from ..physics import TENSION_CHOICES
 from .rigid import I0
 
 __all__ = [
@@ -75,8 +76,6 @@ __all__ = [
     "approach",
     "exact_for",
 ]
-
-TENSION_CHOICES = ("ambient", "law")  # as solver.physics.TENSION_CHOICES
 
 # Where the rigid approach gives way to the coupled solver near the glass gap: the axis's
 # ln(mu/mu0) = beta P(0) = -ln(1 - z) reaches 1, i.e. X = GLASS_MARGIN k. Why there: a gap change

@@ -1,0 +1,302 @@
+"""What the time loop asks of the film model: the contract between integration/stepper.py and the
+physics.
+
+The loop (integration/stepper.py) solves ``y = (P_0..P_{N-1}, X, V)`` by BDF2 and chord Newton and
+knows no physics. Everything a piece of physics needs the loop to do goes through the functions
+here, which read the physics array ``phys`` (solver/physics.py) and decide:
+
+- ``new_state``: the film's own state beyond ``y`` (``marks``, ``cells``, ``scalars`` below),
+  which the loop carries and hands back but never reads;
+- ``content_history``: the BDF combination of the cells' liquid content at the accepted states;
+- ``has_active_set``: whether the film has a complementarity constraint decided cell by cell
+  (an active set); then a Newton iterate converges only with a settled set, a change refreshes
+  the factorisation (``settled``), and the set is decided at the iterates ``decide`` marks;
+- ``start_attempt``, ``step_residual``, ``step_jacobian``: a step attempt's start, its residual
+  (with the active set decided and its rows replaced) and its Jacobian (recording the set it was
+  built with);
+- ``split_update``, ``update_norm``: unknowns whose slot in ``y`` holds another variable (a JFO
+  cavity's liquid fraction), and their part of the Newton norm;
+- ``step_error``: in which variable each pressure's local error is measured, and which errors
+  leave the norm where the solution is not smooth in time (an active set's edge);
+- ``pressure_scale``: the absolute part of the pressure error scale;
+- ``record``, ``accept``: the model's columns of the series row, and its state after an accepted
+  step (the work against a floor, the history of the fractions).
+
+The physics behind each branch: model/film.py (terms) and docs/model.md (Cavitation;
+Pressure-dependent viscosity and density).
+"""
+
+import numpy as np
+
+from .._jit import jit
+from ..observables import SERIES_INDEX
+from ..physics import CAVITATION, DENSITY, PI, ST
+from .film import (JFO, NO_FLOOR, cavity_edge, cell_content, compression_work, constrain, gap,
+                   jacobian, jfo_void, residual, update_cavity, update_cavity_jfo, void_work)
+from .liquid import CONSTANT, isoviscous, kirchhoff_difference
+
+# rows of ``marks`` (bool, one entry per cell): the cavitated cells of the current iterate, of the
+# factorised Jacobian, and of the last accepted state
+ACTIVE, ACTIVE_LU, ACTIVE0 = 0, 1, 2
+# rows of ``cells`` (float, one entry per cell): the liquid fraction theta of the iterate and of
+# the last two accepted states (1 in full cells, and in every cell but a JFO cavity's), the
+# fraction's Newton update, the gap where each cell cavitated (the void volume), the face fluxes
+# of the last accepted state
+THETA, THETA0, THETA1, DTHETA, H_ONSET, Q_PREV = 0, 1, 2, 3, 4, 5
+# entries of ``scalars``: the work against the floor so far, the absolute pressure error scale,
+# the largest pressure seen, the accepted state's cavity radius
+WORKED, P_ABS, P_SEEN, R_EDGE = 0, 1, 2, 3
+
+_R_CAV, _V_VOID = SERIES_INDEX["cavity_radius"], SERIES_INDEX["void_volume"]
+_W_VOID, _E_C = SERIES_INDEX["void_work"], SERIES_INDEX["E_c"]
+
+
+@jit
+def new_state(q):
+    """The film's state at the start (``q`` the face fluxes of the initial state): no cavity,
+    full cells."""
+    cells_n = q.size
+    marks = np.zeros((3, cells_n), dtype=np.bool_)
+    cells = np.zeros((6, cells_n))
+    cells[THETA, :] = 1.0
+    cells[THETA0, :] = 1.0
+    cells[THETA1, :] = 1.0
+    cells[Q_PREV, :] = q
+    scalars = np.zeros(4)
+    # Absolute part of the pressure error scale. With a floor the film carries almost no
+    # pressure once it has cavitated (|P| ~ Pi over the whole rebound), and a scale relative to
+    # the instantaneous pressure made the steps collapse to 1e-9 where the last full cells at the
+    # axis drained: pressures far below the collision's peak move neither the gap nor the force
+    # (both in the norm on their own), so they count as absolute below a fraction of the largest
+    # pressure seen so far, from the film's first cavity on (``record``). The classic film (and
+    # a film that never cavitates) keeps its instantaneous scale.
+    scalars[P_ABS] = 1e-12
+    return marks, cells, scalars
+
+
+@jit
+def has_active_set(phys):
+    """Whether the film has a constraint decided cell by cell (a cavitation floor)."""
+    return phys[CAVITATION] != NO_FLOOR
+
+
+@jit
+def fluid_fraction(cells):
+    """The accepted state's liquid fraction per cell (the profile the loop saves)."""
+    return cells[THETA0]
+
+
+@jit
+def pressure_scale(scalars):
+    """The absolute part of the pressure error scale (``new_state``)."""
+    return scalars[P_ABS]
+
+
+@jit
+def content_history(a1, a2, y0, y1, h0, h1, cells, phys, out):
+    """``a1 C(state 0) + a2 C(state 1)`` per cell (``C = rho_bar theta H``, ``film.cell_content``),
+    and the same combination of the boundary node's gap, into ``out``."""
+    n = out.size
+    theta0, theta1 = cells[THETA0], cells[THETA1]
+    if phys[DENSITY] == CONSTANT:  # C = theta H (rho = 1)
+        for i in range(n - 1):
+            out[i] = a1 * (theta0[i] * h0[i]) + a2 * (theta1[i] * h1[i])
+    else:
+        for i in range(n - 1):
+            out[i] = a1 * cell_content(theta0[i], h0[i], y0[i], phys)[0] \
+                + a2 * cell_content(theta1[i], h1[i], y1[i], phys)[0]
+    out[n - 1] = a1 * h0[n - 1] + a2 * h1[n - 1]
+
+
+@jit
+def start_attempt(y, marks, cells, phys):
+    """A step attempt of a JFO film starts from the accepted cavity, its cells' slots at the
+    floor; the Reynolds film keeps the iterate's set."""
+    if phys[CAVITATION] != JFO:
+        return
+    active, active0 = marks[ACTIVE], marks[ACTIVE0]
+    theta, theta0 = cells[THETA], cells[THETA0]
+    for i in range(active.size):
+        active[i] = active0[i]
+        theta[i] = theta0[i]
+        if active[i]:
+            y[i] = -phys[PI]
+
+
+@jit
+def step_residual(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist, y,
+                  marks, cells, decide, q, w, h, res):
+    """The scaled residual of the step at the iterate ``y`` (``film.residual``) into ``res``;
+    where ``decide``, the active set is decided first from it (a JFO switch moves slots to the
+    floor, so the gap ``w, h`` and the rows follow); the rows of a Reynolds cavity are replaced by
+    their constraint. ``q`` receives the face fluxes."""
+    n = s.size
+    p = y[:n]
+    theta, active = cells[THETA], marks[ACTIVE]
+    residual(s, s_face, area, weight, phys, bh, c_hist, x_hist, v_hist, y[n], y[n + 1], p, theta,
+             h, q, res)
+    if not has_active_set(phys):
+        return
+    jfo = phys[CAVITATION] == JFO
+    if decide:
+        if jfo:
+            if update_cavity_jfo(p, theta, phys, active):
+                gap(s, influence, y[n], p, w, h)
+                residual(s, s_face, area, weight, phys, bh, c_hist, x_hist, v_hist, y[n],
+                         y[n + 1], p, theta, h, q, res)
+        else:
+            update_cavity(p, res, phys, active)
+    if not jfo:
+        constrain(p, res, active, phys)
+
+
+@jit
+def settled(marks):
+    """Whether the iterate's active set is the one the factorised Jacobian was built with."""
+    active, active_lu = marks[ACTIVE], marks[ACTIVE_LU]
+    for i in range(active.size):
+        if active[i] != active_lu[i]:
+            return False
+    return True
+
+
+@jit
+def step_jacobian(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, jac,
+                  dres_dh):
+    """The Jacobian of ``step_residual`` at ``y`` into ``jac`` (``film.jacobian``), recording the
+    active set it is built with."""
+    n = s.size
+    jacobian(s, s_face, area, weight, influence, phys, bh, y[:n], cells[THETA], h, marks[ACTIVE],
+             jac, dres_dh)
+    marks[ACTIVE_LU, :] = marks[ACTIVE]
+
+
+@jit
+def split_update(res, marks, cells, phys):
+    """Take the Newton update of the slots that hold another unknown out of ``res``: a JFO
+    cavity's slot updates its liquid fraction theta (kept >= 0: a dry cell), not ``P``."""
+    if phys[CAVITATION] != JFO:
+        return
+    active, theta, dtheta = marks[ACTIVE], cells[THETA], cells[DTHETA]
+    for i in range(active.size):
+        dtheta[i] = 0.0
+        if active[i]:
+            dtheta[i] = res[i]
+            theta[i] = max(theta[i] + res[i], 0.0)
+            res[i] = 0.0
+
+
+@jit
+def update_norm(norm, cells, phys, rtol):
+    """The Newton norm with the fractions' updates (absolute) of ``split_update``."""
+    if phys[CAVITATION] != JFO:
+        return norm
+    dtheta = cells[DTHETA]
+    for i in range(dtheta.size):
+        norm = max(norm, abs(dtheta[i]) / rtol)
+    return norm
+
+
+@jit
+def step_error(y, y_pred, err_fac, marks, scalars, phys, perr, dh, scale):
+    """Adjust the local error estimate of a converged step. On entry ``perr`` holds the pressure
+    part ``err_fac (y - y_pred)`` and ``dh`` the gap's; on return ``scale`` holds the values the
+    pressure errors are measured against.
+
+    - While a cavity is open the pressure is not smooth in time wherever its edge crosses a node
+      (the cells there and their neighbours), and a cavity that closes in this step makes it
+      jump: the gap, X and V errors control the step (measured: every rejection came from these
+      kinks; counting the jump of the last cell of an axis cavity as an error underflowed the
+      step).
+    - JFO: where a cavity closes the pressure jumps (the void's closing rate is finite up to the
+      instant it vanishes), and the gap with it through ``W = K P``: no step size makes the
+      extrapolation of the gap across it accurate. X and V stay continuous; they control this
+      step, and the history restarts after it.
+    - A pressure-dependent liquid: the pressure error in the variable the film sees, the
+      Kirchhoff pressure ``Int rho/mu dP``, smooth where a glassy lens makes ``P`` itself spike
+      (that spike moves the gap, X and V only through W and the force, both in the norm on their
+      own)."""
+    n = perr.size
+    active, active0 = marks[ACTIVE], marks[ACTIVE0]
+    floor = has_active_set(phys)
+    open_cavity = scalars[R_EDGE] > 0.0
+    refilled = False
+    if phys[CAVITATION] == JFO:
+        for i in range(active.size):
+            refilled = refilled or (active0[i] and not active[i])
+    for i in range(active.size):
+        open_cavity = open_cavity or active[i]
+    rough_in_time = floor and (open_cavity or refilled)
+    if rough_in_time:
+        for i in range(n):
+            perr[i] = 0.0
+    if refilled:
+        for i in range(n):
+            dh[i] = 0.0
+    if not isoviscous(phys) and not rough_in_time:
+        for i in range(n):
+            perr[i] = err_fac * kirchhoff_difference(y_pred[i], y[i], phys)[0]
+            scale[i] = kirchhoff_difference(0.0, y[i], phys)[0]
+    else:
+        for i in range(n):
+            scale[i] = y[i]
+
+
+@jit
+def record(row, s, area, p, h, pmax, pmin, marks, cells, scalars, phys, floor_fraction):
+    """The model's columns of the series row of an accepted state (cavity radius and void volume,
+    work against the floor, compression energy), and the error scale's update from the largest
+    pressure seen (``floor_fraction`` of it, from the first cavity on). Returns the radius the
+    terminal events see: the cavity's, tiny but positive for a JFO cavity of axis cells alone
+    (whose edge radius is zero)."""
+    active0, theta0, h_onset = marks[ACTIVE0], cells[THETA0], cells[H_ONSET]
+    r_cav = cavity_edge(s, p, active0, phys)
+    jfo = phys[CAVITATION] == JFO
+    v_void = 0.0
+    if jfo:
+        v_void = jfo_void(area, theta0, h, active0)
+    else:
+        for i in range(active0.size):
+            if active0[i]:
+                v_void += area[i] * (h[i] - h_onset[i])
+    row[_R_CAV] = r_cav
+    row[_V_VOID] = v_void
+    row[_W_VOID] = scalars[WORKED]
+    row[_E_C] = compression_work(area, p, h, theta0, phys)
+    scalars[R_EDGE] = r_cav
+    if has_active_set(phys):
+        scalars[P_SEEN] = max(scalars[P_SEEN], pmax, -pmin)
+        if r_cav > 0.0:
+            scalars[P_ABS] = max(scalars[P_ABS], floor_fraction * scalars[P_SEEN])
+    r_event = r_cav
+    if jfo:
+        for i in range(active0.size):
+            if active0[i]:
+                r_event = max(r_event, 1e-300)
+    return r_event
+
+
+@jit
+def accept(area, h0, h1, q, dt, marks, cells, scalars, phys):
+    """The model's state after an accepted step (``h0`` its gap, ``h1`` the previous one's, ``q``
+    its face fluxes): the work against the floor (JFO: ``Pi dV_void`` exactly, film.jfo_void;
+    Reynolds: film.void_work), the fractions' history, where new cavity cells opened, and the
+    accepted cavity."""
+    if not has_active_set(phys):
+        return
+    active, active0 = marks[ACTIVE], marks[ACTIVE0]
+    theta, theta0, theta1 = cells[THETA], cells[THETA0], cells[THETA1]
+    h_onset, q_prev = cells[H_ONSET], cells[Q_PREV]
+    if phys[CAVITATION] == JFO:
+        scalars[WORKED] += 2.0 * phys[PI] * (jfo_void(area, theta, h0, active)
+                                             - jfo_void(area, theta0, h1, active0)) \
+            / (3.0 * phys[ST])
+    else:
+        scalars[WORKED] += void_work(area, h0, h1, q, q_prev, dt, active, phys)
+    theta1[:] = theta0
+    theta0[:] = theta
+    for i in range(active.size):
+        if active[i] and not active0[i]:
+            h_onset[i] = h1[i]
+    active0[:] = active
+    q_prev[:] = q

@@ -1,0 +1,83 @@
+"""The time loop's parts (solver/integration/stepper.py), each against what it must be exactly.
+
+The whole loop is tested through collisions (closed forms, energy, convergence: test_collision.py,
+test_convergence.py); here each part on its own, where a wrong coefficient or a swapped index
+would otherwise show only as more steps.
+"""
+
+import numpy as np
+import pytest
+
+from solver.integration import stepper
+
+
+@pytest.mark.parametrize("dt, dt_prev", [(0.1, 0.1), (0.13, 0.05), (0.02, 0.3)])
+def test_bdf2_is_exact_for_quadratics(dt, dt_prev):
+    """Variable-step BDF2 ``y1 - a1 y0 - a2 y_1 = b dt y'(t1)`` holds exactly for every
+    polynomial of degree 2 (its order), whatever the two step sizes."""
+    t_prev, t0 = 0.7, 0.7 + dt_prev
+    t1 = t0 + dt
+    a1, a2, b = stepper._bdf2(dt, t0, t_prev, 2)
+    for c0, c1, c2 in [(1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.3, -2.0, 5.0)]:
+        f = lambda t: c0 + c1 * t + c2 * t * t  # noqa: E731
+        df = c1 + 2.0 * c2 * t1
+        # 1e-12: a few roundings of O(1) terms, relative to the largest term
+        assert f(t1) - a1 * f(t0) - a2 * f(t_prev) == pytest.approx(b * dt * df, abs=1e-12)
+    assert stepper._bdf2(dt, t0, t_prev, 1) == (1.0, 0.0, 1.0)  # implicit Euler to start
+
+
+def test_predictor_extrapolates_polynomials_exactly():
+    """Through three states the predictor is the quadratic, through two the line; its error
+    factor is ``dt / (t_new - t_oldest)``."""
+    t2, t1, t0, dt = 0.0, 0.2, 0.5, 0.15
+    quad = lambda t: np.array([1.0 + 2.0 * t - 3.0 * t * t, -t * t])  # noqa: E731
+    out = np.empty(2)
+    fac = stepper._predict(dt, t0, t1, t2, 3, quad(t0), quad(t1), quad(t2), out)
+    np.testing.assert_allclose(out, quad(t0 + dt), rtol=0, atol=1e-13)  # round-off of O(1) terms
+    assert fac == pytest.approx(dt / (t0 + dt - t2), rel=1e-15)
+    line = lambda t: np.array([2.0 - t, 3.0 * t])  # noqa: E731
+    fac = stepper._predict(dt, t0, t1, t2, 2, line(t0), line(t1), line(t2), out)
+    np.testing.assert_allclose(out, line(t0 + dt), rtol=0, atol=1e-13)
+    assert fac == pytest.approx(dt / (t0 + dt - t1), rel=1e-15)
+    assert stepper._predict(dt, t0, t1, t2, 1, line(t0), line(t1), line(t2), out) == 0.0
+    np.testing.assert_array_equal(out, line(t0))
+
+
+def test_step_factor_bounds_growth_and_keeps_the_lu():
+    """Growth at most 2x (BDF2 zero-stability needs < 2.41x), shrink at most 5x, and a proposed
+    growth under 1.2x keeps the step (and so the factorised matrix)."""
+    assert stepper._step_factor(0.0) == 2.0
+    assert stepper._step_factor(1e-9) == 2.0
+    assert stepper._step_factor(1e3) == 0.2
+    assert stepper._step_factor(0.55) == 1.0  # 0.9 * 0.55^(-1/3) = 1.096: kept
+    err = 0.2
+    assert stepper._step_factor(err) == pytest.approx(0.9 * err ** (-1.0 / 3.0), rel=1e-15)
+
+
+def test_norm_counts_small_pressures_as_absolute():
+    """A pressure far below the largest one is measured against ``PRESSURE_SCALE`` of it (plus
+    the absolute scale), a gap below ``GAP_SCALE`` against that; X and V against 1 and 0.1."""
+    p = np.array([10.0, 1e-6])
+    h = np.array([1.0, 1e-4])
+    zero = np.zeros(2)
+    rtol = 1e-3
+    dp = np.array([0.0, 1e-3])
+    expected = 1e-3 / (1e-6 + stepper.PRESSURE_SCALE * 10.0) / rtol
+    assert stepper._norm(dp, 0.0, 0.0, zero, p, 0.0, 0.0, h, rtol, 0.0) == pytest.approx(
+        expected, rel=1e-14)
+    dh = np.array([0.0, 1e-5])
+    assert stepper._norm(zero, 0.0, 0.0, dh, p, 0.0, 0.0, h, rtol, 0.0) == pytest.approx(
+        1e-5 / (1e-4 + stepper.GAP_SCALE) / rtol, rel=1e-14)
+    assert stepper._norm(zero, 0.5, 0.0, zero, p, 1.0, 0.0, h, 1.0, 0.0) == pytest.approx(0.25)
+    assert stepper._norm(zero, 0.0, 0.05, zero, p, 0.0, 0.0, h, 1.0, 0.0) == pytest.approx(0.5)
+
+
+def test_counters_are_named_in_the_order_the_loop_returns_them():
+    assert [stepper.STEPS, stepper.REJECTED, stepper.NEWTON, stepper.LU, stepper.JACOBIANS] == \
+        list(range(len(stepper.COUNTERS)))
+    from solver import Physics, collide
+
+    c = collide(Physics(St=10.0, eps=1e-2), accuracy="fast", save_profiles=False)
+    # every attempt runs Newton at least once and every accepted step is an attempt
+    assert c.newton_iterations >= c.steps + c.rejected_steps > 0
+    assert 0 < c.lu_factorizations <= c.newton_iterations
