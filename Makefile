@@ -13,7 +13,7 @@ export OMP_NUM_THREADS := 1
 export OPENBLAS_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: install test test-install sweep quick figures bench bench-sweep bench-accuracy clean-cache clean
+.PHONY: install test test-install test-dem sweep quick figures bench bench-sweep bench-accuracy clean-cache clean
 
 $(STAMP): pyproject.toml setup.py
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "error: $(PYTHON) not found; set PYTHON=/path/to/python3.11"; exit 1; }
@@ -31,6 +31,21 @@ test: $(STAMP)
 # folder (tests/install_from_pip.py; a few minutes: the fresh install compiles the solver)
 test-install: $(STAMP)
 	$(PY) -m pytest -q tests/install_from_pip.py
+
+# The exported DEM snippets run in the real programs (tests/test_dem_programs.py, ~30 s): the
+# Debian packages liggghts (3.8.0) and yade (2023.02a) are installed when missing, with
+# apt-get install -y (root and apt-get only); without them their tests skip, each saying why.
+DEM_PROGRAMS := liggghts yade
+test-dem: $(STAMP)
+	@missing=""; for p in $(DEM_PROGRAMS); do command -v $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	if [ -n "$$missing" ]; then \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "test-dem: installing$$missing (apt-get install -y)"; \
+	    { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq$$missing >/dev/null; } \
+	      || echo "test-dem: apt-get could not install$$missing: their tests skip"; \
+	  else echo "test-dem:$$missing not installed and no root apt-get here: their tests skip"; fi; \
+	fi
+	$(PY) -m pytest -q -ra tests/test_dem_programs.py
 
 # The sweep's figures are drawn also when some scenes failed (exit 3: failures are masked in
 # them); make still reports the sweep's exit code. Exit 2 (bad input) draws nothing.

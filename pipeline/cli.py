@@ -7,7 +7,9 @@ The error boundary of every command is :func:`main`: an expected failure is a
 traceback, one line saying so, exit 70). Exit codes (the table is in ``pipeline/errors.py`` and
 docs/pipeline.md): 0 success, 1 a scene failed (its status and message are printed), 2 bad input
 (including output paths that cannot be written, checked before any solve), 3/4 a sweep with failed
-scenes / a lost scheduler, 5 a damaged store, 70 a bug, 130 interrupted, 141 the reader of stdout
+scenes / a lost scheduler, 5 a damaged store, 70 a bug, 74 an output could not be written (a full
+disk, stdout closed or full: one line naming the path and the free space, nothing partial left),
+130 interrupted, 143 terminated (SIGTERM, handled like Ctrl-C), 141 the reader of stdout
 went away (``ehd run ... | head``): like a Unix tool killed by SIGPIPE (128 + 13), so ``set -o
 pipefail`` scripts see the usual code, but without a traceback; the rest of the output goes to
 /dev/null (the recipe of the Python docs, "Note on SIGPIPE").
@@ -27,8 +29,9 @@ import sys
 # names stay importable from here for code written against them
 from .cli_shared import (add_numerics_flags, check_output_dir, check_output_paths, format_value,
                          numerics_overrides)
-from .errors import (BUG_REPORT, EXIT_BROKEN_PIPE, EXIT_INTERNAL, EXIT_INTERRUPTED, EhdError,
-                     PathError, UsageError)
+from .errors import (BUG_REPORT, EXIT_BROKEN_PIPE, EXIT_INTERNAL, EXIT_INTERRUPTED,
+                     EXIT_SCENE_FAILED, EXIT_TERMINATED, EXIT_WRITE, EhdError, PathError,
+                     Terminated, UsageError)
 
 __all__ = ["main", "COMMANDS", "UsageError", "check_output_paths", "check_output_dir"]
 
@@ -85,6 +88,13 @@ def cmd_run(args) -> int:
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     d = result.to_dict()
+    from .sweeps.tasks import nonfinite_reason
+
+    failed = not result.ok
+    reason = "" if failed else nonfinite_reason(lambda n: getattr(result, n, None))
+    if reason:  # an overflow is no result: a failed scene with its reason
+        d.update(status="error", message=reason)
+        failed = True
     if args.json:
         import json
 
@@ -95,23 +105,30 @@ def cmd_run(args) -> int:
         _save_dataset(result.to_xarray(), args.save)
         if not args.json:
             print(f"saved {args.save}")
-    if args.plot and result.ok:
+    if args.plot and not failed:
         from .plots.scene_plots import plot_scene
+        from .writes import guarded_dir
 
-        paths = plot_scene(result, args.plot)
+        with guarded_dir(args.plot, f"--plot {args.plot}"):
+            paths = plot_scene(result, args.plot)
         if not args.json:
             print(f"figures: {', '.join(str(p) for p in paths if p.suffix == '.png')}")
-    return 0 if result.ok else 1
+    return EXIT_SCENE_FAILED if failed else 0
 
 
 def _save_dataset(ds, path: str) -> None:
-    if path.endswith(".zarr"):
-        from .sweeps.layout import zarr_warnings
+    """Write under a temporary name and move into place: a failed write (a full disk) leaves
+    neither a partial file nor a changed old one (pipeline/writes.py)."""
+    from .writes import atomic_path
 
-        with zarr_warnings():  # we consolidate on purpose, as the sweep stores do
-            ds.to_zarr(path, mode="w")
-    else:
-        ds.to_netcdf(path, engine="scipy")  # netCDF3 via scipy: no extra dependency
+    with atomic_path(path, f"--save {path}") as tmp:
+        if path.endswith(".zarr"):
+            from .sweeps.layout import zarr_warnings
+
+            with zarr_warnings():  # we consolidate on purpose, as the sweep stores do
+                ds.to_zarr(tmp, mode="w")
+        else:
+            ds.to_netcdf(tmp, engine="scipy")  # netCDF3 via scipy: no extra dependency
 
 
 def _add_physics_flags(p: argparse.ArgumentParser) -> None:
@@ -277,72 +294,263 @@ def _parser(argv=None) -> argparse.ArgumentParser:
     return parser
 
 
-def _interrupted(name: str) -> int:
+def _interrupted(name: str, terminated: bool = False) -> int:
     _quiet_dask()
     _flush_quietly()
-    print(f"{name}: interrupted; everything finished so far is kept", file=sys.stderr)
-    return EXIT_INTERRUPTED
+    how = "terminated (SIGTERM)" if terminated else "interrupted"
+    _say(f"{name}: {how}; everything finished so far is kept")
+    return EXIT_TERMINATED if terminated else EXIT_INTERRUPTED
 
 
-def _caused_by_interrupt(exc: BaseException) -> bool:
-    """Ctrl-C that arrived inside compiled code comes back wrapped: numba re-raises it as a
-    ``SystemError`` ("returned a result with an exception set") whose cause is the
-    ``KeyboardInterrupt``."""
+def _caused_by_interrupt(exc: BaseException):
+    """Ctrl-C (or SIGTERM) that arrived inside compiled code comes back wrapped: numba re-raises
+    it as a ``SystemError`` ("returned a result with an exception set") whose cause is the
+    ``KeyboardInterrupt``. Returns the interrupt found, or None."""
     seen = set()
     while exc is not None and id(exc) not in seen:
-        if isinstance(exc, KeyboardInterrupt):
-            return True
+        if isinstance(exc, (KeyboardInterrupt, Terminated)):
+            return exc
         seen.add(id(exc))
         exc = exc.__cause__ or exc.__context__
-    return False
+    return None
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated()
+
+
+def _handle_sigterm():
+    """SIGTERM unwinds like Ctrl-C (the journal keeps every finished scene; exit 143). Returns
+    a function that puts the previous handler back (``main`` called from Python code, e.g. a
+    test, leaves the process as it found it)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+    previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    return lambda: signal.signal(signal.SIGTERM, previous)
+
+
+def _closed_stdout() -> bool:
+    """fd 1 is closed (``ehd ... >&-``); it is pointed at /dev/null at once, so no file opened
+    later takes fd 1 and receives what C code prints. Also fd 2 when closed (messages are then
+    lost, the exit code still says what happened)."""
+    closed = False
+    for fd in (1, 2):
+        try:
+            os.fstat(fd)
+        except OSError:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            if devnull != fd:
+                os.dup2(devnull, fd)
+                os.close(devnull)
+            closed = closed or fd == 1
+    return closed or sys.stdout is None
+
+
+def _say(line: str) -> None:
+    """One line on stderr; never raises (stderr may be closed or full too)."""
+    try:
+        stream = sys.stderr if sys.stderr is not None else sys.__stderr__
+        print(line, file=stream, flush=True)
+    except Exception:  # noqa: BLE001 - nowhere left to say it: the exit code says it
+        pass
+
+
+def _stdout_lost(name: str, exc: OSError) -> int:
+    """stdout could not take the output (``> /dev/full``, an I/O error): one line, exit 74; the
+    rest of the output goes to /dev/null so the interpreter's last flush cannot fail again."""
+    _to_devnull()
+    _say(f"{name}: error: cannot write to stdout ({exc.strerror or type(exc).__name__}); the "
+         "output was lost: send it to a file with room (> FILE)")
+    return EXIT_WRITE
+
+
+def _to_devnull() -> None:
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, 1)
+        os.close(devnull)
+    except OSError:
+        pass
 
 
 def main(argv=None) -> int:
-    """Run one ``ehd`` command: the error boundary of them all (see the module docstring)."""
+    """Run one ``ehd`` command: the error boundary of them all (see the module docstring).
+    Never raises but ``SystemExit`` of argparse (``--help``, a bad flag: exit 2)."""
+    restore = _handle_sigterm()
+    try:
+        return _main(argv)
+    except SystemExit:
+        raise
+    except BaseException as exc:  # noqa: BLE001 - the boundary of the boundary
+        if _caused_by_interrupt(exc) is not None:
+            return EXIT_TERMINATED if isinstance(_caused_by_interrupt(exc), Terminated) \
+                else EXIT_INTERRUPTED
+        try:
+            what = f"{type(exc).__name__}: {exc}"
+        except Exception:  # noqa: BLE001 - an exception whose text fails too
+            what = type(exc).__name__
+        _say(f"ehd: internal error ({what}): this is a bug in ehd-collision; please report it "
+             f"at {BUG_REPORT}")
+        return EXIT_INTERNAL
+    finally:
+        try:
+            restore()
+        except Exception:  # noqa: BLE001 - the boundary never raises
+            pass
+
+
+def _main(argv=None) -> int:
+    import errno
+
+    stdout_closed = _closed_stdout()
+    argv = _negative_values(sys.argv[1:] if argv is None else list(argv))
     args = _parser(argv).parse_args(argv)
     name = f"ehd {args.command}"
+    if stdout_closed:
+        _say(f"{name}: error: stdout is closed (>&-): the results would be lost; run with stdout "
+             "open (> FILE, or > /dev/null to discard them)")
+        return EXIT_WRITE
+    real_stdout, sys.stdout = sys.stdout, _Stdout(sys.stdout)
     try:
         code = args.func(args)
-        sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
+        sys.stdout.flush()  # a closed pipe or a full stdout shows here, not at interpreter exit
         return code
+    except _StdoutLost as exc:
+        return _stdout_lost(name, exc.error)
     except EhdError as exc:
         _flush_quietly()
-        print(f"{name}: error: {exc.line()}", file=sys.stderr)
+        _say(f"{name}: error: {exc.line()}")
         return exc.exit_code
     except KeyboardInterrupt:
         return _interrupted(name)
+    except Terminated:
+        return _interrupted(name, terminated=True)
     except BrokenPipeError:
         # the reader went away (``ehd ... | head``): no traceback, and the interpreter's final
         # flush must not raise again, so stdout points to /dev/null (Python docs, SIGPIPE note)
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
+        _to_devnull()
         return EXIT_BROKEN_PIPE
-    except Exception as exc:
-        import traceback
+    except OSError as exc:
+        if exc.errno not in (errno.ENOSPC, getattr(errno, "EDQUOT", -1), errno.EIO,
+                             errno.EFBIG, errno.EROFS):
+            return _bug(name, exc)
+        if exc.filename is None and not _stdout_ok():
+            return _stdout_lost(name, exc)
+        from .writes import write_error
 
-        if _caused_by_interrupt(exc):
-            return _interrupted(name)
         _flush_quietly()
+        _say(f"{name}: error: {write_error(exc, name, exc.filename).line()}")
+        return EXIT_WRITE
+    except Exception as exc:
+        return _bug(name, exc)
+    finally:
+        sys.stdout = real_stdout
+
+
+class _StdoutLost(Exception):
+    """A write to stdout failed (not a closed pipe): ``error`` is the ``OSError``."""
+
+    def __init__(self, error: OSError):
+        super().__init__(str(error))
+        self.error = error
+
+
+class _Stdout:
+    """stdout as the commands see it: a failed write (``> /dev/full``) is told apart from a
+    failed write of a file (the error boundary reports each with its own line)."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def write(self, text):
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise _StdoutLost(exc) from None
+
+    def flush(self):
+        try:
+            return self._stream.flush()
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise _StdoutLost(exc) from None
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
+def _negative_values(argv: list) -> list:
+    """``--Pi -inf`` as ``--Pi=-inf``: argparse takes a value that starts with '-' and is not
+    a plain negative number (``-inf``, ``-1e3``, ``-nan``) for an unknown option ("expected one
+    argument"); joined to its flag, the value reaches the check that names it."""
+    out = []
+    for token in argv:
+        prev = out[-1] if out else ""
+        if (token.startswith("-") and prev.startswith("--") and "=" not in prev
+                and prev != "--" and _is_number(token)):
+            out[-1] = f"{prev}={token}"
+        else:
+            out.append(token)
+    return out
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
+
+
+def _stdout_ok() -> bool:
+    try:
+        sys.stdout.flush()
+        return True
+    except (OSError, ValueError, AttributeError):
+        return False
+
+
+def _bug(name: str, exc: BaseException) -> int:
+    import traceback
+
+    interrupt = _caused_by_interrupt(exc)
+    if interrupt is not None:
+        return _interrupted(name, terminated=isinstance(interrupt, Terminated))
+    if isinstance(exc, OSError) and not _stdout_ok():
+        return _stdout_lost(name, exc)
+    _flush_quietly()
+    try:
         traceback.print_exc()
-        print(f"{name}: internal error: this is a bug in ehd-collision, not in your input; please "
-              f"report it at {BUG_REPORT}", file=sys.stderr)
-        return EXIT_INTERNAL
+    except Exception:  # noqa: BLE001
+        pass
+    _say(f"{name}: internal error: this is a bug in ehd-collision, not in your input; please "
+         f"report it at {BUG_REPORT}")
+    return EXIT_INTERNAL
 
 
 def _flush_quietly() -> None:
     try:
         sys.stdout.flush()
-    except (BrokenPipeError, OSError, ValueError):
-        pass
+    except (OSError, ValueError, AttributeError):
+        _to_devnull()  # what is left in the buffer goes nowhere, quietly, at exit
 
 
 def _quiet_dask() -> None:
     """After Ctrl-C: dask's loggers would print the tracebacks of its closing comms and
     workers; what matters was already said (and kept by the journal)."""
-    if "distributed" in sys.modules:
-        from .sweeps.runners import _quiet_dask as quiet
+    try:
+        if "distributed" in sys.modules:
+            from .sweeps.runners import _quiet_dask as quiet
 
-        quiet()
+            quiet()
+    except Exception:  # noqa: BLE001 - quieting is a courtesy
+        pass
 
 
 if __name__ == "__main__":

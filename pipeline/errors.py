@@ -14,20 +14,22 @@ Exit codes of every ``ehd`` command (docs/pipeline.md, "Exit codes"):
 | 2 | bad input: arguments, sweep/scene file, unusable path, store of other physics or numerics, busy store, scheduler unreachable (nothing computed) |
 | 3 | ``sweep``: finished, but failed scenes remain in the store |
 | 4 | ``sweep``: the scheduler went away mid-sweep (every scene finished so far is kept; rerun) |
-| 5 | damaged store: ``status`` found damaged cells (listed), ``figures`` refuses to draw them |
+| 5 | damaged store: ``status`` found damaged cells, coordinates or metadata (listed), ``figures`` refuses to draw them, ``sweep`` refuses metadata it cannot repair |
 | 70 | internal error: a bug (traceback printed; please report it) |
+| 74 | an output could not be written: disk full or another I/O error (the line names the path and the free space; nothing partial is left behind), or stdout closed or full |
 | 130 | interrupted (Ctrl-C): every scene finished so far is kept |
 | 141 | the reader of stdout went away (``ehd ... | head``) |
+| 143 | terminated (SIGTERM, e.g. ``kill`` or a batch system's time limit): every scene finished so far is kept |
 
-No imports here: every module may import this one.
+No project imports here (stdlib only, imported lazily): every module may import this one.
 """
 
 from __future__ import annotations
 
 __all__ = ["EhdError", "UsageError", "PathError", "SchedulerError", "SchedulerLost",
-           "StoreDamaged", "EXIT_OK", "EXIT_SCENE_FAILED", "EXIT_USAGE", "EXIT_SWEEP_FAILED",
+           "StoreDamaged", "StoreMismatch", "WriteError", "Terminated", "EXIT_OK", "EXIT_SCENE_FAILED", "EXIT_USAGE", "EXIT_SWEEP_FAILED",
            "EXIT_SCHEDULER_LOST", "EXIT_DAMAGED", "EXIT_INTERNAL", "EXIT_INTERRUPTED",
-           "EXIT_BROKEN_PIPE", "BUG_REPORT"]
+           "EXIT_BROKEN_PIPE", "EXIT_WRITE", "EXIT_TERMINATED", "BUG_REPORT"]
 
 EXIT_OK = 0
 EXIT_SCENE_FAILED = 1
@@ -36,8 +38,10 @@ EXIT_SWEEP_FAILED = 3
 EXIT_SCHEDULER_LOST = 4
 EXIT_DAMAGED = 5
 EXIT_INTERNAL = 70  # EX_SOFTWARE of sysexits.h
+EXIT_WRITE = 74  # EX_IOERR of sysexits.h
 EXIT_INTERRUPTED = 130  # 128 + SIGINT
 EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE
+EXIT_TERMINATED = 143  # 128 + SIGTERM
 
 BUG_REPORT = "the project's issue tracker, with the command and the traceback above"
 
@@ -81,3 +85,50 @@ class StoreDamaged(EhdError):
     """Chunks of a store cannot be read or contradict its status: exit 5."""
 
     exit_code = EXIT_DAMAGED
+
+
+class StoreMismatch(UsageError, ValueError):
+    """The store belongs to another solver version, numerics, physics or schema: refuse to mix
+    (exit 2)."""
+
+
+class WriteError(EhdError):
+    """An output could not be written (disk full, I/O error; stdout closed or full): exit 74.
+    Whatever was partly written has been removed."""
+
+    exit_code = EXIT_WRITE
+
+
+class Terminated(BaseException):
+    """SIGTERM arrived (raised by the handler ``pipeline.cli.main`` installs): unwinds like
+    Ctrl-C, so every scene finished so far is kept; exit 143. A ``BaseException``, like
+    ``KeyboardInterrupt``, so no ``except Exception`` swallows it."""
+
+
+def describe_os_error(exc: OSError, path) -> str:
+    """``'<path>': <reason>`` for a failed write, with the free space of its file system when
+    the disk is full (ENOSPC, EDQUOT)."""
+    import errno
+    import os
+    import shutil
+
+    reason = exc.strerror or type(exc).__name__
+    where = str(path)
+    if exc.errno in (errno.ENOSPC, getattr(errno, "EDQUOT", -1)):
+        probe = os.path.dirname(os.path.abspath(where)) or "."
+        while probe and not os.path.exists(probe):
+            probe = os.path.dirname(probe)
+        try:
+            free = shutil.disk_usage(probe or ".").free
+            reason += f", {_bytes(free)} free on its file system"
+        except OSError:
+            pass
+    return f"{where!r}: {reason}"
+
+
+def _bytes(n: float) -> str:
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
+        if n < 1024 or unit == "TiB":
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1024
+    return f"{n} B"  # pragma: no cover

@@ -238,16 +238,16 @@ def _rigid_block(t, x, v, tau_per_t, phase, dissipated):
     so the force is ``V/X`` in our unit, the axis pressure ``3V/X^2`` the extreme one (the far
     field tends to 0), ``W(0)`` the small-deformation estimate ``3 I0 V X^-1.5``."""
     n = len(t)
-    zeros = np.zeros(n)
     p_axis = 3.0 * v / (x * x)
-    return {
-        "T": t, "tau": t * tau_per_t, "X": x, "V": v, "F": v / x,
-        "W0": 3.0 * v * x**-1.5 * rigid.I0, "H_min": x, "R_H_min": zeros,
-        "E_k": v * v, "E_s": zeros, "dissipated": dissipated,
-        "P_max": np.maximum(p_axis, 0.0), "P_min": np.minimum(p_axis, 0.0),
-        "cavity_radius": zeros, "void_volume": zeros, "void_work": zeros, "E_c": zeros,
-        "phase": np.full(n, phase, dtype=np.int8),
+    rigid_film = {
+        "T": t, "X": x, "V": v, "F": v / x, "W0": 3.0 * v * x**-1.5 * rigid.I0, "H_min": x,
+        "E_k": v * v, "dissipated": dissipated, "P_max": np.maximum(p_axis, 0.0),
+        "P_min": np.minimum(p_axis, 0.0),
     }
+    # every other column (strain, cavity, void, compression...) is 0 on a rigid path
+    block = {c.name: rigid_film.get(c.name, np.zeros(n)) for c in _KEPT}
+    block.update(tau=t * tau_per_t, phase=np.full(n, phase, dtype=np.int8))
+    return block
 
 
 def _floor_block(path, physics, tau_per_t, lost, v_release):
@@ -265,8 +265,7 @@ def _floor_block(path, physics, tau_per_t, lost, v_release):
     return block
 
 
-_COUPLED_COLUMNS = ("T", "X", "V", "F", "W0", "H_min", "R_H_min", "E_k", "E_s", "dissipated",
-                    "P_max", "P_min", "cavity_radius", "void_volume", "void_work", "E_c")
+_KEPT = tuple(c for c in SERIES if c.kept)  # the series columns a result keeps
 
 
 def _concat(blocks):
@@ -331,7 +330,7 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
 
     # rigid approach (analytic, or the Barus film's scalar ODE) up to the hand-over
     blocks = [head.block] if head.block is not None and len(head.block["T"]) else []
-    coupled = {k: cols[k] for k in _COUPLED_COLUMNS}
+    coupled = {c.name: cols[c.name] for c in _KEPT}
     coupled.update(tau=t_c * tau_per_t, phase=np.full(len(t_c), 1, dtype=np.int8))
     blocks.append(coupled)
 

@@ -12,6 +12,7 @@ pressure in ``mu a v0 / x1^2``, energies relative to the initial kinetic energy 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 __all__ = ["Observable", "OBSERVABLES", "OBSERVABLE", "STATUS", "STATUS_CODES", "MODEL_CODES",
@@ -35,6 +36,9 @@ class Observable:
         or ``lin``; scaling ``length``, ``velocity``, ``force``, ``pressure``, ``log_length``,
         ``energy``, ``time`` or ``none`` (docs/model.md, "Similarity"); ``""`` when it is derived from other
         observables or not available on that path.
+    derived, start
+        A derived observable is a property of ``Collision`` computed from the others; every
+        other one is a field of it (solver/result.py), starting at ``initial``.
     """
 
     name: str
@@ -44,29 +48,39 @@ class Observable:
     label: str = ""
     diagnostic: bool = False
     master: str = ""
+    derived: bool = False  # computed from other observables (a property of Collision, no field)
+    start: object = None  # a Collision's value before its solve sets it (None: by kind)
+
+    @property
+    def initial(self):
+        """The value a ``Collision`` holds until the solve sets it: ``start``, else NaN for a
+        float, False for a flag, 0 for a count."""
+        if self.start is not None:
+            return self.start
+        return {"float": math.nan, "flag": False, "count": 0}[self.kind]
 
 
 _P = "mu a v0 / x1^2"
 OBSERVABLES = (
     Observable("v_r", "float", "maximum rebound (separation) velocity max(-v)/v0, 0 without "
-               "rebound", "v0", "rebound velocity v_r/v0", master="lin velocity"),
+               "rebound", "v0", "rebound velocity v_r/v0", master="lin velocity", start=0.0),
     Observable("e_wet", "float", "wet coefficient of restitution: separation speed where the "
                "spheres pass back out through x_ref (default x0) over the approach speed there; "
                "0 when they stick", "v0/v0", "wet restitution e_wet (at x_ref)"),
     Observable("h_m_x1", "float", "closest approach of the deformed surfaces, whole collision",
                "x1", "closest approach h_m/x1", master="log length"),
     Observable("h_m_x0", "float", "closest approach of the deformed surfaces, whole collision",
-               "x0", "  h_m/x0"),
+               "x0", "  h_m/x0", derived=True),
     Observable("h_m_approach_x1", "float", "closest approach until v first reaches 0", "x1",
                "closest approach on approach /x1", master="log length"),
-    Observable("h_m_approach_x0", "float", "closest approach until v first reaches 0", "x0"),
+    Observable("h_m_approach_x0", "float", "closest approach until v first reaches 0", "x0", derived=True),
     Observable("x_e_x1", "float", "equilibrium separation of the undeformed surfaces (inf: exp "
-               "overflow, see ln_x_e_x1)", "x1", "equilibrium separation x_e/x1"),
+               "overflow, see ln_x_e_x1)", "x1", "equilibrium separation x_e/x1", derived=True),
     Observable("x_e_x0", "float", "equilibrium separation of the undeformed surfaces (inf: exp "
-               "overflow, see ln_x_e_x0)", "x0", "  x_e/x0"),
+               "overflow, see ln_x_e_x0)", "x0", "  x_e/x0", derived=True),
     Observable("ln_x_e_x1", "float", "natural log of x_e/x1 (finite where x_e/x1 overflows)", "1",
                "  ln(x_e/x1)", master="lin log_length"),
-    Observable("ln_x_e_x0", "float", "natural log of x_e/x0; > 0 means escaped", "1"),
+    Observable("ln_x_e_x0", "float", "natural log of x_e/x0; > 0 means escaped", "1", derived=True),
     Observable("tau_max_deformation", "float", "time of the largest central deformation W(0)",
                "x0/v0", "tau at max deformation", master="lin time"),
     Observable("tau_v_zero", "float", "first time v = 0 (inf: the spheres never stop in finite "
@@ -89,21 +103,21 @@ OBSERVABLES = (
     Observable("dimple", "flag", "a dimple forms (central gap above the minimum by more than "
                "1e-3 x1)", "1", "dimple"),
     Observable("dimple_depth_x1", "float", "largest dimple depth H(0) - min_R H", "x1",
-               "  depth /x1", master="lin length"),
+               "  depth /x1", master="lin length", start=0.0),
     Observable("tau_dimple", "float", "first time the dimple is deeper than 1e-3 x1", "x0/v0"),
     Observable("escaped", "flag", "rebound carries the spheres back beyond x0 (x_e > x0): no "
-               "sticking", "1", "escaped (x_e > x0: no sticking)"),
+               "sticking", "1", "escaped (x_e > x0: no sticking)", derived=True),
     Observable("energy_error", "float", "max energy-closure error of the coupled phase (void "
                "work included)",
                "m v0^2 / 2", "energy closure error", master="lin energy"),
     Observable("cavitated", "flag", "the film cavitated (its pressure reached the floor -Pi)", "1",
                "cavitated"),
     Observable("cavity_radius_max", "float", "largest cavity radius (outermost cavitated node)",
-               "sqrt(a x1)", "  largest cavity radius /sqrt(a x1)"),
+               "sqrt(a x1)", "  largest cavity radius /sqrt(a x1)", start=0.0),
     Observable("tau_cavitation_onset", "float", "time the film first cavitates (NaN: never)",
                "x0/v0", "  tau at cavitation onset"),
     Observable("void_volume_max", "float", "largest void volume Int_cav (H - H_onset) ds",
-               "2 pi a x1^2", "  largest void volume /(2 pi a x1^2)"),
+               "2 pi a x1^2", "  largest void volume /(2 pi a x1^2)", start=0.0),
     Observable("viscosity_ratio_max_approach", "float", "largest viscosity over ambient mu/mu0 "
                "until v first reaches 0 (at the approach's peak film pressure)", "1",
                "peak viscosity ratio on approach mu/mu0"),
@@ -113,7 +127,7 @@ OBSERVABLES = (
     Observable("solidified", "flag", "the film solidified on approach: its viscosity rose "
                "beyond 1e4 mu0", "1", "  solidified (mu > 1e4 mu0)"),
     Observable("start_strain_energy", "float", "strain energy where the coupled phase starts, "
-               "over the kinetic energy", "1"),
+               "over the kinetic energy", "1", start=0.0),
     Observable("steps", "count", "accepted time steps of the coupled solve", "1", "steps",
                diagnostic=True),
     Observable("rejected_steps", "count", "rejected time steps of the coupled solve", "1",
@@ -123,7 +137,7 @@ OBSERVABLES = (
     Observable("lu_factorizations", "count", "LU factorisations of the coupled solve", "1",
                diagnostic=True),
     Observable("wall_s", "float", "wall time of the scene", "s", "wall time [s]",
-               diagnostic=True),
+               diagnostic=True, start=0.0),
 )
 OBSERVABLE = {o.name: o for o in OBSERVABLES}
 
@@ -153,11 +167,13 @@ def failure_message(name: str, **fields) -> str:
 
 @dataclass(frozen=True)
 class Column:
-    """One column of a collision's time series."""
+    """One column of a collision's time series. A rigid phase's rows hold the rigid film's values
+    of the classic columns and 0 in every other (solver/collision.py: ``_rigid_block``)."""
 
     name: str
     long_name: str
     units: str
+    kept: bool = True  # part of a result's series (False: the coupled phase's, for observables)
 
 
 SERIES = (
@@ -171,8 +187,8 @@ SERIES = (
     Column("E_k", "kinetic energy", "m v0^2/2"),
     Column("E_s", "strain energy", "m v0^2/2"),
     Column("dissipated", "viscous dissipation so far", "m v0^2/2"),
-    Column("H0", "central gap H(0)", "x1"),
-    Column("W_absmax", "largest |W| over the radius", "x1"),
+    Column("H0", "central gap H(0)", "x1", kept=False),
+    Column("W_absmax", "largest |W| over the radius", "x1", kept=False),
     Column("P_max", "largest film pressure over the radius", _P),
     Column("P_min", "lowest film pressure over the radius", _P),
     Column("cavity_radius", "radius of the outermost cavitated node (0: no cavity)", "sqrt(a x1)"),

@@ -74,7 +74,7 @@ class Group:
                 raise ValueError(f"{label} must be one of {list(self.choices)}, got {value!r}")
             return value
         try:
-            if isinstance(value, bool):
+            if isinstance(value, (bool, str, bytes)):  # "5" is refused like True
                 raise TypeError
             v = float(value)
         except (TypeError, ValueError):
@@ -107,6 +107,9 @@ def parse_table(text, label="viscosity_table"):
                              "and a colon)") from None
         if not (math.isfinite(p) and math.isfinite(r) and r > 0.0):
             raise ValueError(f"{label}: {item.strip()!r} needs a finite P and a finite ratio > 0")
+        if r > MAX_TABLE_RATIO:  # 1e308 overflowed to an infinite peak viscosity, status ok
+            raise ValueError(f"{label}: {item.strip()!r}: a ratio above {MAX_TABLE_RATIO:g} "
+                             "overflows the film's products (a liquid is solid by 1e4)")
         points.append((p, r))
     if len(points) < 2 or points[0] != (0.0, 1.0):
         raise ValueError(f"{label} must start with the point 0:1 (mu = mu0 at ambient pressure) "
@@ -124,6 +127,7 @@ def format_table(points) -> str:
 
 
 MAX_TABLE_POINTS = 64
+MAX_TABLE_RATIO = 1e30  # largest mu/mu0 of a table (the tests reach exp(60) ~ 1e26)
 
 GROUPS = (
     Group("St", "Stokes number m v0 / (6 pi mu a^2)", "Stokes number", 0.0, 1.0e4),
@@ -258,6 +262,9 @@ class _PhysicsMethods:
             law = "table"
         if law == "table" and not self.viscosity_table:
             raise ValueError("viscosity_law = 'table' needs a viscosity_table (\"P:mu/mu0, ...\")")
+        if law not in ("auto", "table") and self.viscosity_table:
+            raise ValueError(f"viscosity_law = {law!r} does not use the viscosity_table: give the "
+                             "table (viscosity_law 'table' or 'auto') or the law, not both")
         if self.beta == 0.0 and law != "table":
             law = "constant"
         elif law == "auto":

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import field, make_dataclass
 
 import numpy as np
 
@@ -37,61 +37,8 @@ def _exp(v):
     return math.exp(v) if v < 709.0 else math.inf
 
 
-@dataclass
-class Collision:
-    """Result of one collision. Failures are data: ``status != "ok"`` with a ``message`` and NaN
-    observables (never a guess). The observables and their units are declared in
-    solver/observables.py."""
-
-    physics: Physics
-    accuracy: str
-    numerics: Numerics
-    model: str  # "rigid" (no coupled solve needed), "ehd", or "master" (solver.master fast path)
-    status: str  # "ok" or a failure code (observables.STATUS)
-    message: str
-    v_r: float = 0.0  # max rebound speed / v0
-    e_wet: float = math.nan  # wet restitution at x_ref (rigid.restitution; 0: the spheres stick)
-    h_m_x1: float = math.nan  # closest approach of the deformed surfaces, whole collision
-    h_m_approach_x1: float = math.nan  # closest approach until v first reaches 0
-    ln_x_e_x1: float = math.nan  # log of the equilibrium separation (finite even when x_e overflows)
-    tau_max_deformation: float = math.nan  # time of the largest W(0)
-    tau_v_zero: float = math.nan  # first time v = 0 (inf: the spheres never stop in finite time)
-    tau_max_rebound: float = math.nan  # time of the largest rebound speed (nan: no rebound)
-    tau_peak_force: float = math.nan
-    peak_force: float = math.nan
-    p_max: float = math.nan  # largest film pressure over the collision
-    p_min: float = math.nan  # lowest film pressure over the collision (< 0: tension)
-    w0_max_x1: float = math.nan  # largest central deformation W(0)
-    x_min_x1: float = math.nan  # smallest X (negative: undeformed surfaces overlap)
-    dimple: bool | None = False  # None when the scene failed
-    dimple_depth_x1: float = 0.0  # largest H(0) - min_R H
-    tau_dimple: float = math.nan  # first time the dimple is deeper than DIMPLE_DEPTH
-    energy_error: float = math.nan  # max |E_k + E_s + dissipated + void work - const|, coupled phase
-    cavitated: bool | None = False  # the film reached the floor -Pi (None when the scene failed)
-    cavity_radius_max: float = 0.0  # largest cavity radius (sqrt(a x1))
-    tau_cavitation_onset: float = math.nan  # first time a cell cavitates
-    void_volume_max: float = 0.0  # largest Int_cav (H - H_onset) ds
-    start_strain_energy: float = 0.0  # E_s / E_k where the coupled phase starts
-    p_max_approach: float = math.nan  # largest film pressure until v first reaches 0
-    viscosity_ratio_max_approach: float = math.nan  # mu/mu0 at p_max_approach
-    h_axis_at_peak_pressure_x1: float = math.nan  # H(0) when the approach's pressure peaks
-    solidified: bool | None = False  # viscosity_ratio_max_approach >= SOLID_VISCOSITY_RATIO
-    steps: int = 0
-    rejected_steps: int = 0
-    newton_iterations: int = 0
-    lu_factorizations: int = 0
-    wall_s: float = 0.0
-    tau_handover: float = math.nan  # rigid -> coupled
-    tau_release: float = math.nan  # coupled -> rigid
-    x_ref_x0: float = 1.0  # where e_wet is seen, over x0 (a reporting option, >= 1)
-    series: dict = field(default_factory=dict, repr=False)  # time series (SERIES, tau, phase)
-    radius: np.ndarray | None = field(default=None, repr=False)  # (N,) grid radii R
-    profile_tau: np.ndarray | None = field(default=None, repr=False)  # (rows,)
-    pressure: np.ndarray | None = field(default=None, repr=False)  # (rows, N) P
-    deformation: np.ndarray | None = field(default=None, repr=False)  # (rows, N) W
-    # (rows, N-1) fluid fraction theta of the cells (the last node is the boundary), JFO only
-    fluid_fraction: np.ndarray | None = field(default=None, repr=False)
-    profile_x: np.ndarray | None = field(default=None, repr=False)  # (rows,) X at profile times
+class _CollisionMethods:
+    """What every ``Collision`` does beyond holding its results (the fields: ``_fields``)."""
 
     # ---- the physics ----------------------------------------------------------------------------
     @property
@@ -207,3 +154,37 @@ class Collision:
                                {"long_name": "fluid fraction of the gap (JFO cavity < 1)",
                                 "units": "1"})
         return ds
+
+
+def _fields():
+    """The fields of ``Collision``: what the scene was, then every observable of the registry
+    that is not derived (solver/observables.py: its ``initial`` value until the solve sets it),
+    then the phases' times and the arrays."""
+    kinds = {"float": float, "flag": bool, "count": int}
+    arrays = dict(default=None, repr=False)
+    return [
+        ("physics", Physics), ("accuracy", str), ("numerics", Numerics),
+        ("model", str),  # "rigid" (no coupled solve needed), "ehd", or "master" (the fast path)
+        ("status", str),  # "ok" or a failure code (observables.STATUS)
+        ("message", str),
+        *((o.name, kinds[o.kind], field(default=o.initial)) for o in OBSERVABLES if not o.derived),
+        ("p_max_approach", float, field(default=math.nan)),  # largest pressure until v = 0
+        ("tau_handover", float, field(default=math.nan)),  # rigid -> coupled
+        ("tau_release", float, field(default=math.nan)),  # coupled -> rigid
+        ("x_ref_x0", float, field(default=1.0)),  # where e_wet is seen, over x0 (>= 1)
+        ("series", dict, field(default_factory=dict, repr=False)),  # SERIES, tau, phase
+        ("radius", np.ndarray, field(**arrays)),  # (N,) grid radii R
+        ("profile_tau", np.ndarray, field(**arrays)),  # (rows,)
+        ("pressure", np.ndarray, field(**arrays)),  # (rows, N) P
+        ("deformation", np.ndarray, field(**arrays)),  # (rows, N) W
+        ("fluid_fraction", np.ndarray, field(**arrays)),  # (rows, N-1) theta of the cells, JFO
+        ("profile_x", np.ndarray, field(**arrays)),  # (rows,) X at profile times
+    ]
+
+
+Collision = make_dataclass(
+    "Collision", _fields(), bases=(_CollisionMethods,),
+    namespace={"__module__": __name__, "__qualname__": "Collision", "__doc__": """Result of one
+    collision. Failures are data: ``status != "ok"`` with a ``message`` and NaN observables
+    (never a guess). Its observables, with their units and meaning, are the registry's
+    (solver/observables.py: ``OBSERVABLES``); the derived ones are properties."""})

@@ -417,7 +417,6 @@ def test_an_unreachable_scheduler_gives_up_with_one_line(ws, capsys):
     code, _, err = ehd(capsys, "sweep", "more.toml", "--scheduler",
                        f"tcp://127.0.0.1:{_closed_port()}", "--connect-timeout", "1")
     assert code == EXIT_USAGE and time.monotonic() - t < 15
-    assert "waiting for the dask scheduler at tcp://127.0.0.1" in err
     assert "cannot reach" in err.splitlines()[-1] and "Traceback" not in err
 
 
@@ -614,3 +613,646 @@ def test_a_real_ctrl_c_during_the_compiled_solve_is_exit_130_one_line(tmp_path):
     assert proc.returncode == EXIT_INTERRUPTED, (proc.returncode, err)
     assert "Traceback" not in err
     assert err.strip().splitlines()[-1] == "ehd run: interrupted; everything finished so far is kept"
+
+
+# ==== issue 19: nothing wrong is ever stored or shown ============================================
+# ---- silent corruption: checksummed chunks, coordinates and metadata in the integrity check ----
+def _flip(rel, back=3):
+    """Flip one bit of the byte ``back`` bytes from the end of a chunk (its checksum no longer
+    matches; before schema 6 the chunk decoded to another number)."""
+    def make(ws):
+        p = ws / rel
+        data = bytearray(p.read_bytes())
+        data[-back] ^= 0x01
+        p.write_bytes(bytes(data))
+    return make
+
+
+def _edit_root(edit):
+    def make(ws):
+        p = ws / "s.zarr" / "zarr.json"
+        meta = json.loads(p.read_text())
+        meta = edit(meta)
+        p.write_text(json.dumps(meta))
+    return make
+
+
+def _set_attr(key, value):
+    def edit(meta):
+        meta["attributes"][key] = value
+        return meta
+    return _edit_root(edit)
+
+
+def _status_code(code):
+    def make(ws):
+        import zarr
+
+        from pipeline.sweeps.layout import zarr_warnings
+
+        with zarr_warnings():
+            zarr.open_group(str(ws / "s.zarr"), mode="r+")["status"][0, 0] = code
+    return make
+
+
+@pytest.mark.parametrize("damage, where", [
+    (_flip("s.zarr/v_r/c/1/0"), "v_r (unreadable)"),
+    (_flip("s.zarr/steps/c/2/0", 5), "steps (unreadable)"),
+    (_status_code(99), "status (unknown code 99)"),
+], ids=["flipped-byte-data", "flipped-byte-count", "status-code-99"])
+def test_damaged_data_is_listed_refused_raised_and_recomputed(ws, base, capsys, damage, where):
+    from pipeline import open_results
+    from pipeline.errors import StoreDamaged
+
+    damage(ws)
+    code, out, err = ehd(capsys, "status", "s.zarr")
+    assert code == EXIT_DAMAGED and where in err and "Traceback" not in err, err
+    code, _, err = ehd(capsys, "figures", "s.zarr", "--out", "fig")
+    assert code == EXIT_DAMAGED and "damaged" in err and not (ws / "fig").exists()
+    with pytest.raises(StoreDamaged, match="damaged"):
+        open_results(ws / "s.zarr")
+    code, out, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    assert code == 0 and "repaired" in out, err
+    assert 1 <= len(CALLS) <= len(EPS)  # one chunk: one St row at most
+    xr.testing.assert_identical(_stored(ws / "s.zarr"), _stored(base / "s.zarr"))
+    assert ehd(capsys, "status", "s.zarr")[0] == 0
+
+
+@pytest.mark.parametrize("damage, how", [
+    (_truncate("s.zarr/St/c/0", 3), "unreadable"),
+    (_remove("s.zarr/eps/c/0"), "missing"),
+    (_flip("s.zarr/St/c/0"), "unreadable"),
+], ids=["truncated-St", "deleted-eps", "flipped-St"])
+def test_a_damaged_coordinate_is_listed_refused_and_rewritten(ws, base, capsys, damage, how):
+    from pipeline import open_results
+    from pipeline.errors import StoreDamaged
+
+    damage(ws)
+    code, out, err = ehd(capsys, "status", "s.zarr")
+    assert code == EXIT_DAMAGED and f"({how}" in err and "Traceback" not in err, err
+    assert "nan" not in out  # the rows are shown at their true coordinates (the store's copy)
+    assert ehd(capsys, "figures", "s.zarr", "--out", "fig")[0] == EXIT_DAMAGED
+    with pytest.raises(StoreDamaged, match="coordinate"):
+        open_results(ws / "s.zarr")
+    code, out, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    assert code == 0 and "coordinate" in out + err and CALLS == [], err
+    xr.testing.assert_identical(_stored(ws / "s.zarr"), _stored(base / "s.zarr"))
+    assert ehd(capsys, "status", "s.zarr")[0] == 0
+
+
+METADATA = [
+    ("root-is-a-list", _edit_root(lambda m: []), EXIT_USAGE, "not a zarr group"),
+    ("root-is-a-number", _edit_root(lambda m: 5), EXIT_USAGE, "not a zarr group"),
+    ("attributes-a-list", _set_attr_root := _edit_root(lambda m: {**m, "attributes": []}),
+     EXIT_DAMAGED, "attributes"),
+    ("fixed-physics-a-string", _set_attr("fixed_physics", "St=5"), EXIT_DAMAGED, "fixed_physics"),
+    ("axes-a-string", _set_attr("axes", "St"), EXIT_DAMAGED, "axes"),
+    ("schema-a-string", _set_attr("store_schema", "6"), EXIT_DAMAGED, "store_schema"),
+    ("schema-5-old", _set_attr("store_schema", 5), EXIT_USAGE, "checksum"),
+    ("schema-true", _set_attr("store_schema", True), EXIT_DAMAGED, "store_schema"),
+    ("grid-copy-short", _set_attr("grid", {"St": ["1.0"], "eps": ["0.0001", "0.01"]}),
+     EXIT_DAMAGED, "grid.St"),
+    ("an-edited-number", _set_attr("accuracy", "fine"), EXIT_DAMAGED, "checksum"),
+    ("fill-value-edited", _edit_root(lambda m: (m["consolidated_metadata"]["metadata"]["v_r"]
+                                                .update(fill_value=0.0), m)[1]),
+     EXIT_DAMAGED, "checksum"),
+    ("codecs-stripped", _edit_root(lambda m: (m["consolidated_metadata"]["metadata"]["v_r"]
+                                              .update(codecs=[{"name": "bytes"}]), m)[1]),
+     EXIT_DAMAGED, "no checksummed chunks"),
+    ("variable-dropped", _edit_root(lambda m: (m["consolidated_metadata"]["metadata"]
+                                               .pop("status"), m)[1]), EXIT_DAMAGED, "missing"),
+]
+
+
+@pytest.mark.parametrize("setup, code, keyword", [c[1:] for c in METADATA],
+                         ids=[c[0] for c in METADATA])
+def test_metadata_of_the_wrong_shape_is_one_line_for_every_reader(ws, capsys, setup, code, keyword):
+    from pipeline import open_results
+    from pipeline.errors import EhdError
+
+    setup(ws)
+    before = tree_hash(ws / "s.zarr")
+    for argv in (["status", "s.zarr"], ["figures", "s.zarr", "--out", "fig"],
+                 ["sweep", "s.toml", "--executor", "serial"]):
+        got, out, err = ehd(capsys, *argv)
+        assert got == code, (argv, err)
+        assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+        assert keyword in err, err
+    with pytest.raises(EhdError, match=keyword):
+        open_results(ws / "s.zarr")
+    assert tree_hash(ws / "s.zarr") == before and CALLS == []
+
+
+def test_every_chunk_of_every_array_is_checksummed(ws):
+    from pipeline.sweeps.layout import VARIABLES
+
+    root = json.loads((ws / "s.zarr" / "zarr.json").read_text())
+    arrays = root["consolidated_metadata"]["metadata"]
+    assert set(arrays) == set(VARIABLES) | {"St", "eps"}
+    for name, meta in arrays.items():
+        assert [c["name"] for c in meta["codecs"]][-1] == "crc32c", name
+
+
+# ---- a full disk: one line naming the path and the free space, nothing partial left -----------
+def _enospc(*args, **kwargs):
+    import errno
+
+    raise OSError(errno.ENOSPC, "No space left on device")
+
+
+def _leftovers(ws, before):
+    return sorted(str(p.relative_to(ws)) for p in ws.rglob("*") if p not in before)
+
+
+def _assert_full_disk_line(code, err):
+    from pipeline.errors import EXIT_WRITE
+
+    assert code == EXIT_WRITE, err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    assert "No space left on device" in err and "free on its file system" in err, err
+
+
+def test_a_full_disk_while_laying_out_a_store_leaves_nothing(ws, capsys, monkeypatch):
+    import pipeline.sweeps.store as store
+
+    (ws / "n.toml").write_text(sweep_text(ST, EPS, store="n.zarr"))
+    before = set(ws.rglob("*"))
+    monkeypatch.setattr(store, "seal", _enospc)  # after xarray wrote the temporary layout
+    code, _, err = ehd(capsys, "sweep", "n.toml", "--executor", "serial")
+    _assert_full_disk_line(code, err)
+    assert "n.zarr" in err and _leftovers(ws, before) == [] and CALLS == []
+
+
+def test_a_full_disk_while_merging_keeps_every_finished_scene(ws, capsys, monkeypatch):
+    """The store cannot take the merge: the journal keeps the scenes; the next sweep merges
+    them and computes nothing again."""
+    (ws / "s.toml").write_text(sweep_text(ST + [40.0], EPS, store="s.zarr"))
+    code, _, _ = ehd(capsys, "sweep", "s.toml", "--executor", "serial")  # the new layout
+    assert code == 0 and len(CALLS) == len(EPS)
+    _remove("s.zarr/v_r/c/1/0")(ws)  # a damaged row: recomputed, then merged (fails)
+    CALLS.clear()
+    real = xr.Dataset.to_zarr
+
+    def full(self, *a, **k):
+        if k.get("region") is not None and CALLS:  # the merge of the recomputed scenes
+            _enospc()
+        return real(self, *a, **k)
+
+    monkeypatch.setattr(xr.Dataset, "to_zarr", full)
+    code, _, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    _assert_full_disk_line(code, err)
+    computed = list(CALLS)
+    assert computed and (ws / "s.zarr.journal").exists()
+    monkeypatch.setattr(xr.Dataset, "to_zarr", real)
+    CALLS.clear()
+    code, out, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    assert code == 0, err
+    assert CALLS == []  # nothing finished was lost: the journal had every scene
+    assert ehd(capsys, "status", "s.zarr")[0] == 0
+
+
+def test_a_full_disk_at_the_journal_cuts_it_back_to_whole_records(ws, capsys, monkeypatch):
+    (ws / "s.toml").write_text(sweep_text(ST + [40.0], EPS, store="s.zarr"))
+
+    class Full:
+        def __init__(self, f):
+            self.f, self.n = f, 0
+
+        def write(self, text):
+            self.n += 1
+            if self.n > 1:  # the first record fits, the second half does not
+                self.f.write(text[: len(text) // 2])
+                self.f.flush()
+                _enospc()
+            return self.f.write(text)
+
+        def __getattr__(self, name):
+            return getattr(self.f, name)
+
+    import pathlib
+
+    real_path_open = pathlib.Path.open
+
+    def path_open(self, mode="r", *a, **k):
+        f = real_path_open(self, mode, *a, **k)
+        return Full(f) if self.name.endswith(".journal") and "a" in mode else f
+
+    monkeypatch.setattr(pathlib.Path, "open", path_open)
+    monkeypatch.setattr("pipeline.sweeps.store.FLUSH_SECONDS", 1e9)
+    code, _, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    _assert_full_disk_line(code, err)
+    assert "journal" in err
+    journal = ws / "s.zarr.journal"  # merged and dropped, or cut back to whole records
+    assert not journal.exists() or all(json.loads(line) for line in
+                                       journal.read_text().splitlines())
+    assert ehd(capsys, "status", "s.zarr")[0] == 0
+
+
+def test_run_save_on_a_full_disk_leaves_no_file(ws, capsys, monkeypatch):
+    def partial(self, path, *a, **k):
+        Path(path).write_bytes(b"CDF\x01")  # a few bytes, then the disk is full
+        _enospc()
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", partial)
+    before = set(ws.rglob("*"))
+    code, out, err = ehd(capsys, "run", "--St", "5", "--eps", "0.01", "--accuracy", "fast",
+                         "--save", "r.nc")
+    _assert_full_disk_line(code, err)
+    assert "r.nc" in err and "v_r" in out  # the result was shown before the save failed
+    assert _leftovers(ws, before) == []
+
+
+def test_run_save_replaces_an_old_file_only_when_complete(ws, capsys, monkeypatch):
+    (ws / "r.nc").write_bytes(b"old")
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", _enospc)
+    code, _, err = ehd(capsys, "run", "--St", "5", "--eps", "0.01", "--accuracy", "fast",
+                       "--save", "r.nc")
+    _assert_full_disk_line(code, err)
+    assert (ws / "r.nc").read_bytes() == b"old"
+    assert [p.name for p in ws.iterdir() if "r.nc" in p.name] == ["r.nc"]
+
+
+@pytest.mark.parametrize("argv, target", [
+    (["run", "--St", "5", "--eps", "0.01", "--accuracy", "fast", "--plot", "figs/run"],
+     "pipeline.plots.scene_plots.plot_scene"),
+    (["figures", "s.zarr", "--out", "figs/sweep"], "pipeline.plots.sweep_maps.update_figures"),
+])
+def test_figures_on_a_full_disk_leave_nothing_new(ws, capsys, monkeypatch, argv, target):
+    import importlib
+
+    module, name = target.rsplit(".", 1)
+    folder = ws / argv[-1]
+
+    def half(*a, **k):
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "fig.png").write_bytes(b"\x89PNG")  # one figure half written
+        _enospc()
+
+    monkeypatch.setattr(importlib.import_module(module), name, half)
+    before = set(ws.rglob("*"))
+    code, _, err = ehd(capsys, *argv)
+    _assert_full_disk_line(code, err)
+    assert _leftovers(ws, before) == []
+
+
+def _can_mount_tmpfs(path) -> bool:
+    if os.geteuid() != 0 or shutil.which("mount") is None:
+        return False
+    return subprocess.run(["mount", "-t", "tmpfs", "-o", "size=200k", "tmpfs", str(path)],
+                          capture_output=True, timeout=10).returncode == 0
+
+
+def test_a_sweep_on_a_real_full_disk(tmp_path):
+    """The issue's reproduction on a 200 KiB tmpfs (root only; the simulated cases above hold
+    everywhere)."""
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    if not _can_mount_tmpfs(disk):
+        pytest.skip("needs root and mount to make a small tmpfs")
+    try:
+        (disk / "s.toml").write_text(sweep_text(ST, EPS, store="s.zarr"))
+        env = {**os.environ, "PYTHONPATH": str(REPO), "OPENBLAS_NUM_THREADS": "1"}
+        proc = subprocess.run([sys.executable, "-m", "pipeline.cli", "sweep", "s.toml",
+                               "--executor", "serial"], cwd=disk, env=env, capture_output=True,
+                              text=True, timeout=120)
+        _assert_full_disk_line(proc.returncode, proc.stderr)
+        assert sorted(p.name for p in disk.iterdir()) == ["s.toml"]
+    finally:
+        subprocess.run(["umount", str(disk)], capture_output=True, timeout=10)
+
+
+# ---- stdout closed or full ------------------------------------------------------------------------
+def _ehd_subprocess(args, stdout, timeout=120, **kw):
+    env = {**os.environ, "PYTHONPATH": str(REPO), "OPENBLAS_NUM_THREADS": "1"}
+    return subprocess.run([sys.executable, "-m", "pipeline.cli", *map(str, args)], env=env,
+                          stdout=stdout, stderr=subprocess.PIPE, text=True, timeout=timeout,
+                          **kw)
+
+
+@pytest.mark.parametrize("args", [["info"], ["run", "--St", "5", "--eps", "0.01"],
+                                  ["scene", EXAMPLE], ["status", "none.zarr"]],
+                         ids=["info", "run", "scene", "status"])
+def test_a_closed_stdout_is_one_line_before_any_work(tmp_path, args):
+    from pipeline.errors import EXIT_WRITE
+
+    t = time.monotonic()
+    proc = _ehd_subprocess(args, None, cwd=tmp_path, preexec_fn=lambda: os.close(1))
+    assert proc.returncode == EXIT_WRITE, proc.stderr
+    assert "Traceback" not in proc.stderr and "stdout is closed" in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+    assert time.monotonic() - t < 60  # nothing solved (a bound, not a speed target)
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+@pytest.mark.parametrize("args", [["info"], ["run", "--St", "5", "--eps", "0.01", "--accuracy",
+                                             "fast"]], ids=["info", "run"])
+def test_a_full_stdout_is_one_line(tmp_path, args):
+    from pipeline.errors import EXIT_WRITE
+
+    with open("/dev/full", "w") as full:
+        proc = _ehd_subprocess(args, full, cwd=tmp_path)
+    assert proc.returncode == EXIT_WRITE, proc.stderr
+    assert "Traceback" not in proc.stderr and "cannot write to stdout" in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_the_error_boundary_never_raises(monkeypatch, capsys):
+    import pipeline.cli
+
+    class Nasty(Exception):
+        def __str__(self):
+            raise RuntimeError("no text either")
+
+    def broken(args):
+        raise Nasty()
+
+    monkeypatch.setattr(pipeline.cli, "cmd_info", broken)
+    monkeypatch.setattr(sys, "stderr", None)  # and nowhere to say it
+    assert main(["info"]) == EXIT_INTERNAL
+
+
+# ---- SIGTERM: like Ctrl-C, its own code ---------------------------------------------------------
+def test_sigterm_is_exit_143_one_line_and_keeps_every_finished_scene(tmp_path, capsys):
+    from pipeline.errors import EXIT_TERMINATED
+
+    env = _fault_setup(tmp_path)
+    err_path = tmp_path / "err.txt"
+    with err_path.open("w") as err_file:
+        proc = subprocess.Popen([sys.executable, "slow.py", "sweep", "f.toml", "--executor",
+                                 "threads", "--workers", "2"], cwd=tmp_path, env=env,
+                                stdout=subprocess.DEVNULL, stderr=err_file)
+        _wait_for(proc, tmp_path)
+        proc.send_signal(signal.SIGTERM)  # kill PID, or a batch system's time limit
+        proc.wait(timeout=60)
+    err = err_path.read_text()
+    assert proc.returncode == EXIT_TERMINATED, err
+    assert "Traceback" not in err and "terminated" in err.splitlines()[-1]
+    kept = _finished_kept(tmp_path, capsys)
+    assert 1 <= kept < len(FAULT_ST) * len(EPS)
+    os.chdir(tmp_path)
+    try:
+        summary = run_module.run_sweep(load_sweep("f.toml"), runner="serial", solve=fake_solve,
+                                       progress=None)
+    finally:
+        os.chdir(REPO)
+    assert summary.computed == len(FAULT_ST) * len(EPS) - kept and summary.done == summary.scenes
+
+
+# ---- the scheduler: every wait bounded, only a dask scheduler accepted, nothing made before ----
+@pytest.fixture
+def silent_peer():
+    """A TCP server on 127.0.0.1 that accepts and never speaks."""
+    import socket
+    import threading
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(8)
+    held = []
+    stop = threading.Event()
+
+    def accept():
+        server.settimeout(0.2)
+        while not stop.is_set():
+            try:
+                held.append(server.accept()[0])
+            except OSError:
+                continue
+
+    thread = threading.Thread(target=accept, daemon=True)
+    thread.start()
+    yield f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    stop.set()
+    thread.join(2)
+    for conn in held:
+        conn.close()
+    server.close()
+
+
+@pytest.fixture
+def http_peer():
+    """An HTTP server on 127.0.0.1 (answers requests with HTML, never speaks first)."""
+    import http.server
+    import threading
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0),
+                                             http.server.SimpleHTTPRequestHandler)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    yield f"tcp://127.0.0.1:{server.server_address[1]}"
+    server.shutdown()
+    server.server_close()
+
+
+@pytest.mark.parametrize("peer", ["silent_peer", "http_peer"])
+def test_a_peer_that_is_no_scheduler_is_refused_within_the_timeout(ws, capsys, request, peer):
+    address = request.getfixturevalue(peer)
+    (ws / "m.toml").write_text(sweep_text([7.0], EPS, store="m.zarr"))
+    t = time.monotonic()
+    code, _, err = ehd(capsys, "sweep", "m.toml", "--scheduler", address,
+                       "--connect-timeout", "1")
+    assert code == EXIT_USAGE and time.monotonic() - t < 10, err  # 1 s, and slack for a loaded CI
+    assert "dask" in err and "Traceback" not in err
+    assert [line for line in err.splitlines() if "error" in line][0].count("error") >= 1
+    assert not any(p.name.startswith("m.zarr") for p in ws.iterdir())  # no store, no lock
+
+
+def test_an_unreachable_scheduler_leaves_no_store_and_no_lock(ws, capsys):
+    (ws / "m.toml").write_text(sweep_text([7.0], EPS, store="m.zarr"))
+    code, _, err = ehd(capsys, "sweep", "m.toml", "--scheduler",
+                       f"tcp://127.0.0.1:{_closed_port()}", "--connect-timeout", "1")
+    assert code == EXIT_USAGE and "cannot reach" in err
+    assert not any(p.name.startswith("m.zarr") for p in ws.iterdir())
+
+
+def test_a_scheduler_without_workers_is_reported_after_the_wait(ws, capsys):
+    from distributed import LocalCluster
+
+    (ws / "m.toml").write_text(sweep_text([7.0], EPS, store="m.zarr"))
+    # its HTTP server on a free local port (8787 may be taken by another cluster)
+    with LocalCluster(n_workers=0, processes=False, protocol="tcp://", host="127.0.0.1",
+                      dashboard_address="127.0.0.1:0") as cluster:
+        t = time.monotonic()
+        code, _, err = ehd(capsys, "sweep", "m.toml", "--scheduler", cluster.scheduler_address,
+                           "--connect-timeout", "5", "--wait-workers", "1")
+    assert code == EXIT_USAGE and time.monotonic() - t < 20, err
+    assert "no workers" in err and CALLS == []
+
+
+@pytest.mark.parametrize("argv, keyword", [
+    (["--scheduler", "tcp://127.0.0.1"], "no port"),
+    (["--scheduler", "tcp://127.0.0.1:99999"], "65535"),
+    (["--scheduler", "nonsense"], "not a scheduler address"),
+    (["--scheduler", "tcp://127.0.0.1:1", "--connect-timeout", "nan"], "finite"),
+    (["--scheduler", "tcp://127.0.0.1:1", "--connect-timeout", "-1"], "> 0"),
+    (["--scheduler", "tcp://127.0.0.1:1", "--connect-timeout", "0"], "> 0"),
+    (["--scheduler", "tcp://127.0.0.1:1", "--connect-timeout", "inf"], "finite"),
+    (["--scheduler", "tcp://127.0.0.1:1", "--wait-workers", "nan"], "finite"),
+    (["--scheduler", "tcp://127.0.0.1:1", "--wait-workers", "-5"], ">= 0"),
+], ids=["no-port", "port-too-big", "not-an-address", "timeout-nan", "timeout-negative",
+        "timeout-zero", "timeout-inf", "wait-nan", "wait-negative"])
+def test_scheduler_options_are_checked_before_any_work(ws, capsys, argv, keyword):
+    (ws / "m.toml").write_text(sweep_text([7.0], EPS, store="m.zarr"))
+    t = time.monotonic()
+    code, _, err = ehd(capsys, "sweep", "m.toml", *argv)
+    assert code == EXIT_USAGE and keyword in err and "Traceback" not in err, err
+    assert time.monotonic() - t < 5  # nothing waited for
+    assert not any(p.name.startswith("m.zarr") for p in ws.iterdir())
+
+
+# ---- scenes and sweep files: text is read, never evaluated; absurd values refused -------------
+def _scene_with(ws, name, **fields):
+    text = EXAMPLE.read_text()
+    for key, value in fields.items():
+        lines = [line for line in text.splitlines() if not line.startswith(f"{key} =")]
+        text = "\n".join(lines)
+        text = text.replace("[body1]", f"[body1]\n{key} = {value}") if key == "radius" \
+            else f"{key} = {value}\n{text}"
+    (ws / name).write_text(text)
+    return name
+
+
+SCENE_CASES = [
+    ("v0-import", dict(v0="'__import__(\"os\")'"), "cannot read"),
+    ("v0-semicolon", dict(v0="'1 m/s; import os'"), "cannot read"),
+    ("v0-lambda", dict(v0="'lambda: 1'"), "cannot read"),
+    ("v0-units-only", dict(v0="'m/s'"), "cannot read"),
+    ("v0-unknown-unit", dict(v0="'1 furlong__x/s'"), "cannot read"),
+    ("radius-subnormal", dict(radius="1e-320"), "subnormal"),
+    ("radius-subnormal-text", dict(radius="'1e-320 m'"), "subnormal"),
+    ("radius-absurd", dict(radius="1e-40"), "valid range"),
+    ("v0-absurd", dict(v0="'1e40 m/s'"), "valid range"),
+]
+
+
+@pytest.mark.parametrize("fields, keyword", [c[1:] for c in SCENE_CASES],
+                         ids=[c[0] for c in SCENE_CASES])
+def test_scene_values_are_read_never_evaluated(ws, capsys, fields, keyword):
+    name = _scene_with(ws, "bad.toml", **fields)
+    code, _, err = ehd(capsys, "scene", name)
+    assert code == EXIT_USAGE and keyword in err and "Traceback" not in err, err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_a_scene_file_with_a_byte_order_mark_is_read(ws):
+    from pipeline.scenes.commands import load_scene
+
+    (ws / "bom.toml").write_bytes(b"\xef\xbb\xbf" + EXAMPLE.read_bytes())
+    assert load_scene("bom.toml", {}, ()) == load_scene(EXAMPLE, {}, ())
+
+
+def test_a_sweep_file_with_a_byte_order_mark_is_read(ws, capsys):
+    (ws / "bom.toml").write_bytes(b"\xef\xbb\xbf" + (ws / "s.toml").read_bytes())
+    code, out, err = ehd(capsys, "sweep", "bom.toml", "--executor", "serial")
+    assert code == 0 and "cached 8" in out, err
+
+
+SWEEP_CASES = [
+    ("range-one-value-two-ends", "{start = 1.0, stop = 5.0, num = 1}", "one value but two ends"),
+]
+
+
+@pytest.mark.parametrize("grid, keyword", [c[1:] for c in SWEEP_CASES],
+                         ids=[c[0] for c in SWEEP_CASES])
+def test_sweep_grids_are_honest(ws, capsys, grid, keyword):
+    (ws / "g.toml").write_text(sweep_text(grid, EPS, store="g.zarr"))
+    code, _, err = ehd(capsys, "sweep", "g.toml", "--executor", "serial")
+    assert code == EXIT_USAGE and keyword in err, err
+    assert not (ws / "g.zarr").exists()
+
+
+def test_a_range_of_one_value_with_equal_ends_is_that_value():
+    sweep = load_sweep_text(sweep_text("{start = 5.0, stop = 5.0, num = 1}", EPS))
+    assert sweep.axes["St"] == (5.0,)
+
+
+def load_sweep_text(text):
+    from pipeline.sweeps.config import parse_sweep
+
+    return parse_sweep(text)
+
+
+RUN_CASES = [
+    ("Pi-minus-inf", ["--Pi", "-inf"], "got -inf"),
+    ("St-minus-1e3", ["--St", "-1e3"], "valid range"),
+    ("table-and-barus", ["--viscosity", "barus", "--beta", "1", "--viscosity-table", "0:1,1:2"],
+     "not both"),
+    ("table-and-constant", ["--viscosity", "constant", "--viscosity-table", "0:1,1:2"],
+     "not both"),
+    ("table-overflows", ["--viscosity-table", "0:1,1:1e308"], "overflows"),
+]
+
+
+@pytest.mark.parametrize("extra, keyword", [c[1:] for c in RUN_CASES],
+                         ids=[c[0] for c in RUN_CASES])
+def test_run_refuses_conflicts_and_names_the_value(ws, capsys, extra, keyword):
+    args = ["run", "--St", "5", "--eps", "0.01"]
+    if extra[0] == "--St":
+        args = ["run", "--eps", "0.01"]
+    code, _, err = ehd(capsys, *args, *extra)
+    assert code == EXIT_USAGE and keyword in err and "Traceback" not in err, err
+    assert "expected one argument" not in err
+
+
+@pytest.mark.parametrize("value", ["5", True, b"5", None, [5]])
+def test_physics_takes_numbers_only(value):
+    from solver.physics import Physics
+
+    with pytest.raises(ValueError, match="must be a number"):
+        Physics(St=value, eps=1e-2)
+
+
+# ---- a grid too large: refused before any allocation, with its size --------------------------
+def test_a_grid_too_large_for_memory_is_refused_before_any_allocation(ws, capsys, monkeypatch):
+    monkeypatch.setattr(run_module, "available_memory", lambda: 2**30)  # a 1 GiB machine
+    eps = json.dumps([float(v) for v in np.geomspace(1e-8, 1e-2, 1000)])
+    (ws / "big.toml").write_text(sweep_text("{start = 1.0, stop = 50.0, num = 10000}", [])
+                                 .replace("eps = []", f"eps = {eps}").replace(
+                                     "results/test.zarr", "big.zarr"))
+    for confirm in ([], ["--allow-large"]):  # too large to run unconfirmed; too large for 1 GiB
+        t = time.monotonic()
+        code, _, err = ehd(capsys, "sweep", "big.toml", "--executor", "serial", *confirm)
+        assert code == EXIT_USAGE and "10000000 scenes" in err and "GiB" in err, err
+        assert ("--allow-large" in err) == (not confirm)
+        assert time.monotonic() - t < 10 and not (ws / "big.zarr").exists() and CALLS == []
+
+
+def test_planning_a_large_grid_is_announced(capsys):
+    import io
+
+    stream = io.StringIO()
+    run_module.check_memory(run_module.PLANNING_NOTE, stream)
+    assert f"planning {run_module.PLANNING_NOTE} scenes" in stream.getvalue()
+
+
+# ---- a non-finite result is a failed scene with its reason ---------------------------------------
+def test_a_non_finite_result_is_a_failure_with_its_reason(ws, capsys, monkeypatch):
+    import math as m
+
+    import solver
+
+    real = solver.collide
+
+    def overflowing(*a, **k):
+        c = real(*a, **k)
+        c.viscosity_ratio_max_approach = m.inf  # what a table reaching 1e308 gave, status ok
+        return c
+
+    monkeypatch.setattr(solver, "collide", overflowing)
+    code, out, err = ehd(capsys, "run", "--St", "5", "--eps", "0.01", "--accuracy", "fast",
+                         "--json")
+    d = json.loads(out)
+    assert code == 1 and d["status"] == "error" and "non-finite" in d["message"], err
+    code, out, err = ehd(capsys, "scene", EXAMPLE, "--accuracy", "fast", "--json")
+    d = json.loads(out)
+    assert code == 1 and d["status"] == "error" and "non-finite" in d["message"], err
+    from pipeline.sweeps.tasks import solve_scene
+
+    rec = solve_scene({"St": 5.0, "eps": 0.01}, "fast", {})
+    assert rec["status"] == "error" and "viscosity_ratio_max_approach = inf" in rec["message"]
+
+
+def test_main_leaves_the_sigterm_handler_as_it_found_it(capsys):
+    before = signal.getsignal(signal.SIGTERM)
+    assert ehd(capsys, "info")[0] == 0
+    assert signal.getsignal(signal.SIGTERM) is before

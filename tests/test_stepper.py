@@ -73,8 +73,8 @@ def test_norm_counts_small_pressures_as_absolute():
 
 
 def test_counters_are_named_in_the_order_the_loop_returns_them():
-    assert [stepper.STEPS, stepper.REJECTED, stepper.NEWTON, stepper.LU, stepper.JACOBIANS] == \
-        list(range(len(stepper.COUNTERS)))
+    assert [stepper.STEPS, stepper.REJECTED, stepper.NEWTON, stepper.LU, stepper.JACOBIANS,
+            stepper.LOWRANK] == list(range(len(stepper.COUNTERS)))
     from solver import Physics, collide
 
     c = collide(Physics(St=10.0, eps=1e-2), accuracy="fast", save_profiles=False)

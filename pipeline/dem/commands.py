@@ -17,20 +17,29 @@ import numpy as np
 __all__ = ["register", "solve_path"]
 
 
-def solve_path(scene, vary: str, factors, accuracy: str = "standard"):
+def solve_path(scene, vary: str, factors, accuracy: str = "standard", progress=None):
     """Solve the scenes along a path (export.scene_path); scenes the solver refuses are skipped
-    with their reason. Returns ``(results, skipped)``."""
+    with their reason. ``progress``: called with a line per scene once the path has taken more
+    than 2 s. Returns ``(results, skipped)``."""
+    import time
+
     from pipeline.scenes.run import run_scene
     from pipeline.scenes.scene import SceneError
 
     from .export import scene_path
 
     results, skipped = [], []
-    for s in scene_path(scene, vary, factors):
+    path = scene_path(scene, vary, factors)
+    t0 = time.perf_counter()
+    for k, s in enumerate(path):
+        factor = s.v0 / scene.v0 if vary == "v0" else s.body1.radius / scene.body1.radius
         try:
             results.append(run_scene(s, accuracy=accuracy, save_profiles=False))
         except SceneError as exc:
-            skipped.append(f"{vary} x {s.v0 / scene.v0 if vary == 'v0' else s.body1.radius / scene.body1.radius:.3g}: {exc}")
+            skipped.append(f"{vary} x {factor:.3g}: {exc}")
+        elapsed = time.perf_counter() - t0
+        if progress and elapsed > 2.0:
+            progress(f"{vary} x {factor:.3g} solved ({k + 1}/{len(path)}), {elapsed:.1f} s")
     return results, skipped
 
 
@@ -48,20 +57,34 @@ def _print_rows(rows, skipped):
     print(f"{'St':>10} {'St_L':>10} {'eps':>10} {'v0 [m/s]':>10} {'e_wet':>8}  note")
     for r in rows:
         note = "sticks" if r["sticks"] else ""
-        if r["warning"]:
-            note = (note + "; " if note else "") + "roughness decides (see CSV)"
+        if r["warning_checks"]:
+            note = (note + "; " if note else "") + "warnings: " + r["warning_checks"] + " (see CSV)"
         print(f"{r['St']:>10.4g} {r['St_L']:>10.4g} {r['eps']:>10.3g} {r['v0_m_s']:>10.4g} "
               f"{r['e_wet']:>8.4f}  {note}")
     for s in skipped:
         print(f"skipped: {s}")
 
 
+def _fit_range(args):
+    from pipeline.cli import UsageError
+
+    if args.fit_range is None:
+        return None
+    lo, hi = args.fit_range
+    if not (0.0 <= lo < hi):
+        raise UsageError(f"--fit-range {lo:g} {hi:g}: give 0 <= LO < HI (our St)")
+    return (lo, hi)
+
+
 def cmd_export_dem(args) -> int:
     from pipeline.cli import UsageError, check_output_dir
 
-    from .export import scene_rows, store_rows, write_export
+    from .export import export_files, progress_to_stderr, scene_rows, store_rows, write_files
+
+    _progress = progress_to_stderr("export-dem")
 
     check_output_dir("--out", args.out)  # before any solve
+    fit_range = _fit_range(args)
     path = Path(args.path)
     if not path.exists():
         raise UsageError(f"{args.path}: no such store or scene file")
@@ -74,16 +97,33 @@ def cmd_export_dem(args) -> int:
         if "e_wet" not in ds:
             raise UsageError(f"{args.path}: the store has no e_wet (made before solver 1.4.0); "
                              "rerun the sweep")
+        if not args.density_ratio >= 0.0:
+            raise UsageError(f"--density-ratio {args.density_ratio:g}: give rho_f/rho_p >= 0")
         rows = store_rows(ds, args.density_ratio)
+        if not rows:
+            raise UsageError(f"{args.path}: no finished (ok) scene in the store; run "
+                             "ehd sweep on it first (ehd status shows what is done)")
     else:
         scene = _scene(str(path), args.materials)
         factors = np.geomspace(0.1, 10.0, args.n)
-        results, skipped = solve_path(scene, "v0", factors, args.accuracy)
+        results, skipped = solve_path(scene, "v0", factors, args.accuracy, progress=_progress)
         rows = scene_rows(results, f"{scene.body1.solid.name}-{scene.body2.solid.name} in "
                                    f"{scene.fluid.name}")
         for s in skipped:
             print(f"skipped: {s}")
-    paths = write_export(rows, args.out, str(path))
+        if not rows:
+            raise UsageError(f"{args.path}: the solver refused every speed of the path "
+                             "(skipped lines above); change the scene")
+    if not any(r["e_wet"] > 0.0 for r in rows):
+        raise UsageError(f"{args.path}: no collision rebounds (every e_wet is 0): nothing to fit; "
+                         "export a store or scene that reaches higher St")
+    files = export_files(rows, str(path), fit_range=fit_range, density_ratio=args.density_ratio,
+                         progress=_progress)
+    if not any(name.startswith("liggghts_") for name in files):
+        raise UsageError(f"{args.path}: no group has 3 rebounding collisions"
+                         + (" in --fit-range" if fit_range else "") + ": nothing to fit; "
+                         "export more St (a wider sweep or --n)")
+    paths = write_files(files, args.out)
     print(f"wrote {len(rows)} rows: " + ", ".join(str(p) for p in paths))
     return 0
 
@@ -91,7 +131,9 @@ def cmd_export_dem(args) -> int:
 def cmd_restitution(args) -> int:
     from pipeline.cli import UsageError, check_output_dir
 
-    from .export import scene_rows, write_export
+    from .export import progress_to_stderr, scene_rows, write_export
+
+    _progress = progress_to_stderr("restitution")
 
     check_output_dir("--out", args.out)  # before any solve
     check_output_dir("--plot", args.plot)
@@ -99,7 +141,7 @@ def cmd_restitution(args) -> int:
     if not (args.start > 0 and args.stop > 0 and args.n >= 1):
         raise UsageError("--from and --to must be positive factors and --n >= 1")
     factors = np.geomspace(args.start, args.stop, args.n)
-    results, skipped = solve_path(scene, args.vary, factors, args.accuracy)
+    results, skipped = solve_path(scene, args.vary, factors, args.accuracy, progress=_progress)
     rows = scene_rows(results, f"{scene.body1.solid.name}-{scene.body2.solid.name} in "
                                f"{scene.fluid.name}, {args.vary} path")
     _print_rows(rows, skipped)
@@ -117,7 +159,7 @@ def cmd_restitution(args) -> int:
                                  title=scene.title)
         print("figure: " + ", ".join(str(p) for p in paths))
     if args.out:
-        paths = write_export(rows, args.out, args.scene)
+        paths = write_export(rows, args.out, args.scene, progress=_progress)
         print("wrote " + ", ".join(str(p) for p in paths))
     return 0
 
@@ -131,6 +173,9 @@ def register(sub) -> None:
                    help="stores only: rho_f/rho_p for Legendre's St_L (default 0)")
     p.add_argument("--n", type=int, default=13,
                    help="scenes only: speeds, log-spaced from 0.1 to 10 v0 (default 13)")
+    p.add_argument("--fit-range", nargs=2, type=float, default=None, metavar=("LO", "HI"),
+                   help="fit and calibrate only on rows with LO <= St <= HI (our St: where your "
+                        "collisions are); errors are still reported on every row")
     p.add_argument("--accuracy", default="standard",
                    help="numerical preset of the solves: fast, standard, fine (default standard)")
     p.add_argument("--materials", action="append", default=None, metavar="FILE",

@@ -10,6 +10,8 @@ from __future__ import annotations
 import json
 import sys
 
+from ..errors import EXIT_SCENE_FAILED
+
 __all__ = ["register", "cmd_scene", "cmd_paper_figures", "load_scene", "format_report"]
 
 # flag dest -> (section or None for top level, key)
@@ -239,25 +241,36 @@ def cmd_scene(args) -> int:
     except ArithmeticError as exc:  # a numerical failure inside the solver: report, no traceback
         print(f"ehd scene: the solver failed for St = {scene.stokes:.4g}, eps = {scene.eps:.3g}: "
               f"{type(exc).__name__}: {exc}", file=sys.stderr)
-        return 1
+        return EXIT_SCENE_FAILED
     d = result.to_dict()
+    from ..sweeps.tasks import nonfinite_reason
+
+    failed = not result.collision.ok
+    reason = "" if failed else nonfinite_reason(lambda n: getattr(result.collision, n, None))
+    if reason:  # an overflow is no result: a failed scene with its reason
+        d.update(status="error", message=reason)
+        failed = True
     if args.json:
         print(json.dumps(d))
         for w in d["warnings"]:
             print(f"warning: [{w['check']}] {w['message']}", file=sys.stderr)
     else:
         print(format_report(d))
-    if args.plot and result.collision.ok:
+    if args.plot and not failed:
         from ..plots.scene_plots import plot_scene, si_scales
 
-        paths = plot_scene(result.collision, args.plot, title=scene.title, scales=si_scales(scene))
+        from ..writes import guarded_dir
+
+        with guarded_dir(args.plot, f"--plot {args.plot}"):
+            paths = plot_scene(result.collision, args.plot, title=scene.title,
+                               scales=si_scales(scene))
         if not args.json:
             print(f"figures: {', '.join(str(p) for p in paths if p.suffix == '.png')}")
-    if not result.collision.ok:
-        return 1
+    if failed:
+        return EXIT_SCENE_FAILED
     if args.strict and d["warnings"]:
         print(f"ehd scene: {len(d['warnings'])} validity warning(s) (--strict)", file=sys.stderr)
-        return 1
+        return EXIT_SCENE_FAILED
     return 0
 
 
@@ -299,15 +312,17 @@ def _list_materials(args) -> int:
 def cmd_paper_figures(args) -> int:
     from ..cli_shared import check_output_dir
     from ..plots.paper_figures import paper_figures
+    from ..writes import guarded_dir
 
     check_output_dir("--out", args.out)
     try:
-        paths = paper_figures(args.out, accuracy=args.accuracy)
+        with guarded_dir(args.out, f"--out {args.out}"):
+            paths = paper_figures(args.out, accuracy=args.accuracy)
     except ValueError as exc:
         raise _usage_error(str(exc)) from None
     except RuntimeError as exc:
         print(f"ehd paper-figures: {exc}", file=sys.stderr)
-        return 1
+        return EXIT_SCENE_FAILED
     print(f"wrote {len(paths)} files to {args.out}: "
           f"{', '.join(p.name for p in paths if p.suffix == '.png')}")
     return 0

@@ -210,8 +210,8 @@ class MaterialTable:
 def read_toml(path, what: str = "materials file", error=MaterialError) -> dict:
     """Parse a TOML file; a missing, unreadable or invalid file raises ``error`` naming it."""
     try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
+        with open(path, "rb") as fh:  # a UTF-8 byte-order mark (some editors write one) is read
+            return tomllib.loads(fh.read().decode("utf-8-sig"))
     except FileNotFoundError:
         raise error(f"{what} {str(path)!r} not found") from None
     except IsADirectoryError:

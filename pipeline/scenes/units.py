@@ -4,14 +4,30 @@ Scene files and the materials table accept either a plain number, taken as SI (`
 or a string with units (``radius = "50 um"``, ``v0 = "10 cm/s"``, ``viscosity = "1 mPa s"``).
 Strings are parsed by pint's unit registry (a maintained units library; no hand-written parser),
 checked against the dimension the field needs, and converted to SI. Every error names the field.
+
+A string is read as a *quantity*, never evaluated as an expression: it must be a number followed
+by a unit expression (``QUANTITY``: letters, digits, ``* / ^ ( ) .`` and spaces), which is then
+handed to pint; anything else (``'__import__("os")'``, quotes, brackets, commas) is refused before
+pint sees it, and any failure inside pint is one line naming the field. A value whose magnitude in
+SI is subnormal or absurd (nonzero and below ``TINY`` or above ``HUGE``) is refused with the
+field's range: no length of 1e-320 m reaches the solver to underflow there.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from functools import lru_cache
 
-__all__ = ["UnitError", "FieldSpec", "to_si", "format_quantity"]
+__all__ = ["UnitError", "FieldSpec", "to_si", "format_quantity", "TINY", "HUGE", "QUANTITY"]
+
+# a number, then a unit expression; what pint is given to parse
+QUANTITY = re.compile(r"\s*[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?"
+                      r"(\s*[A-Za-z0-9/(\u00b5\u03bc\u00b0\u2126%][A-Za-z0-9_\u00b5\u03bc\u00b0\u2126%\s*/^().-]*)?\s*")
+# nonzero SI magnitudes outside [TINY, HUGE] are no physical input of this solver (the smallest
+# are far below a nucleus, 1e-15 m, the largest far above any modulus or speed): a typo, or a value
+# that would underflow or overflow in the reduced radius, the scalings or the kernel
+TINY, HUGE = 1e-30, 1e30
 
 
 from ..errors import UsageError
@@ -81,14 +97,16 @@ def to_si(value, spec: FieldSpec, where: str) -> float:
         except ValueError:
             pass
     if isinstance(value, str):
-        import pint
-
         ureg = _registry()
+        text = value.strip().lstrip("\ufeff")
+        if not QUANTITY.fullmatch(text):
+            raise UnitError(f"{where}: cannot read {value!r} as a quantity (a number and its "
+                            f"units); write e.g. '{spec.example}'")
         try:
-            q = ureg.Quantity(value.strip())
-        except (pint.errors.PintError, ValueError, TypeError, AttributeError,
-                SyntaxError) as exc:  # pint raises a mix of these for unreadable strings
-            raise UnitError(f"{where}: cannot read {value!r} as a quantity ({exc}); "
+            q = ureg.Quantity(text)
+        except Exception as exc:  # noqa: BLE001 - pint raises a mix (even AssertionError)
+            reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise UnitError(f"{where}: cannot read {value!r} as a quantity ({reason}); "
                             f"write e.g. '{spec.example}'") from None
         if not isinstance(q, ureg.Quantity):  # a bare number string such as "5"
             q = ureg.Quantity(float(q))
@@ -107,6 +125,13 @@ def to_si(value, spec: FieldSpec, where: str) -> float:
         v = float(value)
     if math.isnan(v):
         raise UnitError(f"{where}: value is NaN")
+    if v != 0.0 and math.isfinite(v) and not TINY <= abs(v) <= HUGE:
+        unit = f" {spec.si_unit}" if spec.si_unit else ""
+        subnormal = "subnormal, " if abs(v) < 2.2250738585072014e-308 else ""  # float min
+        raise UnitError(f"{where} = {value!r} is {subnormal}outside what this solver takes (its "
+                        f"valid range is "
+                        f"{spec.range_text()}, and a nonzero value must be within "
+                        f"[{TINY:g}, {HUGE:g}]{unit} in magnitude)")
     ok_lo = v > spec.lo if spec.lo_open else v >= spec.lo
     ok_hi = v < spec.hi if spec.hi_open else v <= spec.hi
     if not (ok_lo and ok_hi):

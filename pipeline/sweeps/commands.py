@@ -5,7 +5,9 @@ another solver version/numerics/sweep file, busy store, unreachable scheduler), 
 stderr, nothing computed; 3 the sweep finished but failed scenes remain in it (stored with status
 and message; rerun them with ``--retry-failed``); 4 the scheduler went away mid-sweep (finished
 scenes kept); 5 ``status``/``figures``: the store is damaged (the cells are listed; ``ehd sweep``
-recomputes them); 130 interrupted (everything finished so far is kept).
+recomputes them; ``sweep``: metadata it cannot repair); 74 a write failed (a full disk: the path
+and the free space, nothing partial left; stdout closed or full); 130 interrupted, 143 terminated
+(SIGTERM; everything finished so far is kept).
 """
 
 from __future__ import annotations
@@ -32,9 +34,11 @@ def register(sub) -> None:
         "sweep", help="compute a sweep (grid over Physics fields) into its zarr store (cached, resumable)",
         description="Compute every scene of a sweep file that its store lacks. Exit codes: 0 all "
                     "scenes ok, 2 bad input, 3 finished with failed scenes, 4 scheduler lost "
-                    "mid-sweep, 130 interrupted.")
-    p.add_argument("sweep_file", metavar="SWEEP_FILE", help="sweep definition, e.g. sweeps/paper.toml, or the name of a "
-                        "shipped one: paper, quick, cavitation, piezoviscous")
+                    "mid-sweep, 5 damaged metadata the sweep cannot repair, 74 a write failed "
+                    "(disk full), 130 interrupted, 143 terminated (SIGTERM).")
+    p.add_argument("sweep_file", metavar="SWEEP_FILE",
+                   help="sweep definition, e.g. sweeps/paper.toml, or the name of a shipped one: "
+                        "paper, quick, cavitation, piezoviscous")
     p.add_argument("--store", metavar="PATH", default=None,
                    help="zarr store to use instead of the one named in the sweep file")
     where = p.add_mutually_exclusive_group()
@@ -55,6 +59,9 @@ def register(sub) -> None:
     p.add_argument("--connect-timeout", metavar="SECONDS", type=float, default=None,
                    help="with --scheduler/--scheduler-file: give up (exit 2) when the scheduler "
                         "does not answer within SECONDS (default 30)")
+    p.add_argument("--allow-large", action="store_true",
+                   help="run a grid of more than 10^6 scenes (refused otherwise, before anything "
+                        "is allocated)")
     p.add_argument("--add-sweep", action="store_true",
                    help="write this sweep file into a store that another sweep file wrote "
                         "(recorded in the store's 'sweeps' attr)")
@@ -85,28 +92,25 @@ def cmd_sweep(args) -> int:
                         workers=args.workers, address=args.scheduler,
                         scheduler_file=args.scheduler_file, retry_failed=args.retry_failed,
                         wait_workers=args.wait_workers, add_sweep=args.add_sweep,
-                        connect_seconds=args.connect_timeout)
+                        connect_seconds=args.connect_timeout, allow_large=args.allow_large)
     print(summary.text())
     return summary.exit_code
 
 
 def _open_checked(store: str):
-    """``(dataset, damage, journal lines skipped)`` of the store at ``store``, read whole; a
-    missing or unreadable store is a one-line error (exit 2)."""
-    from ..errors import PathError, UsageError
+    """``(dataset, damage, journal lines skipped)`` of the store at ``store``, read whole and
+    checked (pipeline/sweeps/integrity.py); a missing or unreadable store is a one-line error
+    (exit 2), metadata that cannot be trusted one line too (exit 5)."""
+    from ..errors import EhdError, PathError, UsageError
     from .integrity import load_checked
     from .journal import _journal_path, read_journal
-    from .store import open_results
 
     if not str(store).strip():
         raise PathError("STORE: empty path; give a store directory such as results/paper.zarr")
-    import warnings
-
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)  # a pending journal is reported
-            open_results(store, chunks=None)  # is it a sweep store at all?
         ds, damage = load_checked(store)
+    except EhdError:
+        raise
     except FileNotFoundError as exc:
         raise UsageError(str(exc)) from None
     except (ValueError, KeyError, OSError) as exc:
@@ -126,7 +130,7 @@ def cmd_status(args) -> int:
     from .analysis import PlaneError, planes
     from .journal import pending_journal
     from .layout import MODEL_CODES, STATUS_CODES
-    from .run import format_physics
+    from .config import format_physics
 
     ds, damage, skipped = _open_checked(args.store)
     fixed = ds.attrs.get("fixed_physics") or {}
@@ -160,9 +164,12 @@ def cmd_status(args) -> int:
               "next ehd sweep")
     if skipped:
         print(f"  journal   {skipped:6d}   bad lines skipped (their scenes run again)")
-    if damage:
+    if len(damage):
         print(f"  damaged   {len(damage):6d}   counted as not run above; the next ehd sweep "
               "computes them again")
+    for coord, how in sorted(damage.coords.items()):
+        print(f"  damaged   coordinate {coord} ({how}): shown from the store's copy; the next ehd "
+              "sweep rewrites it")
     try:
         for extra, plane in planes(ds):
             _status_table(plane, extra, format_physics)
@@ -177,7 +184,8 @@ def cmd_status(args) -> int:
         print(f"  ... {len(cells) - 20} more failed scenes")
     if damage:
         print(f"ehd status: error: store {args.store} is damaged: {damage_text}; run its sweep "
-              "again (ehd sweep SWEEP_FILE) to compute them again", file=sys.stderr)
+              "again (ehd sweep SWEEP_FILE) to repair it (damaged cells are computed again)",
+              file=sys.stderr)
         return EXIT_DAMAGED
     return 0
 
@@ -212,6 +220,7 @@ def cmd_figures(args) -> int:
         return 0
     from ..errors import StoreDamaged, UsageError
     from ..plots.sweep_maps import update_figures
+    from ..writes import guarded_dir
     from .analysis import PlaneError
     from .layout import STATUS_CODES
 
@@ -220,12 +229,13 @@ def cmd_figures(args) -> int:
         raise StoreDamaged(f"store {args.store} is damaged: "
                            f"{damage.describe(checked, checked.attrs.get('fixed_physics') or {})}; no "
                            "figures drawn from it: run its sweep again (ehd sweep SWEEP_FILE) to "
-                           "compute those cells again")
+                           "repair it (damaged cells are computed again)")
     if not (checked["status"].values == STATUS_CODES["ok"]).any():
         raise UsageError(f"store {args.store} holds no finished scene yet: nothing to draw; run "
                          "its sweep first (ehd sweep SWEEP_FILE)")
     try:  # the store as read and checked above: one read per command
-        paths, rendered = update_figures(checked, args.out, store=args.store)
+        with guarded_dir(args.out, f"--out {args.out}"):
+            paths, rendered = update_figures(checked, args.out, store=args.store)
     except PlaneError as exc:
         raise UsageError(f"no figures for {args.store}: {exc}") from None
     if not rendered:

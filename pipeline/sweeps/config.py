@@ -40,7 +40,7 @@ import numpy as np
 from ..errors import UsageError
 
 __all__ = ["Sweep", "load_sweep", "parse_sweep", "cache_key", "canonical_json", "ConfigError",
-           "physics_json", "physics_from_json"]
+           "physics_json", "physics_from_json", "format_physics"]
 
 _TOP_KEYS = {"name", "store", "grid", "physics", "numerics"}
 _RANGE_KEYS = {"start", "stop", "num"}
@@ -49,6 +49,12 @@ MAX_SCENES = 10**7  # a typo guard (num = 1e9), far above any real sweep
 
 class ConfigError(UsageError, ValueError):
     """A sweep file is malformed; the message names the file and the offending key."""
+
+
+def format_physics(physics: dict) -> str:
+    """``St=20 eps=1e-08``: a scene's physics in one short line."""
+    return " ".join(f"{k}={v:.6g}" if isinstance(v, float) else f"{k}={v}"
+                    for k, v in physics.items())
 
 
 def canonical_json(obj) -> str:
@@ -165,7 +171,7 @@ def load_sweep(path) -> Sweep:
     """
     path = Path(path)
     try:
-        text = path.read_bytes().decode("utf-8")
+        text = path.read_bytes().decode("utf-8-sig")  # a UTF-8 byte-order mark is no TOML
     except UnicodeDecodeError as exc:
         raise ConfigError(f"sweep file {str(path)!r} is not a text file (byte {exc.start} is not "
                           "UTF-8): give a TOML sweep file such as sweeps/quick.toml") from None
@@ -300,6 +306,10 @@ def _axis(where: str, name: str, spec) -> tuple:
         start, stop = (_number(where, f"{name}.{k}", spec[k]) for k in ("start", "stop"))
         check(f"{name}.start", start)
         check(f"{name}.stop", stop)
+        if spec["num"] == 1 and start != stop:
+            raise ConfigError(f"{where}: grid.{name} = {{start = {start:g}, stop = {stop:g}, num = "
+                              f"1}} is one value but two ends: give num >= 2, or the one value as "
+                              f"a list ({name} = [{start:g}])")
         values = np.geomspace(start, stop, spec["num"])
     else:
         values = np.array([_number(where, name, v) for v in spec])

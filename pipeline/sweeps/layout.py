@@ -4,7 +4,9 @@ Layout (``STORE_SCHEMA``): every variable of ``VARIABLES`` (generated from the r
 ``solver.observables.OBSERVABLES`` plus ``model``, ``status``, ``message``) is an N-D array over
 the sweep's axes (fields of ``solver.Physics``, in ``Physics.names()`` order, e.g. ``(St, eps)``),
 chunked 1 along every axis but the last and whole along the last; coordinates are sorted
-ascending. ``status`` (``STATUS_CODES``; 0 = not run) is written *after* a cell's data, so a cell
+ascending. Every chunk of every variable and coordinate is zstd-compressed and then carries a
+CRC-32C checksum (zarr's ``crc32c`` codec, ``CODECS``): a flipped byte is an error when the chunk
+is read, never a changed number. ``status`` (``STATUS_CODES``; 0 = not run) is written *after* a cell's data, so a cell
 with a non-zero status always has its data. Root attrs carry the axis names (``axes``), the fixed
 physics (``fixed_physics``), the solver version, the cache key and the resolved numerics, the
 sweep file verbatim, package versions and the creation time.
@@ -25,9 +27,11 @@ from solver.observables import MODEL_CODES, OBSERVABLES, STATUS_CODES
 from solver.physics import Physics
 
 __all__ = ["STORE_SCHEMA", "VARIABLES", "FLOATS", "FLAGS", "COUNTS", "DIAGNOSTIC", "SCALING",
-           "STATUS_CODES", "MODEL_CODES", "empty_dataset", "zarr_warnings"]
+           "STATUS_CODES", "MODEL_CODES", "CODECS", "empty_dataset", "zarr_warnings"]
 
-STORE_SCHEMA = 5  # bump when variables or their meaning change (an old store is then refused)
+# bump when variables, their encoding or their meaning change (an old store is then refused);
+# 6: checksummed chunks (crc32c), the coordinates' copy ``grid`` and ``metadata_sha256``
+STORE_SCHEMA = 6
 
 _DTYPE = {"float": "f8", "flag": "i1", "count": "i4"}
 # name: (dtype, long_name, units), generated from the registry; flags are int8 0/1 with fill -1
@@ -123,11 +127,30 @@ def _chunks(ds) -> tuple:
     return tuple(1 for _ in dims[:-1]) + (ds.sizes[dims[-1]],)
 
 
+def codecs() -> tuple:
+    """The bytes-to-bytes codecs of every array: zstd, then a CRC-32C of the compressed chunk
+    (zarr 3's ``crc32c`` codec; a chunk whose checksum does not match raises when read)."""
+    from zarr.codecs import Crc32cCodec, ZstdCodec
+
+    return (ZstdCodec(), Crc32cCodec())
+
+
+CODECS = ("zstd", "crc32c")  # names of codecs() in an array's zarr.json (checked when read)
+
+
 def _encoding(ds) -> dict:
     chunks = _chunks(ds)
     enc = {}
     for name in VARIABLES:
-        enc[name] = {"chunks": chunks}
+        enc[name] = {"chunks": chunks, "compressors": codecs()}
         if name in FLAGS:
             enc[name].update(dtype="i1", _FillValue=-1)
+    for name in ds["status"].dims:  # the coordinates: one chunk each, checksummed too
+        enc[name] = {"compressors": codecs()}
     return enc
+
+
+def grid_copy(ds) -> dict:
+    """The coordinates as the root attr ``grid`` holds them: ``{axis: [repr(value), ...]}``
+    (``float(text)`` gives back the same float, inf included)."""
+    return {d: [repr(float(v)) for v in ds[d].values] for d in ds["status"].dims}

@@ -7,22 +7,26 @@ each to the store's single writer and updates the progress bar.
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import EXIT_OK, EXIT_SWEEP_FAILED
+from .config import format_physics
 from .layout import MODEL_CODES, STATUS_CODES
 from .progress import Progress
-from .runners import check_runner, open_runner
+from .runners import check_runner, open_runner, probe_scheduler
 from .store import SweepStore
 from .tasks import MasterSolve, solve_scene, warm
 
 __all__ = ["run_sweep", "Summary", "EXIT_OK", "EXIT_FAILED", "format_physics"]
 
-EXIT_OK = 0
-EXIT_FAILED = 3  # the sweep finished, but some of its scenes are stored as failed
+# the one exit-code table is pipeline/errors.py; EXIT_FAILED is its EXIT_SWEEP_FAILED (3): the
+# sweep finished, but some of its scenes are stored as failed
+EXIT_FAILED = EXIT_SWEEP_FAILED
 
 _CODE_NAMES = {v: k for k, v in STATUS_CODES.items()}
 
@@ -44,6 +48,7 @@ class Summary:
     failed: int = 0  # stored as failed (this run or before)
     not_run: int = 0  # still missing (an interrupted run)
     repaired: int = 0  # damaged cells found when the store was opened (recomputed if in the grid)
+    repaired_coords: tuple = ()  # damaged coordinates rewritten from the store's copy
     journal_skipped: int = 0  # journal lines that were not scene records (their scenes rerun)
     rigid: int = 0  # answered by the rigid solution, no PDE solve
     rigid_computed: int = 0
@@ -73,6 +78,9 @@ class Summary:
         if self.repaired:
             lines.append(f"  repaired    {self.repaired:6d}   (damaged cells found in the store, "
                          "computed again)")
+        if self.repaired_coords:
+            lines.append(f"  repaired    coordinate(s) {', '.join(self.repaired_coords)} (damaged, "
+                         "rewritten from the store's copy)")
         if self.journal_skipped:
             lines.append(f"  journal     {self.journal_skipped:6d}   bad lines skipped (their "
                          "scenes computed again)")
@@ -92,7 +100,7 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
               retry_failed: bool = False, solve=solve_scene, warm_up: bool | None = None,
               progress=sys.stderr, flush_seconds: float | None = None,
               wait_workers: float | None = None, add_sweep: bool = False,
-              connect_seconds: float | None = None) -> Summary:
+              connect_seconds: float | None = None, allow_large: bool = False) -> Summary:
     """Compute every scene of ``sweep`` that its store lacks.
 
     Parameters
@@ -124,6 +132,9 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         Allow another sweep file to write into an existing store (recorded in its ``sweeps``).
     connect_seconds : float, optional
         With a scheduler: seconds to try to reach it (default ``runners.CONNECT_SECONDS``).
+    allow_large : bool
+        Run a grid of more than ``LARGE_SCENES`` scenes (refused otherwise, before anything is
+        allocated: a typo in ``num`` should not start weeks of work).
 
     Returns
     -------
@@ -131,12 +142,19 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         Counts; ``summary.exit_code`` is ``EXIT_FAILED`` (3) when failed scenes remain.
     """
     t0 = time.monotonic()
+    check_memory(sweep.n_scenes, progress, allow_large)  # before any allocation
     kwargs = {} if flush_seconds is None else {"flush_seconds": flush_seconds}
     if warm_up is None:
         warm_up = solve is solve_scene
     overrides = dict(sweep.overrides)
     # the executor's settings and a scheduler file are checked before the store is touched
-    address = check_runner(runner, workers, address, scheduler_file)
+    address = check_runner(runner, workers, address, scheduler_file, connect_seconds,
+                           wait_workers)
+    if address is not None:  # the scheduler answers before any store or lock is made
+        target = address + (f" (from {scheduler_file})" if scheduler_file else "")
+        if progress is not None:
+            print(f"checking the dask scheduler at {target}...", file=progress, flush=True)
+        probe_scheduler(address, connect_seconds, target)
     runner_kw = {} if wait_workers is None else {"wait_workers": wait_workers}
     if connect_seconds is not None:
         runner_kw["connect_seconds"] = connect_seconds
@@ -144,10 +162,14 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         summary = Summary(name=sweep.name, store=st.shown, shape=sweep.shape,
                           axes=sweep.axis_names)
         summary.repaired = len(st.damage)
+        summary.repaired_coords = tuple(sorted(st.damage.coords))
         summary.journal_skipped = st.journal_skipped
         if st.damage and progress is not None:
             print(f"store {st.shown} is damaged: {st.damage_text}; "
                   "those cells are computed again", file=progress, flush=True)
+        if progress is not None and sweep.n_scenes >= PLANNING_NOTE:
+            print(f"store {st.shown} ready; listing the scenes it lacks...", file=progress,
+                  flush=True)
         cells = st.cells(sweep)
         status = st.status_of(cells)
         rerun = (status == 0) | (retry_failed & (status >= 2))
@@ -193,6 +215,64 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
     return summary
 
 
+# bytes one scene takes while a sweep is planned and run: its cell in the in-memory store (every
+# variable of the layout) plus the work list (the cell's index tuple, its job with the physics
+# dict; measured ~0.5 kB with sys.getsizeof on CPython 3.11)
+PLAN_BYTES_PER_SCENE = 500
+MEMORY_SHARE = 0.5  # of the memory available: a sweep planning more is refused
+PLANNING_NOTE = 100_000  # scenes above which planning is announced (it takes seconds)
+LARGE_SCENES = 1_000_000  # scenes above which a sweep needs allow_large (--allow-large)
+
+
+def plan_bytes(n_scenes: int) -> int:
+    """Memory a sweep of ``n_scenes`` needs to be planned: the layout's bytes per cell (dtype
+    sizes; strings as a pointer) plus ``PLAN_BYTES_PER_SCENE``."""
+    from .layout import FLAGS, VARIABLES
+
+    per_cell = sum(8 if dtype == "str" else (4 if name in FLAGS else int(dtype[1:]))
+                   for name, (dtype, _, _) in VARIABLES.items())
+    return int(n_scenes) * (per_cell + PLAN_BYTES_PER_SCENE)
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available to a new allocation (MemAvailable of /proc/meminfo), or None
+    where it cannot be read."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def check_memory(n_scenes: int, progress=None, allow_large: bool = False) -> None:
+    """UsageError, before anything is allocated, when a grid of ``n_scenes`` would take more
+    than ``MEMORY_SHARE`` of the available memory to plan, or has more than ``LARGE_SCENES``
+    scenes without ``allow_large`` (``--allow-large``); a large grid is announced."""
+    from ..errors import UsageError
+    from ..errors import _bytes as size
+
+    need = plan_bytes(n_scenes)
+    if n_scenes > LARGE_SCENES and not allow_large:
+        raise UsageError(f"the sweep has {n_scenes} scenes (planning them takes about "
+                         f"{size(need)} of memory; at 0.1 s a scene, {n_scenes * 0.1 / 86400:.0f} "
+                         f"core-days): more than {LARGE_SCENES}, so it needs --allow-large to "
+                         "run; check the grid's num values")
+    have = available_memory()
+    if have is not None and need > MEMORY_SHARE * have:
+        raise UsageError(f"the sweep has {n_scenes} scenes; planning them needs about "
+                         f"{size(need)} of memory and {size(have)} is available: split it into "
+                         "smaller sweeps (fewer values per axis), or run it on a larger machine")
+    if progress is not None and n_scenes >= PLANNING_NOTE:
+        print(f"planning {n_scenes} scenes (about {size(need)} of memory)...", file=progress,
+              flush=True)
+
+
 def _master_solve(sweep, progress) -> MasterSolve:
     """Build the master curve once, here, before the workers start (solver/master.py)."""
     from solver.master import MasterCurve
@@ -213,12 +293,6 @@ class _Warm:
 
     def __call__(self):
         return warm(self.accuracy, self.overrides)
-
-
-def format_physics(physics: dict) -> str:
-    """``St=20 eps=1e-08``: a scene's physics in one short line."""
-    return " ".join(f"{k}={v:.6g}" if isinstance(v, float) else f"{k}={v}"
-                    for k, v in physics.items())
 
 
 def _count(summary: Summary, st, cells) -> None:

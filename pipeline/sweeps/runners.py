@@ -31,7 +31,8 @@ from distributed import WorkerPlugin
 from ..environment import configure
 from ..errors import SchedulerError, SchedulerLost
 
-__all__ = ["open_runner", "check_runner", "scheduler_address", "CONNECT_SECONDS", "default_workers", "max_local_workers", "RUNNERS", "Runner",
+__all__ = ["open_runner", "check_runner", "check_seconds", "check_address", "probe_scheduler",
+           "scheduler_address", "CONNECT_SECONDS", "default_workers", "max_local_workers", "RUNNERS", "Runner",
            "RunnerError", "WorkerSetup", "WAIT_WORKERS_SECONDS"]
 
 RUNNERS = ("processes", "threads", "serial")
@@ -72,11 +73,50 @@ def scheduler_address(scheduler_file) -> str:
     return address
 
 
+def check_seconds(flag: str, value, allow_zero: bool = False) -> None:
+    """RunnerError unless ``value`` (of ``flag``) is a finite number of seconds > 0 (>= 0)."""
+    import math
+
+    if value is None:
+        return
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and \
+        math.isfinite(value) and (value >= 0 if allow_zero else value > 0)
+    if not ok:
+        raise RunnerError(f"{flag} {value!r}: give a finite number of seconds "
+                          f"{'>= 0' if allow_zero else '> 0'}, e.g. {flag} 30")
+
+
+def check_address(address: str) -> str:
+    """RunnerError unless ``address`` names a scheduler: ``tcp://HOST:PORT`` (or another dask
+    protocol with its port)."""
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    where = f"--scheduler {address}"
+    try:
+        protocol, location = parse_address(address, strict=True)
+    except (ValueError, TypeError) as exc:
+        raise RunnerError(f"{where}: not a scheduler address ({exc}); give one such as "
+                          "tcp://10.0.0.1:8786") from None
+    if protocol in ("tcp", "tls", "ws", "wss"):
+        try:
+            _, port = parse_host_port(location)
+        except (ValueError, TypeError):
+            raise RunnerError(f"{where}: no port; give one such as "
+                              f"{protocol}://{location or '10.0.0.1'}:8786") from None
+        if not 0 < int(port) < 65536:
+            raise RunnerError(f"{where}: port {port} is not in 1-65535")
+    return address
+
+
 def check_runner(kind: str | None = "processes", workers: int | None = None,
-                 address: str | None = None, scheduler_file: str | None = None) -> str | None:
+                 address: str | None = None, scheduler_file: str | None = None,
+                 connect_seconds: float | None = None,
+                 wait_workers: float | None = None) -> str | None:
     """Everything about the executor that can be checked before any work (the store is not
-    touched yet): the executor name, the local worker limit, the scheduler file. Returns the
-    scheduler address (None: local)."""
+    touched yet): the executor name, the local worker limit, the timeouts, the scheduler
+    address and file. Returns the scheduler address (None: local)."""
+    check_seconds("--connect-timeout", connect_seconds)
+    check_seconds("--wait-workers", wait_workers, allow_zero=True)
     local = address is None and scheduler_file is None
     if local and kind not in RUNNERS:
         raise RunnerError(f"executor must be one of {RUNNERS}, got {kind!r}")
@@ -85,10 +125,101 @@ def check_runner(kind: str | None = "processes", workers: int | None = None,
                           f"core, {default_workers()} here): extra local workers only queue for "
                           "the cores; use a dask scheduler for more")
     if scheduler_file is not None:
-        return scheduler_address(scheduler_file)
+        return check_address(scheduler_address(scheduler_file))
     if address is not None and not address.strip():
         raise RunnerError("--scheduler: empty address; give one such as tcp://10.0.0.1:8786")
-    return address
+    return check_address(address) if address is not None else None
+
+
+def probe_scheduler(address: str, seconds: float = None, target: str | None = None) -> None:
+    """Make sure a dask scheduler answers at ``address`` within ``seconds``, before anything
+    is created (no store, no lock): a TCP connection, then the first bytes of the scheduler's
+    handshake (a dask scheduler speaks first: an 8-byte frame length, then its handshake).
+    RunnerError naming what happened: refused, no answer, a peer that accepts and never speaks
+    (e.g. an HTTP server, which waits for a request), or one that sends other bytes. Addresses
+    of other protocols than tcp:// are left to distributed."""
+    import socket
+    import struct
+
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    seconds = CONNECT_SECONDS if seconds is None else seconds
+    target = target or address
+    protocol, location = parse_address(address)
+    if protocol != "tcp":
+        return
+    host, port = parse_host_port(location)
+    deadline = time.monotonic() + seconds
+    fix = "start it, check the address, or raise --connect-timeout"
+    try:
+        sock = socket.create_connection((host, int(port)), timeout=seconds)
+    except socket.timeout:
+        raise RunnerError(f"cannot reach the dask scheduler at {target} within {seconds:g} s "
+                          f"(no answer); {fix}") from None
+    except OSError as exc:
+        raise RunnerError(f"cannot reach the dask scheduler at {target} within {seconds:g} s "
+                          f"({exc.strerror or type(exc).__name__}); {fix}") from None
+    try:
+        head = b""
+        while len(head) < 8:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise socket.timeout()
+            sock.settimeout(left)
+            chunk = sock.recv(8 - len(head))
+            if not chunk:
+                raise RunnerError(f"{target} accepted the connection and closed it without a "
+                                  "word: not a dask scheduler; check the address")
+            head += chunk
+    except socket.timeout:
+        raise RunnerError(f"{target} accepted the connection but sent no dask handshake within "
+                          f"{seconds:g} s: is it a dask scheduler (and not, e.g., an HTTP "
+                          "server)? Check the address and port, or raise --connect-timeout"
+                          ) from None
+    except OSError as exc:
+        raise RunnerError(f"cannot reach the dask scheduler at {target} "
+                          f"({exc.strerror or type(exc).__name__}); {fix}") from None
+    finally:
+        sock.close()
+    (nbytes,) = struct.unpack("<Q", head)
+    if not 0 < nbytes < 2**24:  # a handshake is a few hundred bytes
+        raise RunnerError(f"{target} is not a dask scheduler (it answered {head!r}); check the "
+                          "address and port")
+
+
+def _connect(address: str, seconds: float, target: str):
+    """``Client(address)`` with a hard deadline: distributed's own timeout does not cover every
+    wait (a handshake that stalls); a client still connecting after ``seconds`` (+ 5 s of
+    grace for distributed's own timeout to fire) is abandoned in its daemon thread."""
+    import threading
+
+    from dask.distributed import Client
+
+    box = {}
+
+    def connect():
+        try:
+            box["client"] = Client(address, timeout=seconds)
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller
+            box["error"] = exc
+
+    thread = threading.Thread(target=connect, name="ehd-connect", daemon=True)
+    thread.start()
+    thread.join(seconds + 5.0)
+    if thread.is_alive():
+        _quiet_dask()
+        raise RunnerError(f"the dask scheduler at {target} did not complete the connection "
+                          f"within {seconds:g} s; check it, or raise --connect-timeout")
+    if "error" in box:
+        exc = box["error"]
+        if isinstance(exc, (OSError, TimeoutError, ValueError, MemoryError)):
+            _quiet_dask()
+            raise RunnerError(f"cannot reach the dask scheduler at {target} within "
+                              f"{seconds:g} s ({type(exc).__name__}: "
+                              f"{str(exc).splitlines()[0] if str(exc) else 'no answer'}); start "
+                              "it, check the address, or raise --connect-timeout") from None
+        raise exc
+    return box["client"]
 
 
 def default_workers() -> int:
@@ -209,7 +340,8 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
     warm : callable, optional
         Called once here before any worker starts, then on every worker (:class:`WorkerSetup`).
     """
-    address = check_runner(kind, workers, address, scheduler_file)
+    address = check_runner(kind, workers, address, scheduler_file, connect_seconds,
+                           wait_workers)
     local = address is None
     stream = sys.stderr if stream is None else stream
     if warm is not None:
@@ -231,17 +363,12 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
         _quiet_dask(("distributed.client", "distributed.comm", "distributed.core",
                      "distributed.batched", "tornado.application", "asyncio"),
                     level=logging.CRITICAL)
+        probe_scheduler(address, connect_seconds, target)
+        client = _connect(address, connect_seconds, target)
         try:
-            client = Client(address, timeout=connect_seconds)
-        except (OSError, TimeoutError, ValueError) as exc:
-            _quiet_dask()
-            raise RunnerError(f"cannot reach the dask scheduler at {target} within "
-                              f"{connect_seconds:g} s ({type(exc).__name__}: "
-                              f"{str(exc).splitlines()[0] if str(exc) else 'no answer'}); start "
-                              "it, check the address, or raise --connect-timeout") from None
-        try:
-            if workers:
-                _wait_for_workers(client, workers, wait_workers, stream)
+            # at least one worker: a scheduler without workers would take the scenes and never
+            # run them
+            _wait_for_workers(client, workers or 1, wait_workers, stream)
             yield _dask_runner(client, f"dask scheduler {client.scheduler.address}", warm)
         except BaseException:
             _quiet_dask()  # closing a client of a lost scheduler logs tracebacks
@@ -317,6 +444,10 @@ def _wait_for_workers(client, n: int, timeout: float, stream) -> None:
             return
         waited = time.monotonic() - t0
         if waited >= timeout:
+            if connected == 0 and n == 1:
+                raise RunnerError(f"the scheduler has no workers after {timeout:g} s, so no "
+                                  "scene could run; start workers (dask worker ADDRESS) or raise "
+                                  "--wait-workers")
             raise RunnerError(f"only {connected} of {n} workers connected to the scheduler after "
                               f"{timeout:g} s; start more workers, lower --workers or raise "
                               "--wait-workers")

@@ -39,21 +39,18 @@ import numpy as np
 from solver.observables import MODEL_CODES, STATUS_CODES
 from solver.physics import Physics
 
-from ..errors import EhdError, PathError, UsageError
+from ..errors import EhdError, PathError, StoreDamaged, StoreMismatch, UsageError
+from ..writes import write_error, writing
 from .config import physics_from_json, physics_json
-from .integrity import Damage, load_checked
+from .integrity import DIGEST_KEY, Damage, load_checked, metadata_digest
 from .journal import _journal_path, pending_journal, read_journal
 from .layout import (COUNTS, DIAGNOSTIC, FLAGS, FLOATS, SCALING, STORE_SCHEMA, VARIABLES, _encoding,
-                     _fill, _now, _package_versions, empty_dataset, zarr_warnings)
+                     _fill, _now, _package_versions, empty_dataset, grid_copy, zarr_warnings)
 
-__all__ = ["open_results", "SweepStore", "StoreMismatch", "StoreBusy"]
+__all__ = ["open_results", "SweepStore", "StoreMismatch", "StoreBusy", "seal"]
 
 RTOL_COORD = 1e-9  # grid values this close are the same scene (geomspace round-off is ~1e-16)
 FLUSH_SECONDS = 2.0  # journal -> store merge interval: the journal already makes results durable
-
-
-class StoreMismatch(UsageError, ValueError):
-    """The store belongs to another solver version, numerics, physics or schema: refuse to mix."""
 
 
 class StoreBusy(EhdError, RuntimeError):
@@ -73,13 +70,17 @@ def _tmp_path(path: Path) -> Path:
     return path.with_name(f"{path.name}.tmp-{os.getpid()}")
 
 
-def open_results(path, **open_kwargs):
+def open_results(path, check: bool = True, **open_kwargs):
     """Open a sweep store for analysis.
 
     Parameters
     ----------
     path : str or Path
         The store directory (e.g. ``results/paper.zarr``).
+    check : bool
+        Read the whole store once first and raise ``StoreDamaged`` if any chunk, coordinate or
+        metadata is damaged (default; the stores are small). ``False`` skips the check (to look
+        at a damaged store: ``ehd status`` says which cells are damaged).
     **open_kwargs
         Passed to ``xarray.open_zarr`` (e.g. ``chunks=None``: no dask arrays, quicker for a
         store that is read whole).
@@ -90,24 +91,34 @@ def open_results(path, **open_kwargs):
         Lazily loaded, dims = the sweep's axes (``ds.attrs["axes"]``, e.g. ``(St, eps)``); the
         fixed physics in ``ds.attrs["fixed_physics"]``. Use ``ds.status == 1`` for valid cells (codes in
         ``ds.status.attrs["flag_meanings"]``); ``escaped``/``dimple`` read as float (NaN unknown).
-        Plain ``xarray.open_zarr(path)`` gives the same Dataset.
+        Plain ``xarray.open_zarr(path)`` gives the same Dataset, unchecked (a chunk whose
+        checksum fails still raises when read).
 
     Raises
     ------
     FileNotFoundError
         No sweep store at ``path``.
+    pipeline.errors.StoreDamaged
+        A damaged chunk, coordinate or metadata (``check=True``): its message lists them; ``ehd
+        sweep`` recomputes damaged cells.
+    pipeline.errors.StoreMismatch
+        A store of another schema.
     """
     import xarray as xr
 
+    from .integrity import read_root
+
     path = Path(path)
-    if not (path / "zarr.json").is_file():
-        hint = " (an interrupted re-layout left it in .old; run the sweep again)" \
-            if _old_path(path).exists() else ""
-        raise FileNotFoundError(f"no sweep store at {str(path)!r}{hint}")
+    if check:
+        checked, damage = load_checked(path)
+        if damage:
+            raise StoreDamaged(f"store {str(path)!r} is damaged: "
+                               f"{damage.describe(checked, checked.attrs.get('fixed_physics'))}; "
+                               "run its sweep again (ehd sweep SWEEP_FILE) to repair it")
+    else:
+        read_root(path)
     with zarr_warnings():
         ds = xr.open_zarr(path, consolidated=True, **open_kwargs)
-    if "store_schema" not in ds.attrs:
-        raise FileNotFoundError(f"{str(path)!r} is a zarr store but not an ehd sweep store")
     n = pending_journal(path)
     if n:
         warnings.warn(f"{n} finished scenes of an interrupted sweep are in {_journal_path(path)} "
@@ -116,15 +127,33 @@ def open_results(path, **open_kwargs):
     return ds
 
 
+def seal(path: Path) -> None:
+    """Write ``metadata_sha256`` (pipeline/sweeps/integrity.py) into the root attributes and
+    consolidate: the last write of every metadata change."""
+    import zarr
+
+    with zarr_warnings():
+        zarr.consolidate_metadata(str(path))
+        root = json.loads((Path(path) / "zarr.json").read_text())
+        group = zarr.open_group(str(path), mode="r+", use_consolidated=False)
+        group.attrs[DIGEST_KEY] = metadata_digest(root)
+        zarr.consolidate_metadata(str(path))
+
+
 def _write_new(ds, path: Path) -> None:
     """Write a complete store next to ``path`` and move it into place (readers never see a
     half-written layout). An existing store at ``path`` is replaced only after the new one is
-    complete; a kill in between is repaired by :func:`_recover`."""
+    complete; a kill in between is repaired by :func:`_recover`; a failed write (a full disk)
+    removes the temporary directory and leaves ``path`` as it was."""
     tmp = _tmp_path(path)
     shutil.rmtree(tmp, ignore_errors=True)
-    with zarr_warnings():
-        # one call is enough: nobody sees the temporary directory until the rename below
-        ds.to_zarr(tmp, mode="w-", consolidated=True, encoding=_encoding(ds))
+    ds = ds.copy()
+    ds.attrs["grid"] = grid_copy(ds)
+    with writing(tmp, "writing the store", path):
+        with zarr_warnings():
+            # one call is enough: nobody sees the temporary directory until the rename below
+            ds.to_zarr(tmp, mode="w-", consolidated=True, encoding=_encoding(ds))
+        seal(tmp)
     if path.exists():
         old = _old_path(path)
         path.rename(old)
@@ -147,6 +176,20 @@ def _recover(path: Path) -> None:
     if path.exists():  # a kill during zarr's atomic write leaves its temporary file behind
         for partial in path.rglob("*.partial"):
             partial.unlink(missing_ok=True)
+
+
+def _reopen_truncated(f, path: Path, size: int):
+    """Close ``f`` (its buffer dropped), cut ``path`` to ``size`` bytes, return None (the journal
+    is opened again by the next record)."""
+    try:
+        f.close()
+    except OSError:
+        pass
+    try:
+        os.truncate(path, size)
+    except OSError:
+        pass
+    return None
 
 
 def _union(old: np.ndarray, new) -> np.ndarray:
@@ -233,14 +276,29 @@ class SweepStore:
         path = path if path is not None else sweep.store
         self = cls(path, sweep.cache_key(), flush_seconds, worker_key=sweep.worker_key(),
                    fixed=sweep.fixed)
+        new_store = not self.path.exists()
         self._acquire_lock()
         try:
-            self._prepare(sweep, add_sweep)
+            try:
+                self._prepare(sweep, add_sweep)
+            except BaseException:
+                if new_store and not self.path.exists():
+                    # nothing was made (a full disk, a mismatch): no lock file of ours is left
+                    # either (unlinked while we hold it: no other sweep can be waiting on it)
+                    _lock_path(self.path).unlink(missing_ok=True)
+                raise
             try:
                 yield self
-            finally:
-                # also on Ctrl-C or an error: everything finished so far is merged (and if this
-                # flush fails, the journal still holds it for the next run)
+            except BaseException:
+                # also on Ctrl-C or an error: everything finished so far is merged; if this
+                # flush fails too (a full disk), the journal still holds it for the next run,
+                # and the first failure is the one reported
+                try:
+                    self.flush()
+                except Exception:  # noqa: BLE001
+                    pass
+                raise
+            else:
                 self.flush()
         finally:
             self._close_journal()
@@ -254,9 +312,11 @@ class SweepStore:
                       Path("/"))
         if not parent.is_dir():
             raise PathError(f"{where}: {str(parent)!r} is not a directory")
+        lock = _lock_path(self.path)
+        new_lock = not lock.exists()
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            f = _lock_path(self.path).open("a+")
+            f = lock.open("a+")
         except OSError as exc:
             raise PathError(f"{where}: cannot write next to the store in {str(self.path.parent)!r} "
                             f"({exc.strerror}); choose a writable --store") from None
@@ -268,10 +328,16 @@ class SweepStore:
             f.close()
             raise StoreBusy(f"store {self.shown!r} is being written by {holder}; wait for it "
                             "to finish (only one sweep writes a store)") from None
-        f.seek(0)
-        f.truncate()
-        f.write(f"pid {os.getpid()}\n")
-        f.flush()
+        try:
+            f.seek(0)
+            f.truncate()
+            f.write(f"pid {os.getpid()}\n")
+            f.flush()
+        except OSError as exc:  # a full disk: no lock file of ours left behind
+            f.close()
+            if new_lock:
+                lock.unlink(missing_ok=True)
+            raise write_error(exc, "writing the store's lock", lock) from None
         self._lock = f
 
     def _release_lock(self) -> None:
@@ -310,12 +376,15 @@ class SweepStore:
                                 "another --store")
         try:
             self._load()
+        except EhdError:  # the integrity check's own line (schema, damaged metadata)
+            raise
         except (ValueError, KeyError, OSError) as exc:  # e.g. a zarr store without consolidation
             raise StoreMismatch(f"{self.shown!r} cannot be opened as an ehd sweep store "
                                 f"({type(exc).__name__}: {exc}); choose another --store") from None
         self._check(sweep)
         self._check_provenance(sweep, add_sweep)
         self.damage_text = self.damage.describe(self.ds, self.fixed) if self.damage else ""
+        self._repair_coords(self.damage)
         self._forget(self.damage)
         self._replay()
         self._extend(sweep)
@@ -371,6 +440,19 @@ class SweepStore:
             update.update(sweep_file=sweep.source, sweep_name=sweep.name, sweep_path=new["path"])
         if update:
             self._set_attrs(**update)
+
+    def _repair_coords(self, damage: Damage) -> None:
+        """Rewrite damaged coordinates from their copy (the root attr ``grid``, checked by
+        ``metadata_sha256``; ``self.ds`` already holds it)."""
+        if not damage.coords:
+            return
+        import zarr
+
+        self.require_writable()
+        with writing(None, "writing the store", self.path), zarr_warnings():
+            group = zarr.open_group(str(self.path), mode="r+", use_consolidated=False)
+            for name in damage.coords:
+                group[name][:] = self.ds[name].values
 
     def _forget(self, damage: Damage) -> None:
         """Damaged cells become "not run" (every variable at its fill value) and their chunks
@@ -435,10 +517,10 @@ class SweepStore:
         import zarr
 
         self.require_writable()
-        with zarr_warnings():
-            group = zarr.open_group(self.path, mode="r+")
+        with writing(None, "writing the store", self.path), zarr_warnings():
+            group = zarr.open_group(str(self.path), mode="r+", use_consolidated=False)
             group.attrs.update(attrs)
-            zarr.consolidate_metadata(self.path)
+            seal(self.path)
         self.ds.attrs.update(attrs)
 
     def _extend(self, sweep) -> None:
@@ -489,11 +571,23 @@ class SweepStore:
         import time
 
         physics = self.scene(cell)
-        if self._journal is None:
-            self.require_writable()
-            self._journal = _journal_path(self.path).open("a")
-        self._journal.write(json.dumps({"physics": physics, "key": self.key, **rec}) + "\n")
-        self._journal.flush()  # in the OS page cache: survives the process being killed
+        jpath = _journal_path(self.path)
+        line = json.dumps({"physics": physics, "key": self.key, **rec}) + "\n"
+        try:
+            if self._journal is None:
+                self.require_writable()
+                self._journal = jpath.open("a")
+            start = self._journal.tell()
+            try:
+                self._journal.write(line)
+                self._journal.flush()  # in the OS page cache: survives the process being killed
+            except OSError:
+                # a full disk: cut the journal back to its last whole record (a part of a line
+                # would be skipped anyway, but nothing partial is left behind)
+                self._journal = _reopen_truncated(self._journal, jpath, start)
+                raise
+        except OSError as exc:
+            raise write_error(exc, "writing the store's journal", jpath) from None
         self._apply(cell, rec)
         now = time.monotonic() if now is None else now
         if now - self._last_flush >= self.flush_seconds:
@@ -564,7 +658,8 @@ class SweepStore:
                       for k, a in enumerate(axes[:-1])}
             region[axes[-1]] = slice(None)
             block = self.ds.isel({a: r for a, r in region.items()}).drop_vars(list(axes))
-            with zarr_warnings():
+            # zarr writes each chunk through a temporary file it removes on failure
+            with writing(None, "writing the store", self.path), zarr_warnings():
                 block.drop_vars("status").to_zarr(self.path, region=region, mode="r+",
                                                   consolidated=False)
                 block[["status"]].to_zarr(self.path, region=region, mode="r+",

@@ -89,7 +89,29 @@ def collision_record(c, extra_numerics: dict | None = None) -> dict:
             record[o.name] = None if value is None else bool(value)
         else:
             record[o.name] = int(value)
+    reason = nonfinite_reason(record.get) if ok else ""
+    if reason:  # never stored as ok
+        record.update(status="error", message=reason)
     return record
+
+
+# observables an ok scene has finite (v_r, h_m, the peak viscosity ratio: 1 for the classic
+# film) or at least not NaN (ln_x_e may be inf); anything else is an overflow, not a result
+FINITE_WHEN_OK = ("v_r", "h_m_x1", "h_m_x0", "viscosity_ratio_max_approach")
+NOT_NAN_WHEN_OK = ("ln_x_e_x1", "ln_x_e_x0")
+
+
+def nonfinite_reason(get) -> str:
+    """Why a scene the solver called ok is not a result (``get(name)`` gives an observable), or
+    "" when it is one."""
+    bad = [f"{n} = {get(n)}" for n in FINITE_WHEN_OK
+           if get(n) is not None and not math.isfinite(float(get(n)))]
+    bad += [f"{n} = nan" for n in NOT_NAN_WHEN_OK
+            if get(n) is not None and math.isnan(float(get(n)))]
+    if not bad:
+        return ""
+    return (f"non-finite result ({', '.join(bad)}): an overflow, the inputs are beyond what the "
+            "solver resolves")
 
 
 class MasterSolve:
@@ -102,11 +124,11 @@ class MasterSolve:
 
     def __call__(self, physics: dict, accuracy: str, overrides: dict) -> dict:
         try:
-            from solver.model import rigid
             from solver.physics import Physics
+            from solver.shortcuts import plan
 
             scene = Physics.from_mapping(physics)
-            if rigid.exact_for(scene):
+            if plan(scene).classic:
                 c = self.curve.collide(scene)
             else:  # the master curve holds the classic film only: never answer with it
                 from solver import collide

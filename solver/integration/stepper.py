@@ -14,8 +14,9 @@ The loop in parts, each a function of its own (in the spirit of SciPy's BDF, ``_
 - ``_predict``: the polynomial through the history at the new time, and the error factor;
 - ``_newton``: a chord-Newton iteration whose LU is reused while ``b dt`` stays within 30 % of
   the factorised value; a stalled iteration first refreshes the Jacobian, then halves the step.
-  With an active set, a converged iterate whose set would change goes on with the new set and a
-  fresh Jacobian, and converges only with a settled set (no BDF restart at a change: the error
+  With an active set, a converged iterate whose set would change goes on with the new set and
+  the matrix updated where the set changed (a low-rank update of its factorisation, not a new
+  one), and converges only with a settled set (no BDF restart at a change: the error
   test rejects and shrinks the step across the switching kink, which keeps the integration
   second order);
 - ``_local_error``: the distance to the predictor, ``dt / (t_{n+1} - t_{n-2}) |y_{n+1} -
@@ -38,7 +39,7 @@ from ..model import step as model
 from ..model.film import energy_rates, face_fluxes, film_force, gap
 from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
 from .events import reached
-from .linalg import lu_factor, lu_solve, matvec
+from .linalg import MAX_SLOTS, lowrank_prepare, lowrank_solve, lu_factor, matvec
 
 # status codes of the loop (solver/observables.py: STATUS)
 RUNNING = 0
@@ -48,8 +49,9 @@ STEP_UNDERFLOW = STATUS_CODES["step_underflow"]
 NONFINITE = STATUS_CODES["nonfinite"]
 
 # the counters, in the order of the array integrate returns
-COUNTERS = ("steps", "rejected_steps", "newton_iterations", "lu_factorizations", "jacobians")
-STEPS, REJECTED, NEWTON, LU, JACOBIANS = range(len(COUNTERS))
+COUNTERS = ("steps", "rejected_steps", "newton_iterations", "lu_factorizations", "jacobians",
+            "lowrank_updates")
+STEPS, REJECTED, NEWTON, LU, JACOBIANS, LOWRANK = range(len(COUNTERS))
 
 # outcomes of _newton
 CONVERGED, DIVERGED, SINGULAR = 0, 1, 2
@@ -128,27 +130,74 @@ def _predict(dt, t0, t1, t2, n_hist, y0, y1, y2, y_pred):
 
 
 @jit
-def _factorise(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, jac, dres_dh,
-               piv, counters):
+def _factorisation(m):
+    """Work space of the Newton matrix: the matrix (factorised in place) and its pivots, its copy
+    before factorising, a fresh Jacobian, the low-rank update's arrays (linalg.lowrank_prepare),
+    the updated slots and their number (``rank[0]``, 0: the factorised matrix itself)."""
+    r = 2 * MAX_SLOTS
+    return (np.empty((m, m)), np.empty(m, dtype=np.int32), np.empty((m, m)), np.empty((m, m)),
+            np.empty((r, m)), np.empty((r, m)), np.empty((r, m)), np.empty(r * r),
+            np.empty(r, dtype=np.int32), np.empty(MAX_SLOTS, dtype=np.int64),
+            np.zeros(1, dtype=np.int64), np.empty(r))
+
+
+@jit
+def _factorise(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, fac, dres_dh,
+               counters):
     """A fresh Jacobian at the iterate ``y`` (gap ``h``), LU-factorised in place; counted. False
     if the matrix is singular."""
+    jac, piv, base, rank = fac[0], fac[1], fac[2], fac[10]
     model.step_jacobian(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, jac,
                         dres_dh)
+    model.mark_factorised(marks)
+    if model.has_active_set(phys):  # kept for low-rank updates at a change of the set
+        base[:, :] = jac
+    rank[0] = 0
     counters[JACOBIANS] += 1
     counters[LU] += 1
     return lu_factor(jac, piv)
 
 
 @jit
+def _update_for_set(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, fac,
+                    dres_dh, counters):
+    """After a change of the active set: the factorised matrix with the rows and columns of the
+    slots that changed since it was factorised replaced by a fresh Jacobian's
+    (linalg.lowrank_prepare), instead of a new factorisation; the other rows keep the factorised
+    values (a chord iteration). False when more than ``MAX_SLOTS`` slots changed or the update is
+    singular: then the caller factorises afresh."""
+    jac, piv, base, fresh, u, v, z, cap, cpiv, slots, rank = fac[:11]
+    model.step_jacobian(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, fresh,
+                        dres_dh)
+    counters[JACOBIANS] += 1
+    k = model.changed_slots(marks, slots)
+    if k > MAX_SLOTS:
+        return False
+    rank[0] = 0
+    if k > 0:
+        if not lowrank_prepare(jac, piv, base, fresh, slots, k, u, v, z, cap, cpiv):
+            return False
+        rank[0] = k
+    counters[LOWRANK] += 1
+    return True
+
+
+@jit
+def _solve(fac, b):
+    """Solve with the Newton matrix (the factorised one, or its low-rank update) in place."""
+    lowrank_solve(fac[0], fac[1], fac[10][0], fac[5], fac[6], fac[7], fac[8], b, fac[11])
+
+
+@jit
 def _newton(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist, rtol, y,
-            marks, cells, scalars, q, w, h, res, dh, jac, dres_dh, piv, lu_valid, bh_lu,
-            counters):
+            marks, cells, scalars, q, w, h, res, dh, fac, dres_dh, lu_valid, bh_lu, counters):
     """Solve the step from the predictor in ``y`` by chord Newton (module docstring), reusing
     the LU while ``bh`` stays within 30 % of ``bh_lu``. The gap update of an iterate is the next
     iterate's gap minus this one's, so each iteration costs one K-product (in gap) and one LU
     solve. With an active set, the set is decided at the first iterate and held while Newton
-    converges; a converged iterate whose set would change goes on with the new set and a fresh
-    Jacobian.
+    converges; a converged iterate whose set would change goes on with the new set and the
+    matrix updated in the slots that changed (``_update_for_set``; a fresh factorisation when
+    too many did).
 
     Returns
     -------
@@ -162,7 +211,7 @@ def _newton(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist
     if (not lu_valid) or abs(bh / bh_lu - 1.0) > 0.3:
         gap(s, influence, y[n], y[:n], w, h)
         lu_valid = _factorise(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells,
-                              jac, dres_dh, piv, counters)
+                              fac, dres_dh, counters)
         bh_lu = bh
         fresh = True
         if not lu_valid:
@@ -196,17 +245,19 @@ def _newton(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist
                 set_changes += 1
                 if set_changes > MAX_SET_CHANGES:
                     break
-                lu_valid = _factorise(s, s_face, area, weight, influence, phys, bh, y, h, marks,
-                                      cells, jac, dres_dh, piv, counters)
-                bh_lu = bh
-                fresh = True
                 first = True
                 it = 1
-                if not lu_valid:
-                    break
+                if not _update_for_set(s, s_face, area, weight, influence, phys, bh, y, h, marks,
+                                       cells, fac, dres_dh, counters):
+                    lu_valid = _factorise(s, s_face, area, weight, influence, phys, bh, y, h,
+                                          marks, cells, fac, dres_dh, counters)
+                    bh_lu = bh
+                    fresh = True
+                    if not lu_valid:
+                        break
         for k in range(m):
             res[k] = -res[k]
-        lu_solve(jac, piv, res)
+        _solve(fac, res)
         model.split_update(res, marks, cells, phys)
         for k in range(m):
             y[k] += res[k]
@@ -256,8 +307,9 @@ def _local_error(influence, phys, y, y_pred, err_fac, h, marks, scalars, rtol, r
     matvec(influence, res[:n], kdp)
     for i in range(n):
         dh[i] = res[n] + kdp[i]
-    model.step_error(y, y_pred, err_fac, marks, scalars, phys, res[:n], dh, scale)
-    return _norm(res[:n], res[n], res[n + 1], dh, scale, y[n], y[n + 1], h, 1.0,
+    p_scale = scale if model.step_error(y, y_pred, err_fac, marks, scalars, phys, res[:n], dh,
+                                        scale) else y[:n]
+    return _norm(res[:n], res[n], res[n + 1], dh, p_scale, y[n], y[n + 1], h, 1.0,
                  model.pressure_scale(scalars)) / rtol
 
 
@@ -309,7 +361,7 @@ def _step_factor(err):
 @jit
 def _attempt(s, s_face, area, weight, influence, phys, rtol, dt, dt_min, max_steps, t0, t1, t2,
              n_hist, y0, y1, y2, h0, h1, y, y_pred, marks, cells, scalars, q, w, h, res, c_hist,
-             dh, kdp, scale, jac, dres_dh, piv, lu_valid, bh_lu, counters):
+             dh, kdp, scale, fac, dres_dh, lu_valid, bh_lu, counters):
     """Attempt steps from the accepted state ``y0`` at ``t0`` until one is accepted (its solution
     in ``y``, gap ``h``) or the loop must stop: a diverged Newton halves the step once its
     Jacobian was fresh, a non-positive gap halves it, an error above the tolerance shrinks it.
@@ -342,8 +394,7 @@ def _attempt(s, s_face, area, weight, influence, phys, rtol, dt, dt_min, max_ste
 
         outcome, lu_valid, bh_lu, fresh = _newton(
             s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist, rtol, y,
-            marks, cells, scalars, q, w, h, res, dh, jac, dres_dh, piv, lu_valid, bh_lu,
-            counters)
+            marks, cells, scalars, q, w, h, res, dh, fac, dres_dh, lu_valid, bh_lu, counters)
         if outcome == SINGULAR:
             status = NONFINITE
             break
@@ -425,9 +476,8 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
     dh = np.empty(n)
     kdp = np.empty(n)
     scale = np.empty(n)
-    jac = np.empty((m, m))
+    fac = _factorisation(m)
     dres_dh = np.empty((n, 3))
-    piv = np.empty(m, dtype=np.int32)
     lu_valid = False
     bh_lu = 1.0
 
@@ -474,7 +524,7 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
         status, accepted, dt, err, lu_valid, bh_lu = _attempt(
             s, s_face, area, weight, influence, phys, rtol, dt, dt_min, max_steps, t0, t1, t2,
             n_hist, y0, y1, y2, h0, h1, y, y_pred, marks, cells, scalars, q, w, h, res, c_hist,
-            dh, kdp, scale, jac, dres_dh, piv, lu_valid, bh_lu, counters)
+            dh, kdp, scale, fac, dres_dh, lu_valid, bh_lu, counters)
 
         if not accepted:
             # record the last accepted state with the failure status, then stop; w and h hold

@@ -418,8 +418,14 @@ def energy_rates(s, s_face, weight, phys, x, p, w, h, q):
     n = s.size
     strain = strain_energy(weight, s[n - 1], p, w, phys)
     diss = 0.0
-    for f in range(n - 1):
-        diss += face_dissipation(s[f], s[f + 1], s_face[f], p[f], p[f + 1], h[f], h[f + 1], q[f],
-                                 phys)
+    if phys[DENSITY] == CONSTANT:  # face_dissipation with the volume difference P_hi - P_lo
+        for f in range(n - 1):
+            h_lo = h[f]
+            s_bar = s[f] + (s[f + 1] - s[f]) * h_lo / (h_lo + h[f + 1])
+            diss += q[f] * (p[f + 1] - p[f]) * s_bar / s_face[f]
+    else:
+        for f in range(n - 1):
+            diss += face_dissipation(s[f], s[f + 1], s_face[f], p[f], p[f + 1], h[f], h[f + 1],
+                                     q[f], phys)
     diss += far_field_dissipation(x, s[n - 1], p[n - 1], h[n - 1])
     return strain, 2.0 * diss / (3.0 * phys[ST])

@@ -55,6 +55,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 
 import numpy as np
 from scipy import integrate, optimize
@@ -398,6 +399,36 @@ def approach(x_from, v_from, t_from, stokes, beta, switch, glass_margin=GLASS_MA
                          "glass gap itself)")
     if samples < 2:
         raise ValueError(f"samples = {samples!r} must be at least 2")
+    f = _path_functions(x_from, stokes, beta, switch, glass_margin)
+    y0 = [float(v_from)]
+    started = [name for name, (g, _) in f.thresholds.items() if g(0.0, y0) >= 0.0]
+    if started:
+        return _single(x_from, v_from, t_from, beta, started[0])
+
+    # S >= 1 while approaching: V reaches 0 by u = St v_from
+    u_max = stokes * v_from * 1.01 + 1.0
+    events = [f.handover, f.glass if beta > 0.0 else None, f.rest, f.d_handover, f.d_pressure,
+              f.d_force, f.d_deflection]
+    active = [ev for ev in events if ev is not None]
+    sol = integrate.solve_ivp(f.rhs, (0.0, u_max), y0, method="DOP853", rtol=1e-12, atol=1e-15,
+                              dense_output=True, events=active,
+                              max_step=0.5 if beta > 0.0 else math.inf)
+    if sol.status != 1:
+        raise RuntimeError(f"the rigid Barus approach did not reach an end: {sol.message}")
+    t_events = dict(zip((ev.__name__ for ev in active), sol.t_events))
+    u_end, event = _path_end(sol, t_events, f.thresholds)
+    v_end = 0.0 if event == "rest" else float(sol.sol(u_end)[0])
+    u_s, x_s, v_s, t_s = _sampled_path(sol, x_from, v_from, t_from, u_end, v_end, event, samples)
+    peaks = _path_peaks(sol, t_events, f, x_from, v_from, beta, u_end, v_end, u_s, t_s)
+    return RigidApproach(
+        t=t_s, x=x_s, v=v_s, p_axis=rigid_pressure(0.0, x_s, v_s, beta),
+        force=rigid_force(x_s, v_s, beta) / 3.0, w0=axis_deflection(x_s, v_s, beta), event=event,
+        x_end=float(x_s[-1]), v_end=float(v_end), t_end=float(t_s[-1]), peaks=peaks)
+
+
+def _path_functions(x_from, stokes, beta, switch, glass_margin):
+    """The approach ODE in ``u = ln(x_from/X)`` (``approach``), its terminal thresholds and the
+    derivatives of their logs along the path (solve_ivp events), as a namespace."""
     ln_x0 = math.log(x_from)
     ln_switch = math.log(switch)
     ln_3beta = math.log(3.0 * beta) if beta > 0.0 else -math.inf
@@ -476,29 +507,17 @@ def approach(x_from, v_from, t_from, stokes, beta, switch, glass_margin=GLASS_MA
     thresholds = {"handover": (handover, d_handover)}
     if beta > 0.0:
         thresholds["glass"] = (glass, d_pressure)
+    return SimpleNamespace(rhs=rhs, handover=handover, glass=glass, rest=rest,
+                           d_pressure=d_pressure, d_force=d_force, d_deflection=d_deflection,
+                           d_handover=d_handover, thresholds=thresholds)
 
-    y0 = [float(v_from)]
-    started = [name for name, (f, _) in thresholds.items() if f(0.0, y0) >= 0.0]
-    if started:
-        return _single(x_from, v_from, t_from, beta, started[0])
 
-    # S >= 1 while approaching: V reaches 0 by u = St v_from
-    u_max = stokes * v_from * 1.01 + 1.0
-    events = [handover, glass if beta > 0.0 else None, rest, d_handover, d_pressure, d_force,
-              d_deflection]
-    active = [ev for ev in events if ev is not None]
-    sol = integrate.solve_ivp(rhs, (0.0, u_max), y0, method="DOP853", rtol=1e-12, atol=1e-15,
-                              dense_output=True, events=active,
-                              max_step=0.5 if beta > 0.0 else math.inf)
-    if sol.status != 1:
-        raise RuntimeError(f"the rigid Barus approach did not reach an end: {sol.message}")
-    t_events = dict(zip((ev.__name__ for ev in active), sol.t_events))
-
+def _path_end(sol, t_events, thresholds):
+    """``(u_end, event)``: the terminal event, or an earlier crossing hidden inside one step (its
+    function's maximum lies above the threshold)."""
     def v_at(u):
         return float(sol.sol(u)[0])
 
-    # the end: the terminal event, or an earlier crossing hidden inside one step (its function's
-    # maximum lies above the threshold)
     u_term = float(sol.t[-1])
     ends = []
     for name in ("handover", "glass", "rest"):
@@ -514,54 +533,59 @@ def approach(x_from, v_from, t_from, stokes, beta, switch, glass_margin=GLASS_MA
                                           rtol=4 * np.finfo(float).eps)
                     ends.append((u_c, name))
                 break
-    u_end, event = min(ends)
-    v_end = 0.0 if event == "rest" else v_at(u_end)
+    return min(ends)
 
-    def elapsed(u_a, u_b):
-        """``Int X/V du`` over each interval ``[u_a[i], u_b[i]]``: Gauss-Legendre on the dense
-        output, one vectorised call (``X/V`` is analytic inside each interval; its nearest
-        singularity, ``V = 0`` at a rest, lies at least one sample interval beyond, where
-        ``_GAUSS_POINTS`` nodes converge to round-off)."""
-        u_a, u_b = np.atleast_1d(u_a), np.atleast_1d(u_b)
-        half = 0.5 * (u_b - u_a)
-        u = (u_a + u_b)[:, None] * 0.5 + half[:, None] * _GAUSS_NODES[None, :]
-        v = sol.sol(u.ravel())[0].reshape(u.shape)
-        return half * np.sum(_GAUSS_WEIGHTS * x_from * np.exp(-u) / v, axis=1)
 
+def _elapsed(sol, x_from, u_a, u_b):
+    """``Int X/V du`` over each interval ``[u_a[i], u_b[i]]``: Gauss-Legendre on the dense
+    output, one vectorised call (``X/V`` is analytic inside each interval; its nearest
+    singularity, ``V = 0`` at a rest, lies at least one sample interval beyond, where
+    ``_GAUSS_POINTS`` nodes converge to round-off)."""
+    u_a, u_b = np.atleast_1d(u_a), np.atleast_1d(u_b)
+    half = 0.5 * (u_b - u_a)
+    u = (u_a + u_b)[:, None] * 0.5 + half[:, None] * _GAUSS_NODES[None, :]
+    v = sol.sol(u.ravel())[0].reshape(u.shape)
+    return half * np.sum(_GAUSS_WEIGHTS * x_from * np.exp(-u) / v, axis=1)
+
+
+def _sampled_path(sol, x_from, v_from, t_from, u_end, v_end, event, samples):
+    """``samples`` points ``(u, X, V, T)`` from the start to the end (a rest is reached after
+    infinite time)."""
     u_s = np.linspace(0.0, u_end, samples)
     v_s = sol.sol(u_s)[0]
     v_s[0], v_s[-1] = v_from, v_end
-    finite = samples - 1 if event == "rest" else samples  # a rest is reached after infinite time
+    finite = samples - 1 if event == "rest" else samples
     t_s = np.full(samples, math.inf)
-    t_s[:finite] = t_from + np.concatenate([[0.0], np.cumsum(elapsed(u_s[:finite - 1],
-                                                                     u_s[1:finite]))])
+    t_s[:finite] = t_from + np.concatenate([[0.0], np.cumsum(
+        _elapsed(sol, x_from, u_s[:finite - 1], u_s[1:finite]))])
     x_s = x_from * np.exp(-u_s)
     x_s[-1] = x_from * math.exp(-u_end)
+    return u_s, x_s, v_s, t_s
 
-    # peaks: at the ends or at an interior maximum (events on the log-derivatives)
+
+def _path_peaks(sol, t_events, f, x_from, v_from, beta, u_end, v_end, u_s, t_s):
+    """The path's peaks of force, central deflection and axis pressure (with the gap there): at
+    the ends or at an interior maximum (events on the log-derivatives)."""
     def time_at(u):
         i = int(np.searchsorted(u_s, u, side="right") - 1)
-        return t_s[i] + float(elapsed(u_s[i], u)[0])  # t_s[i] finite: u < u_end
+        return t_s[i] + float(_elapsed(sol, x_from, u_s[i], u)[0])  # t_s[i] finite: u < u_end
 
     peaks = {}
     for key, t_key, d, quantity in (
-            ("peak_force", "t_peak_force", d_force, lambda x, v: rigid_force(x, v, beta) / 3.0),
-            ("w0_max", "t_max_deformation", d_deflection,
+            ("peak_force", "t_peak_force", f.d_force,
+             lambda x, v: rigid_force(x, v, beta) / 3.0),
+            ("w0_max", "t_max_deformation", f.d_deflection,
              lambda x, v: axis_deflection(x, v, beta)),
-            ("p_max", "t_p_max", d_pressure, lambda x, v: rigid_pressure(0.0, x, v, beta))):
+            ("p_max", "t_p_max", f.d_pressure, lambda x, v: rigid_pressure(0.0, x, v, beta))):
         cands = [0.0, u_end] + [float(u) for u in t_events[d.__name__] if 0.0 < u < u_end]
         vals = [float(quantity(x_from * math.exp(-u), v_from if u == 0.0 else
-                               (v_end if u == u_end else v_at(u)))) for u in cands]
+                               (v_end if u == u_end else float(sol.sol(u)[0])))) for u in cands]
         best = int(np.argmax(vals))
         peaks[key] = vals[best]
         peaks[t_key] = float(time_at(cands[best]) if cands[best] < u_end else t_s[-1])
         if key == "p_max":  # the gap there (the rigid film's central gap)
             peaks["x_p_max"] = x_from * math.exp(-cands[best])
-
-    return RigidApproach(
-        t=t_s, x=x_s, v=v_s, p_axis=rigid_pressure(0.0, x_s, v_s, beta),
-        force=rigid_force(x_s, v_s, beta) / 3.0, w0=axis_deflection(x_s, v_s, beta), event=event,
-        x_end=float(x_s[-1]), v_end=float(v_end), t_end=float(t_s[-1]), peaks=peaks)
+    return peaks
 
 
 def _single(x, v, t, beta, event):

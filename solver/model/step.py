@@ -13,7 +13,8 @@ here, which read the physics array ``phys`` (solver/physics.py) and decide:
   the factorisation (``settled``), and the set is decided at the iterates ``decide`` marks;
 - ``start_attempt``, ``step_residual``, ``step_jacobian``: a step attempt's start, its residual
   (with the active set decided and its rows replaced) and its Jacobian (recording the set it was
-  built with);
+  built with); ``mark_factorised`` and ``changed_slots``: which slots a change of the set touches
+  since the last factorisation (the loop updates the factorisation there instead of refactorising);
 - ``split_update``, ``update_norm``: unknowns whose slot in ``y`` holds another variable (a JFO
   cavity's liquid fraction), and their part of the Newton norm;
 - ``step_error``: in which variable each pressure's local error is measured, and which errors
@@ -36,8 +37,9 @@ from .film import (JFO, NO_FLOOR, cavity_edge, cell_content, compression_work, c
 from .liquid import CONSTANT, isoviscous, kirchhoff_difference
 
 # rows of ``marks`` (bool, one entry per cell): the cavitated cells of the current iterate, of the
-# factorised Jacobian, and of the last accepted state
-ACTIVE, ACTIVE_LU, ACTIVE0 = 0, 1, 2
+# Jacobian the loop solves with, of the last accepted state, and of the Jacobian it factorised
+# (which low-rank updates correct to ACTIVE_LU)
+ACTIVE, ACTIVE_LU, ACTIVE0, ACTIVE_BASE = 0, 1, 2, 3
 # rows of ``cells`` (float, one entry per cell): the liquid fraction theta of the iterate and of
 # the last two accepted states (1 in full cells, and in every cell but a JFO cavity's), the
 # fraction's Newton update, the gap where each cell cavitated (the void volume), the face fluxes
@@ -56,7 +58,7 @@ def new_state(q):
     """The film's state at the start (``q`` the face fluxes of the initial state): no cavity,
     full cells."""
     cells_n = q.size
-    marks = np.zeros((3, cells_n), dtype=np.bool_)
+    marks = np.zeros((4, cells_n), dtype=np.bool_)
     cells = np.zeros((6, cells_n))
     cells[THETA, :] = 1.0
     cells[THETA0, :] = 1.0
@@ -172,6 +174,27 @@ def step_jacobian(s, s_face, area, weight, influence, phys, bh, y, h, marks, cel
 
 
 @jit
+def mark_factorised(marks):
+    """The Jacobian just built (``step_jacobian``) is the one the loop factorises."""
+    marks[ACTIVE_BASE, :] = marks[ACTIVE_LU]
+
+
+@jit
+def changed_slots(marks, slots):
+    """The slots whose rows and columns differ between the factorised Jacobian and the one for
+    the iterate's active set (a cell that cavitated or refilled since the factorisation), into
+    ``slots`` as far as it reaches; returns their number."""
+    k = 0
+    active, base = marks[ACTIVE], marks[ACTIVE_BASE]
+    for i in range(active.size):
+        if active[i] != base[i]:
+            if k < slots.size:
+                slots[k] = i
+            k += 1
+    return k
+
+
+@jit
 def split_update(res, marks, cells, phys):
     """Take the Newton update of the slots that hold another unknown out of ``res``: a JFO
     cavity's slot updates its liquid fraction theta (kept >= 0: a dry cell), not ``P``."""
@@ -200,8 +223,7 @@ def update_norm(norm, cells, phys, rtol):
 @jit
 def step_error(y, y_pred, err_fac, marks, scalars, phys, perr, dh, scale):
     """Adjust the local error estimate of a converged step. On entry ``perr`` holds the pressure
-    part ``err_fac (y - y_pred)`` and ``dh`` the gap's; on return ``scale`` holds the values the
-    pressure errors are measured against.
+    part ``err_fac (y - y_pred)`` and ``dh`` the gap's.
 
     - While a cavity is open the pressure is not smooth in time wherever its edge crosses a node
       (the cells there and their neighbours), and a cavity that closes in this step makes it
@@ -215,31 +237,34 @@ def step_error(y, y_pred, err_fac, marks, scalars, phys, perr, dh, scale):
     - A pressure-dependent liquid: the pressure error in the variable the film sees, the
       Kirchhoff pressure ``Int rho/mu dP``, smooth where a glassy lens makes ``P`` itself spike
       (that spike moves the gap, X and V only through W and the force, both in the norm on their
-      own)."""
+      own).
+
+    Returns True when ``scale`` holds the Kirchhoff pressures, False when the errors are measured
+    against the pressures themselves (``scale`` untouched)."""
     n = perr.size
-    active, active0 = marks[ACTIVE], marks[ACTIVE0]
-    floor = has_active_set(phys)
-    open_cavity = scalars[R_EDGE] > 0.0
-    refilled = False
-    if phys[CAVITATION] == JFO:
+    rough_in_time = False
+    if has_active_set(phys):
+        active, active0 = marks[ACTIVE], marks[ACTIVE0]
+        open_cavity = scalars[R_EDGE] > 0.0
+        refilled = False
+        if phys[CAVITATION] == JFO:
+            for i in range(active.size):
+                refilled = refilled or (active0[i] and not active[i])
         for i in range(active.size):
-            refilled = refilled or (active0[i] and not active[i])
-    for i in range(active.size):
-        open_cavity = open_cavity or active[i]
-    rough_in_time = floor and (open_cavity or refilled)
-    if rough_in_time:
-        for i in range(n):
-            perr[i] = 0.0
-    if refilled:
-        for i in range(n):
-            dh[i] = 0.0
+            open_cavity = open_cavity or active[i]
+        rough_in_time = open_cavity or refilled
+        if rough_in_time:
+            for i in range(n):
+                perr[i] = 0.0
+        if refilled:
+            for i in range(n):
+                dh[i] = 0.0
     if not isoviscous(phys) and not rough_in_time:
         for i in range(n):
             perr[i] = err_fac * kirchhoff_difference(y_pred[i], y[i], phys)[0]
             scale[i] = kirchhoff_difference(0.0, y[i], phys)[0]
-    else:
-        for i in range(n):
-            scale[i] = y[i]
+        return True
+    return False
 
 
 @jit
@@ -249,7 +274,14 @@ def record(row, s, area, p, h, pmax, pmin, marks, cells, scalars, phys, floor_fr
     pressure seen (``floor_fraction`` of it, from the first cavity on). Returns the radius the
     terminal events see: the cavity's, tiny but positive for a JFO cavity of axis cells alone
     (whose edge radius is zero)."""
-    active0, theta0, h_onset = marks[ACTIVE0], cells[THETA0], cells[H_ONSET]
+    theta0 = cells[THETA0]
+    row[_E_C] = compression_work(area, p, h, theta0, phys)
+    row[_W_VOID] = scalars[WORKED]
+    if not has_active_set(phys):  # no cavity ever
+        row[_R_CAV] = 0.0
+        row[_V_VOID] = 0.0
+        return 0.0
+    active0, h_onset = marks[ACTIVE0], cells[H_ONSET]
     r_cav = cavity_edge(s, p, active0, phys)
     jfo = phys[CAVITATION] == JFO
     v_void = 0.0
@@ -261,13 +293,10 @@ def record(row, s, area, p, h, pmax, pmin, marks, cells, scalars, phys, floor_fr
                 v_void += area[i] * (h[i] - h_onset[i])
     row[_R_CAV] = r_cav
     row[_V_VOID] = v_void
-    row[_W_VOID] = scalars[WORKED]
-    row[_E_C] = compression_work(area, p, h, theta0, phys)
     scalars[R_EDGE] = r_cav
-    if has_active_set(phys):
-        scalars[P_SEEN] = max(scalars[P_SEEN], pmax, -pmin)
-        if r_cav > 0.0:
-            scalars[P_ABS] = max(scalars[P_ABS], floor_fraction * scalars[P_SEEN])
+    scalars[P_SEEN] = max(scalars[P_SEEN], pmax, -pmin)
+    if r_cav > 0.0:
+        scalars[P_ABS] = max(scalars[P_ABS], floor_fraction * scalars[P_SEEN])
     r_event = r_cav
     if jfo:
         for i in range(active0.size):

@@ -1,0 +1,136 @@
+"""Writes that complete or leave nothing new behind.
+
+Every output of ``ehd`` (a sweep store's temporary layout, its journal and lock, ``run --save``,
+``--plot`` and ``--out`` folders) is written through one of these:
+
+- :func:`writing` turns an ``OSError`` of a write (a full disk, a quota, an I/O error) into one
+  line naming the path and the free space of its file system (:class:`~pipeline.errors.WriteError`,
+  exit 74), after removing the temporary ``cleanup`` path;
+- :func:`atomic_path` gives a temporary name next to the target, moved into place by
+  ``os.replace`` only once it is complete (a file or a directory, e.g. a ``.zarr`` store);
+- :func:`guarded_dir` watches a folder that a plotting function fills with several files: on a
+  failed write, every file it created or changed is removed (a half-written figure is worse than
+  none: the next run draws it again).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+from contextlib import contextmanager
+from pathlib import Path
+
+from .errors import WriteError, describe_os_error
+
+__all__ = ["writing", "atomic_path", "guarded_dir", "write_error"]
+
+
+def write_error(exc: OSError, what: str, path=None) -> WriteError:
+    """The one line of a failed write of ``what`` (e.g. ``--save r.nc``)."""
+    where = path if path is not None else (exc.filename or what)
+    return WriteError(f"{what}: cannot write {describe_os_error(exc, where)}; free some space "
+                      "or choose another path (nothing partial was left behind)")
+
+
+def _remove(path) -> None:
+    if path is None:
+        return
+    path = Path(path)
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        try:
+            path.unlink()
+        except OSError:
+            pass
+
+
+def _quiet_asyncio() -> None:
+    """zarr writes chunks from tasks on its own event loop; after one of them failed, the others
+    are destroyed pending and asyncio logs each at exit ("Task was destroyed but it is
+    pending!"): the one line of the failure says what happened."""
+    import logging
+    import sys
+
+    logging.getLogger("asyncio").setLevel(logging.CRITICAL + 1)
+    # and its coroutines closed with the loop at exit ("Exception ignored in ... Event loop is
+    # closed"): only after a failed write, when the process is about to exit with its one line
+    sys.unraisablehook = lambda unraisable: None
+
+
+@contextmanager
+def writing(cleanup, what: str, path=None):
+    """Run a write; on ``OSError`` remove ``cleanup`` (a temporary file or folder, or None) and
+    raise ``WriteError`` naming ``what``, the path (the error's file name, else ``path``, else
+    ``cleanup``) and the free space. Other errors remove ``cleanup`` too and propagate."""
+    try:
+        yield
+    except OSError as exc:
+        _remove(cleanup)
+        _quiet_asyncio()
+        where = exc.filename or path or cleanup
+        raise write_error(exc, what, where) from None
+    except BaseException:
+        _remove(cleanup)
+        raise
+
+
+@contextmanager
+def atomic_path(path, what: str):
+    """Yield a temporary path next to ``path``; once the block completes it replaces ``path``
+    (a file by ``os.replace``; a directory by two renames). On any failure the temporary is
+    removed and ``path`` is left as it was."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    _remove(tmp)
+    with writing(tmp, what, path):
+        yield tmp
+        if tmp.is_dir() and path.is_dir():
+            old = path.with_name(f".{path.name}.old-{os.getpid()}")
+            path.rename(old)
+            tmp.rename(path)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(tmp, path)
+
+
+def _listing(folder: Path) -> dict:
+    if not folder.is_dir():
+        return {}
+    out = {}
+    for p in folder.rglob("*"):
+        try:
+            st = p.lstat()
+        except OSError:
+            continue
+        out[p] = (st.st_mtime_ns, st.st_size)
+    return out
+
+
+@contextmanager
+def guarded_dir(folder, what: str):
+    """A folder filled by code that writes files in place: on an ``OSError`` (or any failure),
+    remove every file created or changed inside it, and the folders created for it, then raise
+    (``WriteError`` for an ``OSError``)."""
+    folder = Path(folder)
+    created_root = [p for p in (folder, *folder.parents) if not p.exists()]
+    before = _listing(folder)
+    try:
+        yield folder
+    except BaseException as exc:
+        after = _listing(folder)
+        for p, stamp in sorted(after.items(), key=lambda kv: -len(kv[0].parts)):
+            if p.is_dir() and not p.is_symlink():
+                if p not in before:
+                    shutil.rmtree(p, ignore_errors=True)
+            elif before.get(p) != stamp:
+                _remove(p)
+        for p in created_root:  # innermost first
+            try:
+                p.rmdir()
+            except OSError:
+                pass
+        if isinstance(exc, OSError):
+            _quiet_asyncio()
+            raise write_error(exc, what, exc.filename or folder) from None
+        raise
