@@ -144,8 +144,12 @@ def render(results: dict, meta: dict, before: dict | None) -> str:
     lines += ["", "Where the time goes: `ehd --help` imports only the command registry "
               "(`pipeline/cli.py`); a command imports its own module when chosen. The no-op "
               "`ehd sweep` reads the store once, whole (its integrity check: 40 arrays of 64 "
-              "chunks), and imports xarray, zarr and dask.distributed; the up-to-date `ehd "
-              "figures` lists the store's files and reads nothing (`pipeline/plots/stamp.py`).",
+              "chunks, each chunk's checksum verified since store schema 6), and imports xarray, "
+              "zarr and dask.distributed; the up-to-date `ehd figures` lists the store's files "
+              "and reads nothing (`pipeline/plots/stamp.py`). Measured before schema 6 (the "
+              "same script, this branch before main's checksums were merged): `ehd --help` "
+              "1.33x, the no-op `make sweep` 1.87 s wall, 1.72 s CPU, of which `ehd sweep` "
+              "1.59 s CPU.",
               ""]
     return "\n".join(lines)
 
