@@ -15,7 +15,9 @@ export MKL_NUM_THREADS := 1
 
 .PHONY: install test test-install test-dem sweep quick figures bench bench-sweep bench-accuracy clean-cache clean
 
-$(STAMP): pyproject.toml setup.py
+# solver/result.py: the package version is its SOLVER_VERSION (pyproject: dynamic), so a new
+# solver version reinstalls and the installed metadata never goes stale
+$(STAMP): pyproject.toml setup.py solver/result.py
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "error: $(PYTHON) not found; set PYTHON=/path/to/python3.11"; exit 1; }
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
