@@ -9,6 +9,14 @@ from .environment import configure as _configure  # noqa: E402  (imports nothing
 
 _configure()
 
-from .sweeps.store import open_results  # noqa: E402
-
 __all__ = ["open_results"]
+
+
+def __getattr__(name):
+    # loaded on first use (PEP 562): every ``ehd`` command imports this package, and the store
+    # brings in xarray, zarr and the solver's registry, which most commands do not need
+    if name == "open_results":
+        from .sweeps.store import open_results
+
+        return open_results
+    raise AttributeError(f"module 'pipeline' has no attribute {name!r}")

@@ -22,60 +22,33 @@ generated from its declaration, and prints one row per labelled observable of
 from __future__ import annotations
 
 import argparse
-import json
-import math
 import os
 import sys
-from pathlib import Path
 
-from solver.observables import LABELS, OBSERVABLES
-from solver.physics import GROUPS, Physics
-
+# the shared helpers live in cli_shared (the sub-command modules import them from there); the
+# names stay importable from here for code written against them
+from .cli_shared import (add_numerics_flags, check_output_dir, check_output_paths, format_value,
+                         numerics_overrides)
 from .errors import (BUG_REPORT, EXIT_BROKEN_PIPE, EXIT_INTERNAL, EXIT_INTERRUPTED,
                      EXIT_SCENE_FAILED, EXIT_TERMINATED, EXIT_WRITE, EhdError, PathError,
                      Terminated, UsageError)
 
 __all__ = ["main", "COMMANDS", "UsageError", "check_output_paths", "check_output_dir"]
 
-
-def _add_numerics_flags(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--accuracy", default="standard", help="preset: fast, standard or fine")
-    p.add_argument("--switch", type=float, default=None,
-                   help="hand-over threshold on W(0)/X from the rigid approach (preset default)")
-    p.add_argument("--release", type=float, default=None,
-                   help="max|W|/X below which the departing spheres are rigid again")
-    p.add_argument("--n-inner", type=int, default=None, help="grid cells across the contact region")
-    p.add_argument("--rtol", type=float, default=None, help="time-step error tolerance")
-    p.add_argument("--max-steps", type=int, default=None, help="step budget of the coupled solve")
-
-
-def _numerics_overrides(args) -> dict:
-    return {"switch": args.switch, "release": args.release, "n_inner": args.n_inner,
-            "rtol": args.rtol, "max_steps": args.max_steps}
-
-
-def format_value(v, spec=".6g"):
-    """A value of a report row: numbers with ``spec`` (non-finite as ``inf``/``nan``), flags as
-    yes/no, missing (or empty text, e.g. no viscosity table) as "-", anything else as text."""
-    if v is None or v == "":
-        return "-"
-    if isinstance(v, bool):
-        return "yes" if v else "no"
-    if isinstance(v, float):
-        return format(v, spec) if math.isfinite(v) else str(v)
-    return str(v)
-
-
-# Labels of a result (solver.observables.LABELS) shown as rows; "message" is printed below the
-# table as the failure or note line, "accuracy" is the user's own flag.
-_LABEL_ROWS = tuple(name for name in LABELS if name in ("model", "status"))
+_add_numerics_flags = add_numerics_flags  # the former private names
+_numerics_overrides = numerics_overrides
 
 
 def report_rows(d: dict) -> list[tuple[str, object]]:
     """Rows of the ``ehd run`` report of ``Collision.to_dict()``: the physics groups, model and
     status, then every observable with a ``label``, in registry order."""
+    from solver.observables import LABELS, OBSERVABLES
+    from solver.physics import Physics
+
+    # labels of a result shown as rows; "message" is printed below the table as the failure or
+    # note line, "accuracy" is the user's own flag
     rows = [(name, d[name]) for name in Physics.names()]
-    rows += [(name, d[name]) for name in _LABEL_ROWS]
+    rows += [(name, d[name]) for name in LABELS if name in ("model", "status")]
     rows += [(o.label, d[o.name]) for o in OBSERVABLES if o.label]
     return rows
 
@@ -91,45 +64,10 @@ def _print_scene(d: dict) -> None:
         print(f"note: {d['message']}")
 
 
-def check_output_dir(flag: str, value: str | None) -> None:
-    """PathError, before any work, when the folder ``value`` of ``flag`` cannot be made or
-    written: empty, an existing file, a file among its parents, or a read-only parent."""
-    if value is None:
-        return
-    if not str(value).strip():
-        raise PathError(f"{flag}: empty path; give a folder")
-    path = Path(value)
-    if path.exists() and not path.is_dir():
-        raise PathError(f"{flag} {value}: exists and is not a directory")
-    existing = next((p for p in (path, *path.parents) if p.exists()), Path("."))
-    if not existing.is_dir():
-        raise PathError(f"{flag} {value}: {str(existing)!r} is not a directory")
-    if not os.access(existing, os.W_OK | os.X_OK):
-        raise PathError(f"{flag} {value}: {str(existing)!r} is not writable")
-
-
-def check_output_paths(save: str | None = None, plot: str | None = None) -> None:
-    """PathError, before any solve, when ``--save FILE`` or ``--plot DIR`` cannot be written:
-    a missing or read-only parent directory, or an existing path of the wrong kind (a ``.zarr``
-    store and ``DIR`` are directories, a ``.nc`` file is a file)."""
-    if save is not None:
-        if not save.endswith((".nc", ".zarr")):
-            raise PathError(f"--save: unknown file type {save!r}; use a .nc or .zarr path")
-        path = Path(save)
-        parent = path.parent
-        if not parent.is_dir():
-            raise PathError(f"--save {save}: the directory {str(parent)!r} does not exist")
-        if not os.access(parent, os.W_OK | os.X_OK):
-            raise PathError(f"--save {save}: the directory {str(parent)!r} is not writable")
-        if save.endswith(".zarr") and path.exists() and not path.is_dir():
-            raise PathError(f"--save {save}: exists and is not a directory (a .zarr store is one)")
-        if save.endswith(".nc") and path.is_dir():
-            raise PathError(f"--save {save}: is a directory, not a file")
-    check_output_dir("--plot", plot)
-
-
-def physics_from_args(args) -> Physics:
+def physics_from_args(args):
     """The ``Physics`` of the ``--St``, ``--eps``... flags (``_add_physics_flags``)."""
+    from solver.physics import Physics
+
     try:
         return Physics.from_mapping({name: getattr(args, name) for name in Physics.names()})
     except ValueError as exc:
@@ -141,6 +79,9 @@ def cmd_run(args) -> int:
 
     check_output_paths(args.save, args.plot)
     physics = physics_from_args(args)
+    from .environment import compile_notice
+
+    compile_notice()
     try:
         result = collide(physics, accuracy=args.accuracy, x_ref_x0=args.x_ref,
                          save_profiles=bool(args.save or args.plot), **_numerics_overrides(args))
@@ -155,6 +96,8 @@ def cmd_run(args) -> int:
         d.update(status="error", message=reason)
         failed = True
     if args.json:
+        import json
+
         print(json.dumps(d))
     else:
         _print_scene(d)
@@ -191,6 +134,8 @@ def _save_dataset(ds, path: str) -> None:
 def _add_physics_flags(p: argparse.ArgumentParser) -> None:
     """One flag per dimensionless group (``solver.physics.GROUPS``): ``--St``, ``--eps`` (required),
     ``--Pi``, ``--cavitation``, ``--beta``, ``--viscosity``... (with their defaults)."""
+    from solver.physics import GROUPS
+
     for group in GROUPS:
         default = "" if group.default is None else f"; default {group.default}"
         if group.choices:
@@ -209,8 +154,8 @@ def _add_physics_flags(p: argparse.ArgumentParser) -> None:
 
 
 def _build_run(sub) -> None:
-    names = ", ".join(Physics.names())
-    p = sub.add_parser("run", help=f"solve one collision given its dimensionless groups ({names})")
+    p = sub.add_parser("run", description="Solve one collision given its dimensionless groups "
+                       "and print its observables (one row each; --json: one JSON object).")
     _add_physics_flags(p)
     _add_numerics_flags(p)
     p.add_argument("--json", action="store_true", help="print exactly one JSON object")
@@ -233,32 +178,119 @@ def cmd_info(args) -> int:
 
 
 def _build_info(sub) -> None:
-    p = sub.add_parser("info", help="solver version, compiled-code cache folder, BLAS threads")
+    p = sub.add_parser("info", description="What to paste into a bug report: the versions, the "
+                       "compiled-code cache folder in use, the BLAS threads.")
     p.set_defaults(func=cmd_info)
 
 
-# name -> builder(subparsers) of the commands defined here
-COMMANDS = {"run": _build_run, "info": _build_info}
-# modules that add their own subcommands through ``register(subparsers)``
-COMMAND_MODULES = ("pipeline.sweeps.commands", "pipeline.scenes.commands", "pipeline.dem.commands")
+def register(sub) -> None:
+    """Add ``run`` and ``info`` (the commands defined here)."""
+    _build_run(sub)
+    _build_info(sub)
 
 
-def _parser() -> argparse.ArgumentParser:
+# The command registry: name -> (the module whose ``register(subparsers)`` adds it, the line
+# ``ehd --help`` shows). Only the chosen command's module is imported, so ``ehd --help`` and
+# ``ehd sweep`` do not load numba or the solver (benchmarks/startup.md); this line is the one
+# help of each command (a module's own ``help=`` is not used; tests/test_docs.py).
+COMMANDS = {
+    "run": ("pipeline.cli", "solve one collision given its dimensionless groups (--St, --eps, ...)"),
+    "info": ("pipeline.cli", "versions, compiled-code cache folder, BLAS threads"),
+    "sweep": ("pipeline.sweeps.commands",
+              "compute a sweep (grid over Physics fields) into its zarr store (cached, resumable); "
+              "a shipped sweep by name: ehd sweep paper"),
+    "status": ("pipeline.sweeps.commands",
+               "what a sweep store holds: done, failed, missing, damaged (exit 5 when damaged)"),
+    "figures": ("pipeline.sweeps.commands",
+                "Figures 12-14, (St, eps) maps and stick/rebound from a sweep store (one set per "
+                "value of its other axes; never computes scenes; skipped when the folder is up to "
+                "date with the store)"),
+    "scene": ("pipeline.scenes.commands",
+              "solve a collision given in physical units (bodies, fluid, speed)"),
+    "paper-figures": ("pipeline.scenes.commands",
+                      "write the in-depth figures 2-11 (kernel, I(xi), St = 2.5/5/10 at "
+                      "eps = 0.01)"),
+    "export-dem": ("pipeline.dem.commands",
+                   "wet restitution e(St) for DEM codes: CSV, fits, LIGGGHTS / OpenFOAM / YADE "
+                   "settings"),
+    "restitution": ("pipeline.dem.commands",
+                    "e(St) of a scene along a path in impact speed or size"),
+    "examples": ("pipeline.shipped",
+                 "copy the shipped example scenes and sweep files into a folder"),
+}
+# the modules that add commands (each once, in the order of the registry)
+COMMAND_MODULES = tuple(dict.fromkeys(module for module, _ in COMMANDS.values()))
+
+
+class _OnlyChosen:
+    """The sub-parsers seen by a module's ``register``: only the chosen command is built (with
+    the registry's help line); the module's other commands go to a parser that is dropped."""
+
+    def __init__(self, sub, chosen: str):
+        self._sub, self._chosen = sub, chosen
+
+    def add_parser(self, name, **kwargs):
+        if name != self._chosen:
+            return argparse.ArgumentParser(add_help=False)
+        kwargs["help"] = COMMANDS[name][1]
+        return self._sub.add_parser(name, **kwargs)
+
+
+class _Version(argparse.Action):
+    """``--version``, worked out only when asked for (it imports the solver's version)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS,
+                 help=None):
+        super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(version_line())  # on stdout, as argparse's own version action
+        parser.exit()
+
+
+def version_line() -> str:
+    """``ehd-collision 1.5.0 (solver 1.5.0)``: the installed package and the solver whose
+    version keys every store and cache (they are one number; a difference means the installed
+    metadata is stale: reinstall)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    from solver.result import SOLVER_VERSION
+
+    try:
+        package = version("ehd-collision")
+    except PackageNotFoundError:
+        package = "not installed (run from a clone)"
+    stale = "" if package in (SOLVER_VERSION,) or package.startswith("not") else \
+        "; the installed metadata is stale: reinstall (make install)"
+    return f"ehd-collision {package} (solver {SOLVER_VERSION}{stale})"
+
+
+def _chosen_command(argv) -> str | None:
+    """The command named on the command line (the first word that is not an option; the top
+    level has only -h and --version), or None."""
+    for token in argv:
+        if not token.startswith("-"):
+            return token if token in COMMANDS else None
+    return None
+
+
+def _parser(argv=None) -> argparse.ArgumentParser:
+    """The ``ehd`` parser: every command is listed, the chosen one (from ``argv``) built in full.
+    ``_parser()`` without ``argv`` builds none in full (``ehd --help``)."""
     import importlib
 
     parser = argparse.ArgumentParser(
-        prog="ehd", description="Elastohydrodynamic collision of two elastic spheres in a viscous fluid.")
-    sub = parser.add_subparsers(dest="command", required=True)
-    for build in COMMANDS.values():
-        build(sub)
-    for name in COMMAND_MODULES:
-        try:
-            module = importlib.import_module(name)
-        except ModuleNotFoundError as exc:
-            if exc.name != name:
-                raise
-            continue
-        module.register(sub)
+        prog="ehd", description="Elastohydrodynamic collision of two elastic spheres in a viscous "
+        "fluid. Every command: ehd COMMAND --help. Example files: ehd examples DIR.")
+    parser.add_argument("--version", action=_Version,
+                        help="print the package and solver version and exit")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    chosen = _chosen_command(sys.argv[1:] if argv is None else argv)
+    for name, (module, help_line) in COMMANDS.items():
+        if name == chosen:
+            importlib.import_module(module).register(_OnlyChosen(sub, name))
+        else:
+            sub.add_parser(name, help=help_line, add_help=False)
     return parser
 
 
@@ -374,7 +406,8 @@ def _main(argv=None) -> int:
     import errno
 
     stdout_closed = _closed_stdout()
-    args = _parser().parse_args(_negative_values(sys.argv[1:] if argv is None else list(argv)))
+    argv = _negative_values(sys.argv[1:] if argv is None else list(argv))
+    args = _parser(argv).parse_args(argv)
     name = f"ehd {args.command}"
     if stdout_closed:
         _say(f"{name}: error: stdout is closed (>&-): the results would be lost; run with stdout "

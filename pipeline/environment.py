@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["configure", "THREAD_VARS", "info"]
+__all__ = ["configure", "THREAD_VARS", "info", "compile_notice"]
 
 THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
@@ -28,9 +28,48 @@ def configure() -> None:
 
 
 def info() -> dict:
-    """What a user reporting a problem should paste: solver version, cache folder, threads."""
+    """What a user reporting a problem should paste: versions, cache folder, threads."""
+    from importlib.metadata import PackageNotFoundError, version
+
     from solver import SOLVER_VERSION
     from solver import _jit
 
-    return {"solver_version": SOLVER_VERSION, "cache_dir": _jit.CACHE_DIR,
+    try:
+        package = version("ehd-collision")
+    except PackageNotFoundError:
+        package = "not installed (run from a clone)"
+    return {"package_version": package, "solver_version": SOLVER_VERSION,
+            "cache_dir": _jit.CACHE_DIR,
             **{var: os.environ.get(var, "unset") for var in THREAD_VARS}}
+
+
+_NOTICE_GIVEN = False
+
+
+def compile_notice(stream=None) -> str | None:
+    """Before the first solve of a process: one line on ``stream`` (stderr) when the solver's
+    compiled-code cache for this solver version is empty, so that the compile (about 15 s on an
+    idle core, minutes on a busy machine; once per solver version and cache folder) is not a
+    silent wait. Says where the cache goes. Returns the line (None: nothing to say)."""
+    global _NOTICE_GIVEN
+    import sys
+    from pathlib import Path
+
+    if _NOTICE_GIVEN:
+        return None
+    _NOTICE_GIVEN = True
+    from solver import _jit
+
+    folder = _jit.CACHE_DIR
+    if folder is None:
+        line = ("ehd-collision: compiling the solver (about 15 s on an idle core, minutes on a "
+                "busy machine); no writable cache folder, so every process compiles again: set "
+                "EHD_CACHE_DIR to a writable folder")
+    elif not any(Path(folder).rglob("*.nbi")):
+        line = ("ehd-collision: compiling the solver for this version, once (about 15 s on an "
+                f"idle core, minutes on a busy machine); cached in {folder} (ehd info; "
+                "EHD_CACHE_DIR moves it)")
+    else:
+        return None
+    print(line, file=stream or sys.stderr, flush=True)
+    return line

@@ -10,11 +10,29 @@ The model is written down in docs/model.md; the observables, status codes and se
 declared once in ``solver.observables``.
 """
 
-from .collision import collide, hertz_overlap
-from .observables import MODEL_CODES, OBSERVABLES, STATUS, STATUS_CODES
-from .physics import Physics
-from .result import JSON_KEYS, SOLVER_VERSION, Collision
-from .settings import PRESETS, Numerics
+import importlib
+
+# name -> the submodule that defines it. Loaded on first use (PEP 562): ``import solver`` or
+# ``from solver.observables import ...`` (the registry, for command-line parsing and stores) does
+# not compile or even import numba; ``solver.collide`` does.
+_EXPORTS = {"collide": "collision", "hertz_overlap": "collision",
+            "MODEL_CODES": "observables", "OBSERVABLES": "observables", "STATUS": "observables",
+            "STATUS_CODES": "observables", "Physics": "physics", "JSON_KEYS": "result",
+            "SOLVER_VERSION": "result", "Collision": "result", "PRESETS": "settings",
+            "Numerics": "settings"}
 
 __all__ = ["collide", "Collision", "Physics", "SOLVER_VERSION", "STATUS", "STATUS_CODES",
            "MODEL_CODES", "OBSERVABLES", "JSON_KEYS", "PRESETS", "Numerics", "hertz_overlap"]
+
+
+def __getattr__(name):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'solver' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted({*globals(), *__all__})

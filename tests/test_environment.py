@@ -70,9 +70,13 @@ def _check_commands(prefix: list[str], env: dict, tmp: Path, kernels_root: Path,
     assert saved, p.stdout[-2000:]
     assert len(saved) == len(set(saved)), "a kernel was compiled twice (parent and worker)"
     assert "data loaded from" in p.stdout, "the worker did not load the parent's kernels"
+    # the compile is announced, with where the cache goes (no silent wait on a fresh install)
+    notice = [line for line in p.stderr.splitlines() if "compiling the solver" in line]
+    assert len(notice) == 1 and str(kernels_root) in notice[0], p.stderr[-2000:]
     p = _run([*prefix, "run", "--St", "5", "--eps", "0.01", "--accuracy", "fast", "--json"],
              env, tmp)
     assert not _saved(p.stdout), "ehd run compiled again instead of loading the sweep's cache"
+    assert "compiling the solver" not in p.stderr  # a warm cache: nothing to announce
     assert "data loaded from" in p.stdout
     if scene:
         _run([*prefix, "scene", str(REPO / "examples" / "glass_beads_water.toml")], env, tmp)

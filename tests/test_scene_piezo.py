@@ -221,15 +221,30 @@ def test_report_shows_the_laws_and_only_the_constants_in_use(capsys):
     assert not {"roelands_Z", "roelands_PR", "dh_c1", "dh_c2"} & rows
 
 
-def test_fluid_without_alpha_is_not_switched_and_a_note_says_from_where_it_would(table):
+def test_fluid_without_alpha_is_not_switched_and_a_warning_says_from_where_it_would(table):
     r = run_scene(scene_from_dict(example(fluid={"name": "silicone_oil_100cst"}), table),
                   accuracy="fast")
     assert r.collision.physics.viscosity_law == "constant"
     assert r.viscosity_reason.startswith("constant viscosity: silicone_oil_100cst has no "
                                          "pressure-viscosity coefficient")
+    # the classic film was the only solve: its peak pressure is the result's; an alpha below
+    # glycerol's would already switch the law there, so the missing value is a warning
+    need = VISCOSITY_SWITCH / r.peak_pressure
+    assert need <= checks.ALPHA_KNOWN_LIQUID
+    (w,) = [w for w in r.warnings if w.check == "pressure_viscosity"]
+    assert w.value == pytest.approx(need) and f"from alpha = {per_gpa(need)} on" in w.message
+    assert not [n for n in r.notes if n.startswith("pressure-dependent viscosity not checked")]
+
+
+def test_fluid_without_alpha_at_a_low_peak_pressure_is_a_note(table):
+    # 1e4 times slower than the example: the peak pressure falls below 0.1 / alpha_glycerol = 17 MPa
+    r = run_scene(scene_from_dict(example(fluid={"name": "silicone_oil_100cst"}, v0="0.1 mm/s"),
+                                  table), accuracy="fast")
+    need = VISCOSITY_SWITCH / r.peak_pressure
+    assert need > checks.ALPHA_KNOWN_LIQUID
+    assert not [w for w in r.warnings if w.check == "pressure_viscosity"]
     (note,) = [n for n in r.notes if n.startswith("pressure-dependent viscosity not checked")]
-    # the classic film was the only solve: its peak pressure is the result's
-    assert f"from alpha = {per_gpa(VISCOSITY_SWITCH / r.peak_pressure)} on" in note
+    assert f"from alpha = {per_gpa(need)} on" in note
 
 
 # ---- the overrides ------------------------------------------------------------------------------

@@ -136,6 +136,7 @@ def cmd_restitution(args) -> int:
     _progress = progress_to_stderr("restitution")
 
     check_output_dir("--out", args.out)  # before any solve
+    check_output_dir("--plot", args.plot)
     scene = _scene(args.scene, args.materials)
     if not (args.start > 0 and args.stop > 0 and args.n >= 1):
         raise UsageError("--from and --to must be positive factors and --n >= 1")
@@ -144,6 +145,19 @@ def cmd_restitution(args) -> int:
     rows = scene_rows(results, f"{scene.body1.solid.name}-{scene.body2.solid.name} in "
                                f"{scene.fluid.name}, {args.vary} path")
     _print_rows(rows, skipped)
+    threshold = None
+    if args.threshold:
+        from pipeline.scenes.threshold import format_threshold, sticking_threshold
+
+        threshold = sticking_threshold(scene, args.vary, args.accuracy, start=args.start,
+                                       stop=args.stop, n=args.n, results=results)
+        print(format_threshold(threshold))
+    if args.plot:
+        from pipeline.plots.restitution_plot import plot_restitution
+
+        paths = plot_restitution(results, args.vary, args.plot, threshold=threshold,
+                                 title=scene.title)
+        print("figure: " + ", ".join(str(p) for p in paths))
     if args.out:
         paths = write_export(rows, args.out, args.scene, progress=_progress)
         print("wrote " + ", ".join(str(p) for p in paths))
@@ -157,22 +171,35 @@ def register(sub) -> None:
     p.add_argument("--out", default="dem_export", help="output folder (default dem_export)")
     p.add_argument("--density-ratio", type=float, default=0.0,
                    help="stores only: rho_f/rho_p for Legendre's St_L (default 0)")
-    p.add_argument("--n", type=int, default=13, help="scenes only: speeds from 0.1 to 10 v0")
+    p.add_argument("--n", type=int, default=13,
+                   help="scenes only: speeds, log-spaced from 0.1 to 10 v0 (default 13)")
     p.add_argument("--fit-range", nargs=2, type=float, default=None, metavar=("LO", "HI"),
                    help="fit and calibrate only on rows with LO <= St <= HI (our St: where your "
                         "collisions are); errors are still reported on every row")
-    p.add_argument("--accuracy", default="standard")
-    p.add_argument("--materials", action="append", default=None, metavar="FILE")
+    p.add_argument("--accuracy", default="standard",
+                   help="numerical preset of the solves: fast, standard, fine (default standard)")
+    p.add_argument("--materials", action="append", default=None, metavar="FILE",
+                   help="extra materials/fluids TOML file (repeatable; overrides shipped entries)")
     p.set_defaults(func=cmd_export_dem)
 
     p = sub.add_parser("restitution", help="e(St) of a scene along a path in impact speed or size")
-    p.add_argument("scene", help="scene file")
-    p.add_argument("--vary", choices=("v0", "radius"), default="v0")
+    p.add_argument("scene", help="scene file (TOML; see docs/scenes.md)")
+    p.add_argument("--vary", choices=("v0", "radius"), default="v0",
+                   help="what moves along the path: the impact speed v0 or both radii "
+                        "(default v0)")
     p.add_argument("--from", dest="start", type=float, default=0.1,
                    help="first factor on v0 or the radii (default 0.1)")
     p.add_argument("--to", dest="stop", type=float, default=10.0, help="last factor (default 10)")
     p.add_argument("--n", type=int, default=9, help="points, log-spaced (default 9)")
     p.add_argument("--out", default=None, help="also write the DEM export into this folder")
-    p.add_argument("--accuracy", default="standard")
-    p.add_argument("--materials", action="append", default=None, metavar="FILE")
+    p.add_argument("--plot", metavar="DIR", default=None,
+                   help="write e against St and the path's v0 or radius, the sticking threshold "
+                        "marked, as DIR/restitution.png and .pdf")
+    p.add_argument("--threshold", action="store_true",
+                   help="also find the sticking threshold St_c (and its v0 or radius) by "
+                        "bisection along the path")
+    p.add_argument("--accuracy", default="standard",
+                   help="numerical preset of the solves: fast, standard, fine (default standard)")
+    p.add_argument("--materials", action="append", default=None, metavar="FILE",
+                   help="extra materials/fluids TOML file (repeatable; overrides shipped entries)")
     p.set_defaults(func=cmd_restitution)

@@ -132,6 +132,9 @@ def paper_figures(out_dir, *, accuracy: str = "standard", collisions=None) -> li
     """
     from solver import collide
 
+    from ..environment import compile_notice
+
+    compile_notice()
     if collisions is None:
         collisions = {st: collide(st, PAPER_EPS, accuracy=accuracy, save_profiles=True)
                       for st in PAPER_STOKES}

@@ -3,8 +3,9 @@
 Everything is plotted in the dimensionless variables of docs/model.md ("Scales"), with the scaling written on
 each axis: axial lengths (gap ``h``, deformation ``w``, separation ``x``) over ``x1``, radius over
 ``sqrt(a x1)``, pressure over ``mu a v0 / x1^2``, force over ``6 pi mu a^2 v0 / x1``, velocity over
-``v0``, energies over ``m v0^2 / 2``, time as ``tau = v0 t / x0``. The figures read a finished
-``solver.Collision``; they never solve anything.
+``v0``, energies over ``m v0^2 / 2``, time as ``tau = v0 t / x0``. A scene in physical units
+(``ehd scene --plot``) adds the same quantities in SI units on the right and top axes
+(``si_scales``). The figures read a finished ``solver.Collision``; they never solve anything.
 
 Files are written as PNG and PDF with reproducible bytes (no timestamps or software versions in
 the metadata, stack-notes.md). Figures are built as ``matplotlib.figure.Figure`` objects without
@@ -20,7 +21,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 __all__ = ["plot_scene", "save_figure", "profile_rows", "plot_profiles", "plot_motion",
-           "plot_energy", "plot_dimple", "radial_extent", "STYLE", "LABELS"]
+           "plot_energy", "plot_dimple", "radial_extent", "si_scales", "STYLE", "LABELS"]
 
 # Fixed style: figures must not depend on a user's matplotlibrc, and the SVG hash salt fixes ids.
 STYLE = {
@@ -42,6 +43,54 @@ LABELS = {
     "X": r"separation $x/x_1$",
     "E": r"energy $/\,(m v_0^2/2)$",
 }
+
+
+# quantity -> (its name on an SI axis, SI unit)
+_SI_NAMES = {"R": ("radius", "m"), "H": ("gap", "m"), "W": ("deformation", "m"),
+             "P": ("pressure", "Pa"), "tau": ("time", "s"), "F": ("force", "N"),
+             "V": ("velocity", "m/s"), "X": ("separation", "m"), "E": ("energy", "J")}
+_SCALE_NAMES = {"R": r"$\sqrt{a x_1}$", "H": r"$x_1$", "W": r"$x_1$", "X": r"$x_1$",
+                "P": r"$\mu a v_0/x_1^2$", "tau": r"$x_0/v_0$", "F": r"$6\pi\mu a^2 v_0/x_1$",
+                "V": r"$v_0$", "E": r"$m v_0^2/2$"}
+_PREFIXES = ((1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "µ"),
+             (1e-9, "n"), (1e-12, "p"), (1e-15, "f"))
+
+
+def si_scales(scene) -> dict:
+    """The SI value of one unit of each plotted quantity of ``scene`` (a
+    ``pipeline.scenes.scene.Scene``): ``{"H": x1 [m], "R": sqrt(a x1) [m], "P": mu a v0 / x1^2
+    [Pa], "F": 6 pi mu a^2 v0 / x1 [N], "tau": x0 / v0 [s], "V": v0 [m/s], "E": m v0^2 / 2
+    [J], ...}``."""
+    x1 = scene.x1
+    return {"R": float(np.sqrt(scene.reduced_radius * x1)), "H": x1, "W": x1, "X": x1,
+            "P": scene.pressure_scale, "F": scene.force_scale, "tau": scene.time_scale,
+            "V": scene.v0, "E": 0.5 * scene.reduced_mass * scene.v0 ** 2}
+
+
+def _si_axis(ax, quantity: str, scales: dict | None, which: str = "y", span=None) -> None:
+    """A right (``which="y"``) or top (``"x"``) axis with ``quantity`` in SI units, the prefix
+    chosen for the values shown (``span``: their largest magnitude in the plot's units)."""
+    if not scales or quantity not in scales:
+        return
+    scale = float(scales[quantity])
+    if span is None:
+        lo, hi = ax.get_ylim() if which == "y" else ax.get_xlim()
+        span = max(abs(lo), abs(hi))
+    big = abs(scale) * (span or 1.0)
+    factor, prefix = next(((f, p) for f, p in _PREFIXES if big >= f), _PREFIXES[-1])
+    k = scale / factor
+    name, unit = _SI_NAMES[quantity]
+    if (ax.get_yscale() if which == "y" else ax.get_xscale()) != "linear":
+        # an SI twin of a symlog axis would get linear ticks: the unit goes into the label
+        get, put = (ax.get_ylabel, ax.set_ylabel) if which == "y" else (ax.get_xlabel,
+                                                                        ax.set_xlabel)
+        put(f"{get()}  ({_SCALE_NAMES[quantity]} = {k:.4g} {prefix}{unit})")
+        return
+    functions = (lambda v: v * k, lambda v: v / k)
+    sec = ax.secondary_yaxis("right", functions=functions) if which == "y" else \
+        ax.secondary_xaxis("top", functions=functions)
+    label = f"{name} [{prefix}{unit}]"
+    (sec.set_ylabel if which == "y" else sec.set_xlabel)(label)
 
 
 def save_figure(fig, out_dir, stem: str) -> list[Path]:
@@ -88,8 +137,9 @@ def _time_colors(n):
     return matplotlib.colormaps["viridis"](np.linspace(0.0, 0.9, max(n, 1)))
 
 
-def plot_profiles(ax, c, quantity: str, rows=None, r_max=None):
-    """Profiles ``H``, ``W`` or ``P`` (``quantity``) against ``R`` at the given profile rows."""
+def plot_profiles(ax, c, quantity: str, rows=None, r_max=None, scales=None):
+    """Profiles ``H``, ``W`` or ``P`` (``quantity``) against ``R`` at the given profile rows
+    (``scales``: SI axes too, ``si_scales``)."""
     data = {"H": c.gap, "W": c.deformation, "P": c.pressure}[quantity]
     rows = profile_rows(c) if rows is None else rows
     r_max = radial_extent(c) if r_max is None else r_max
@@ -107,6 +157,8 @@ def plot_profiles(ax, c, quantity: str, rows=None, r_max=None):
     ax.set_xlabel(LABELS["R"])
     ax.set_ylabel(LABELS[quantity])
     ax.legend(ncol=2)
+    _si_axis(ax, quantity, scales)
+    _si_axis(ax, "R", scales, which="x")
     return ax
 
 
@@ -121,8 +173,9 @@ def _series_window(c):
     return np.ones_like(tau, dtype=bool)
 
 
-def plot_motion(fig, c):
-    """Force, velocity and separation (with the minimum gap) against tau, three stacked panels."""
+def plot_motion(fig, c, scales=None):
+    """Force, velocity and separation (with the minimum gap) against tau, three stacked panels
+    (``scales``: SI axes too)."""
     s = c.series
     m = _series_window(c)
     tau = np.asarray(s["tau"])[m]
@@ -148,10 +201,13 @@ def plot_motion(fig, c):
         for t in (c.tau_v_zero, c.tau_max_rebound):  # v = 0, max rebound
             if np.isfinite(t):
                 ax.axvline(t, color="0.6", lw=0.8, ls=":")
+    for ax, q in zip(axes, ("F", "V", "X")):
+        _si_axis(ax, q, scales)
+    _si_axis(axes[0], "tau", scales, which="x")
     return axes
 
 
-def plot_energy(ax, c):
+def plot_energy(ax, c, scales=None):
     """Kinetic and strain energy, work done by the fluid, and the dissipation (closure check)."""
     s = c.series
     m = _series_window(c)
@@ -167,6 +223,8 @@ def plot_energy(ax, c):
     ax.set_xlabel(LABELS["tau"])
     ax.set_ylabel(LABELS["E"])
     ax.legend(loc="center right")
+    _si_axis(ax, "E", scales)
+    _si_axis(ax, "tau", scales, which="x")
     return ax
 
 
@@ -185,7 +243,7 @@ def dimple_rows(c, n: int = 6) -> np.ndarray:
     return np.array(sorted(picks), dtype=int)
 
 
-def plot_dimple(ax, c, rows=None):
+def plot_dimple(ax, c, rows=None, scales=None):
     """Close-up of the gap near the axis while the dimple exists (``rows`` from ``dimple_rows``)."""
     rows = dimple_rows(c) if rows is None else rows
     h = c.gap
@@ -204,6 +262,8 @@ def plot_dimple(ax, c, rows=None):
     ax.set_xlabel(LABELS["R"])
     ax.set_ylabel(LABELS["H"])
     ax.legend(ncol=2)
+    _si_axis(ax, "H", scales)
+    _si_axis(ax, "R", scales, which="x")
     return ax
 
 
@@ -212,7 +272,8 @@ def _title(c, title=""):
     return head + f"St = {c.St:.4g}, eps = {c.eps:.3g} ({c.model} model)"
 
 
-def plot_scene(collision, out_dir, *, title: str = "", prefix: str = "") -> list[Path]:
+def plot_scene(collision, out_dir, *, title: str = "", prefix: str = "",
+               scales: dict | None = None) -> list[Path]:
     """Write the figures of one collision into ``out_dir``; return the files written.
 
     Parameters
@@ -225,6 +286,8 @@ def plot_scene(collision, out_dir, *, title: str = "", prefix: str = "") -> list
         First title line (e.g. the scene's title); St, eps and the model are always shown.
     prefix : str
         Prepended to every file stem.
+    scales : dict, optional
+        ``si_scales(scene)`` of a scene in physical units: every axis also in SI units.
 
     Returns
     -------
@@ -238,24 +301,24 @@ def plot_scene(collision, out_dir, *, title: str = "", prefix: str = "") -> list
         has_profiles = c.model == "ehd" and c.pressure is not None and c.pressure.size > 0
         if has_profiles:
             for q, stem in (("H", "gap"), ("W", "deformation"), ("P", "pressure")):
-                fig = Figure()
+                fig = Figure(layout="constrained")
                 ax = fig.subplots()
-                plot_profiles(ax, c, q)
+                plot_profiles(ax, c, q, scales=scales)
                 ax.set_title(_title(c, title), fontsize=9)
                 written += save_figure(fig, out_dir, prefix + stem)
-        fig = Figure(figsize=(6.4, 6.4))
-        plot_motion(fig, c)
+        fig = Figure(figsize=(6.4, 6.4), layout="constrained")
+        plot_motion(fig, c, scales=scales)
         fig.suptitle(_title(c, title), fontsize=9)
         written += save_figure(fig, out_dir, prefix + "motion")
-        fig = Figure()
+        fig = Figure(layout="constrained")
         ax = fig.subplots()
-        plot_energy(ax, c)
+        plot_energy(ax, c, scales=scales)
         ax.set_title(_title(c, title), fontsize=9)
         written += save_figure(fig, out_dir, prefix + "energy")
         if has_profiles and c.dimple:
-            fig = Figure()
+            fig = Figure(layout="constrained")
             ax = fig.subplots()
-            plot_dimple(ax, c)
+            plot_dimple(ax, c, scales=scales)
             ax.set_title(_title(c, title) + ": dimple close-up", fontsize=9)
             written += save_figure(fig, out_dir, prefix + "dimple")
     return written

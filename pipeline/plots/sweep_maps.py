@@ -40,7 +40,6 @@ from pathlib import Path
 
 import numpy as np
 
-from solver.collision import SOLID_VISCOSITY_RATIO
 from solver.physics import Physics
 
 from ..sweeps.analysis import (EXPERIMENT_REFERENCE, EXPERIMENT_ST_C, critical_stokes,
@@ -53,7 +52,7 @@ FIGURES = ("fig12_rebound_velocity", "fig12b_wet_restitution", "fig13_closest_ap
            "fig14_equilibrium_separation", "map_rebound_velocity", "map_closest_approach",
            "map_equilibrium_separation", "stick_or_rebound", "wet_restitution_experiments")
 CSV_NAME = "critical_stokes.csv"
-STAMP_NAME = ".sweep-figures.sha256"  # fingerprint of what the figures in a folder were drawn from
+from .stamp import STAMP_NAME  # noqa: E402  (what the figures in a folder were drawn from)
 FORMATS = ("png", "pdf")
 DPI = 150
 FAILED_COLOR = "#d62728"
@@ -130,23 +129,30 @@ def fingerprint(ds) -> str:
     return h.hexdigest()
 
 
-def update_figures(ds, out) -> tuple[list, bool]:
+def update_figures(ds, out, store=None) -> tuple[list, bool]:
     """Render the figures of ``ds`` into ``out`` unless that folder already holds them for the
     same store contents and figure code (a rerun of ``make sweep`` with nothing new then takes a
-    second, not the ten a full render needs). Returns ``(paths, rendered)``."""
+    second, not the ten a full render needs). ``store``: the path ``ds`` was read from, whose
+    file state the stamp then records (``stamp.up_to_date`` checks it without reading the
+    store). Returns ``(paths, rendered)``."""
+    from .stamp import read_stamp, stamp_text, store_state
+
     out = Path(out)
+    state = None if store is None else store_state(store)  # before the read: a conservative key
     ds = ds.load()
     key = fingerprint(ds)
     stamp = out / STAMP_NAME
     expected = [out / f"{n}{_suffix(extra)}.{f}" for extra, _ in planes(ds) for n in FIGURES
                 for f in FORMATS] + [out / f"{n}.{f}" for n, _ in axis_figures(ds)
                                      for f in FORMATS] + [out / CSV_NAME]
-    if stamp.is_file() and stamp.read_text().strip() == key and all(p.is_file() for p in expected):
+    if read_stamp(out).get("fingerprint") == key and all(p.is_file() for p in expected):
+        if state is not None:  # the same figures: record the store's file state for next time
+            stamp.write_text(stamp_text(key, state, expected))
         return expected, False
     out.mkdir(parents=True, exist_ok=True)
     stamp.unlink(missing_ok=True)  # a render cut short must not leave a valid stamp behind
     paths = render_all(ds, out)
-    stamp.write_text(key + "\n")
+    stamp.write_text(stamp_text(key, state, expected))
     return paths, True
 
 
@@ -180,10 +186,28 @@ def _eps_label(eps: float) -> str:
 
 
 def _eps_colors(n):
+    """Colours of ``n`` eps values in ascending order (the store's): the smallest eps darkest.
+    Every figure with a curve per eps takes its colours from here, by the eps's rank."""
     import matplotlib
 
     cmap = matplotlib.colormaps["viridis"]
     return [cmap(x) for x in (np.linspace(0.0, 0.9, n) if n > 1 else [0.0])]
+
+
+def eps_colors(eps_values) -> list:
+    """The colour of each of ``eps_values`` (any order): its rank among them, as in Figs. 12-14."""
+    order = np.argsort(np.asarray(eps_values, dtype=float))
+    ranked = _eps_colors(len(order))
+    colors = [None] * len(order)
+    for rank, i in enumerate(order):
+        colors[i] = ranked[rank]
+    return colors
+
+
+def _legend_outside(ax, **kwargs):
+    """The legend right of the axes, never over the data."""
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False, borderaxespad=0.0,
+              **kwargs)
 
 
 def _failed(ds) -> np.ndarray:
@@ -225,12 +249,15 @@ def _curves(ds, y, ax, ylabel, *, logy=False, title=""):
         ax.plot(St[cols], np.zeros(cols.size), ls="none", marker="x", color=FAILED_COLOR, ms=6,
                 transform=ax.get_xaxis_transform(), clip_on=False,
                 label=f"failed scene ({cols.size})")
-    ax.legend(loc="best", frameon=False)
+    _legend_outside(ax)
     return ax
 
 
+_CURVES_SIZE = (7.2, 4.2)  # a curve per eps, the legend right of the axes
+
+
 def _fig12(ds):
-    fig = _figure()
+    fig = _figure(_CURVES_SIZE)
     ax = fig.add_subplot()
     _curves(ds, _field(ds, "v_r"), ax, r"maximum rebound velocity $v_r / v_0$",
             title="Fig. 12: rebound velocity")
@@ -239,7 +266,7 @@ def _fig12(ds):
 
 
 def _fig12b(ds):
-    fig = _figure()
+    fig = _figure(_CURVES_SIZE)
     ax = fig.add_subplot()
     _curves(ds, _field(ds, "e_wet"), ax, r"wet restitution $e_{wet}$ (at $x_0$)",
             title="Fig. 12b: wet coefficient of restitution")
@@ -263,8 +290,10 @@ def legendre(stokes, density_ratio):
     return np.exp(-LEGENDRE_C / (np.asarray(stokes, float) * (1.0 + 0.5 * density_ratio)))
 
 
-def draw_experiments(ax, stokes, curves: dict):
-    """Model ``e_wet(St)`` (``curves``: label -> values on ``stokes``) over the experiments."""
+def draw_experiments(ax, stokes, curves: dict, colors=None):
+    """Model ``e_wet(St)`` (``curves``: label -> values on ``stokes``) over the experiments;
+    ``colors``, one per curve, default the eps colours of Figs. 12-14 for curves given from the
+    largest eps to the smallest (``eps_colors``). The legend goes below the axes."""
     st = np.geomspace(1.0, 3000.0, 400)
     lo, hi = (legendre(st, r) for r in DENSITY_RATIOS)
     ax.fill_between(st, lo, hi, color="0.8", lw=0,
@@ -273,7 +302,8 @@ def draw_experiments(ax, stokes, curves: dict):
     ax.axvline(10.0, color="0.3", ls="--", lw=0.9,
                label="no rebound below St ~ 10 (Joseph et al. 2001; Gondret et al. 2002)")
     ax.axvspan(500.0, 3000.0, color="0.93", lw=0, label="e near e_dry (St > 500, Joseph et al.)")
-    colors = _eps_colors(len(curves))
+    if colors is None:
+        colors = _eps_colors(len(curves))[::-1]
     for (label, y), color in zip(curves.items(), colors):
         ax.plot(stokes, y, color=color, lw=1.4, marker="o", ms=2.0, label=label)
     ax.set_xscale("log")
@@ -282,22 +312,25 @@ def draw_experiments(ax, stokes, curves: dict):
     ax.set_xlabel(r"Stokes number $St = m v_0/(6\pi\mu a^2) = \rho_p d v_0 / (9 \mu)$ (sphere on a wall)")
     ax.set_ylabel(r"$e_{wet}$ (model, $e_{dry} = 1$) and $e/e_{dry}$ (experiments)")
     ax.grid(True, which="major", lw=0.4, alpha=0.5)
-    ax.legend(loc="upper left", frameon=False, fontsize=6.5)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False,
+              fontsize=6.5)
 
 
 def _experiments(ds):
-    fig = _figure()
+    fig = _figure((6.4, 5.6))
     ax = fig.add_subplot()
     eps = ds["eps"].values
     e = _field(ds, "e_wet")
-    curves = {"model " + _eps_label(eps[i]): e[i] for i in range(eps.size - 1, -1, -1)}
-    draw_experiments(ax, ds["St"].values, curves)
+    order = range(eps.size - 1, -1, -1)  # largest eps first in the legend, as in Fig. 12
+    colors = eps_colors(eps)
+    curves = {"model " + _eps_label(eps[i]): e[i] for i in order}
+    draw_experiments(ax, ds["St"].values, curves, colors=[colors[i] for i in order])
     ax.set_title("Wet restitution: model against experiments")
     return fig
 
 
 def _fig13(ds):
-    fig = _figure()
+    fig = _figure(_CURVES_SIZE)
     ax = fig.add_subplot()
     _curves(ds, _field(ds, "h_m_x1"), ax, r"closest approach $h_m / x_1$", logy=True,
             title="Fig. 13: closest approach of the deformed surfaces")
@@ -311,35 +344,35 @@ def _power_formatter():
 
 
 def _fig14(ds):
+    """Two panels on one St axis: every value (x_e grows like exp(St) past escape, to 1e37 at
+    St = 100), and near contact (up to three decades above the largest x0/x1), where the stick
+    region's physics is."""
     from matplotlib.ticker import MaxNLocator
 
-    fig = _figure()
-    ax = fig.add_subplot()
+    fig = _figure((7.2, 6.6))
+    full, near = fig.subplots(2, 1, sharex=True, height_ratios=(1.0, 1.6))
     y = _log10_x_e(ds)
-    _curves(ds, y, ax, r"equilibrium separation $x_e / x_1$",
-            title="Fig. 14: equilibrium separation")
     colors = _eps_colors(ds.sizes["eps"])
-    for i, eps in enumerate(ds["eps"].values):  # x0/x1 = eps^-0.4: above it the spheres escape
-        ax.axhline(-0.4 * math.log10(eps), color=colors[i], lw=0.8, ls=":")
-    ax.text(0.01, 0.99, r"dotted: start separation $x_0/x_1 = \varepsilon^{-2/5}$",
-            transform=ax.transAxes, va="top", fontsize=7, color="0.3")
-    # Past escape x_e grows like exp(St): on a full axis (1e37 at St = 100) the stick region,
-    # the part of the figure with physics in it, would be a flat line. Show up to three decades
-    # above the highest x0/x1 and say where the curves go.
+    _curves(ds, y, full, r"$x_e / x_1$ (all values)", title="Fig. 14: equilibrium separation")
+    _curves(ds, y, near, r"equilibrium separation $x_e / x_1$")
+    near.get_legend().remove()  # one legend, beside the upper panel
+    full.set_xlabel("")
+    for ax in (full, near):
+        for i, eps in enumerate(ds["eps"].values):  # x0/x1 = eps^-0.4: above it they escape
+            ax.axhline(-0.4 * math.log10(eps), color=colors[i], lw=0.8, ls=":")
+        ax.yaxis.set_major_formatter(_power_formatter())
+    full.yaxis.set_major_locator(MaxNLocator(integer=True, nbins=6))
+    near.yaxis.set_major_locator(MaxNLocator(integer=True, nbins=8))
+    near.text(0.01, 0.99, r"dotted: start separation $x_0/x_1 = \varepsilon^{-2/5}$ (above it "
+              "the spheres escape)", transform=near.transAxes, va="top", fontsize=7, color="0.3")
     finite = y[np.isfinite(y)]
     if finite.size:
         top = max(-0.4 * math.log10(float(ds["eps"].values.min())), 0.0) + 3.0
         if finite.max() > top:
-            bottom = min(float(finite.min()), 0.0) - 0.5
-            ax.set_ylim(bottom, top)
-            ax.text(0.99, 0.62, f"off scale above:\nup to $10^{{{finite.max():.0f}}}$ "
-                    f"at St = {float(ds['St'].values[np.nanargmax(np.nanmax(y, axis=0))]):.3g}",
-                    transform=ax.transAxes, ha="right", va="bottom", fontsize=7, color="0.3")
-            ax.text(0.01, 0.94, "(full range: map_equilibrium_separation)",
-                    transform=ax.transAxes, va="top", fontsize=7, color="0.3")
-            ax.legend(loc="lower right", frameon=False)  # the curves have left that corner
-    ax.yaxis.set_major_locator(MaxNLocator(integer=True, nbins=8))
-    ax.yaxis.set_major_formatter(_power_formatter())
+            near.set_ylim(min(float(finite.min()), 0.0) - 0.5, top)
+            full.axhspan(min(float(finite.min()), 0.0) - 0.5, top, color="0.92", lw=0, zorder=0)
+            full.text(0.01, 0.97, "shaded: the range of the lower panel",
+                      transform=full.transAxes, va="top", fontsize=7, color="0.3")
     return fig
 
 
@@ -388,7 +421,8 @@ def _log_axes(ax, ds):
     ax.set_ylabel(r"elasticity parameter $\varepsilon$ (log scale)")
 
 
-def _map(ds, z, title, cbar_label, levels, *, cbar_power=False, cmap="viridis", norm=None):
+def _map(ds, z, title, cbar_label, levels, *, cbar_power=False, cmap="viridis", norm=None,
+         cbar_ticks=None):
     """A (St, eps) map of ``z`` (NaN where not ok) with contours, failed and missing cells."""
     import matplotlib
     from matplotlib.patches import Patch
@@ -410,11 +444,14 @@ def _map(ds, z, title, cbar_label, levels, *, cbar_power=False, cmap="viridis", 
             cs = ax.contour(lx, ly, zm, levels=lv, colors="white", linewidths=0.8,
                             linestyles="solid")
             ax.clabel(cs, fmt=(lambda v: f"$10^{{{v:g}}}$") if cbar_power else "%g", fontsize=7)
-    cb = fig.colorbar(mesh, ax=ax)
+    cb = fig.colorbar(mesh, ax=ax, spacing="uniform" if cbar_ticks is not None else
+                      "proportional")
     cb.set_label(cbar_label)
     if cbar_power:
         finite = z[np.isfinite(z)]
-        if finite.size:
+        if cbar_ticks is not None:
+            cb.set_ticks([v for v in cbar_ticks if float(v).is_integer()])
+        elif finite.size:
             cb.set_ticks([v for v in levels if finite.min() <= v <= finite.max()])
         cb.formatter = _power_formatter()
         cb.update_ticks()
@@ -441,15 +478,21 @@ def _map_hm(ds):
                 cmap="magma")
 
 
+# x_e/x1 spans ~1e-1 .. 1e37 on the paper grid: coloured in bands of log10(x_e/x1), a decade
+# wide or half a decade near contact (the stick region) and wider where the spheres have escaped,
+# each band one step of the colour bar, evenly spaced whatever its width
+XE_BANDS = (-2.0, -1.0, -0.5, 0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 10.0, 20.0, 30.0, 40.0)
+
+
 def _map_xe(ds):
-    from matplotlib.colors import SymLogNorm
+    import matplotlib
+    from matplotlib.colors import BoundaryNorm
 
     z = _log10_x_e(ds)
-    # x_e/x1 spans ~1e-1 .. 1e37 on the paper grid: colour log10 of it on a symlog scale (linear
-    # within one decade of x1, logarithmic beyond) so the stick region keeps some contrast
-    norm = SymLogNorm(linthresh=1.0, base=10) if np.isfinite(z).any() else None
+    norm = BoundaryNorm(XE_BANDS, matplotlib.colormaps["cividis"].N, extend="both")
     return _map(ds, z, r"equilibrium separation $x_e/x_1$", r"$x_e / x_1$",
-                levels=[-1, 0, 1, 2, 5, 10, 20, 30], cbar_power=True, cmap="cividis", norm=norm)
+                levels=[-1, 0, 1, 2, 5, 10, 20, 30], cbar_power=True, cmap="cividis", norm=norm,
+                cbar_ticks=XE_BANDS)
 
 
 def _stick_or_rebound(ds):
@@ -517,8 +560,13 @@ class Panel:
     log: bool = False  # log y axis
     bottom: float | None = None  # fixed lower y limit
     top: float | None = None  # fixed upper y limit (with ``bottom``)
-    reference: float | None = None  # a dotted horizontal line (ln(x_e/x0) = 0: the threshold)
-    reference_label: str = ""  # written on that line
+    # a dotted horizontal line (ln(x_e/x0) = 0: the threshold), or a function giving it (read
+    # when drawn: the solver's solidification level is defined beside its compiled code)
+    reference: float | object | None = None
+    reference_label: str = ""  # written on that line; "{reference_exponent}": log10 of it
+
+    def reference_value(self) -> float | None:
+        return self.reference() if callable(self.reference) else self.reference
     window: tuple | None = None  # (floor, top): y shown from max(lowest, floor) - 0.5 up to top
     cap: float | None = None  # the axis stops here when a value passes it (a note says how far)
 
@@ -543,8 +591,6 @@ class AxisFigures:
     st_c_title: str
     figsize: tuple = (13.0, 4.2)
     grid: tuple = (1, 3)  # rows, columns of the panels
-    legend: tuple = (2, "lower right")  # panel that holds the legend, where
-    st_c_legend: str = "lower right"
 
     @property
     def st_c_name(self) -> str:
@@ -571,6 +617,12 @@ class AxisFigures:
                 for v in values]
 
 
+def _solid_viscosity_ratio() -> float:
+    from solver.collision import SOLID_VISCOSITY_RATIO
+
+    return SOLID_VISCOSITY_RATIO
+
+
 _V_R = Panel("v_r", r"maximum rebound velocity $v_r/v_0$", bottom=0.0)
 _LN_X_E = Panel("ln_x_e_x0", r"equilibrium separation $\ln(x_e/x_0)$ ($> 0$: rebound)",
                 reference=0.0, window=(-20.0, 10.0))  # ln(x_e/x0) grows ~ St past escape
@@ -586,15 +638,15 @@ AXES = {a.axis: a for a in (
                 (_V_R, Panel("h_m_x1", r"closest approach $h_m/x_1$", log=True), _LN_X_E,
                  Panel("viscosity_ratio_max_approach",
                        r"peak viscosity on approach $\mu_{max}/\mu_0$", log=True,
-                       reference=SOLID_VISCOSITY_RATIO,
-                       reference_label=rf"solidified above ($\mu > "
-                                       rf"10^{{{math.log10(SOLID_VISCOSITY_RATIO):g}}} \mu_0$)",
+                       reference=_solid_viscosity_ratio,
+                       reference_label=r"solidified above ($\mu > 10^{{reference_exponent}} "
+                                       r"\mu_0$)",
                        # up to beta = 10 the curves stay below 1e28 but where the film first
                        # solidifies (1e43 to 1e136 and beyond the float range): off scale
                        cap=1e30)),
                 "Piezoviscous film ({viscosity_law} viscosity, {density_law} density) at {eps}",
                 r"stick-or-rebound threshold against the piezoviscous number",
-                figsize=(10.0, 7.6), grid=(2, 2), legend=(0, "upper left"), st_c_legend="best"),
+                figsize=(10.0, 7.6), grid=(2, 2)),
 )}
 
 
@@ -648,10 +700,14 @@ def _axis_curves(spec, cube, extra):
             ax.set_ylim(panel.bottom, panel.top)
         elif panel.bottom is not None:
             ax.set_ylim(bottom=panel.bottom)
-        if panel.reference is not None:
-            ax.axhline(panel.reference, color="0.3", lw=0.8, ls=":")
+        reference = panel.reference_value()
+        if reference is not None:
+            ax.axhline(reference, color="0.3", lw=0.8, ls=":")
         if panel.reference_label:
-            ax.text(0.01, panel.reference, panel.reference_label, fontsize=7, color="0.3",
+            label = panel.reference_label.replace(
+                "{reference_exponent}", f"{math.log10(reference):g}") if reference > 0 else \
+                panel.reference_label
+            ax.text(0.01, reference, label, fontsize=7, color="0.3",
                     va="bottom", transform=ax.get_yaxis_transform())
         if panel.window is not None and np.isfinite(y).any():
             ax.set_ylim(max(float(np.nanmin(y)), panel.window[0]) - 0.5, panel.window[1])
@@ -661,8 +717,8 @@ def _axis_curves(spec, cube, extra):
     if failed:
         axes[0].text(0.01, 0.01, f"{failed} failed scene(s) left out", transform=axes[0].transAxes,
                      fontsize=7, color=FAILED_COLOR)
-    where, loc = spec.legend
-    axes[where].legend(loc=loc, frameon=False, fontsize=7)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside right upper", frameon=False, fontsize=7)
     eps = float(cube["eps"].values)
     # the title names the physics as the solver resolves it where it is on ("auto" -> "barus")
     on = next((v for v in values if v != spec.classic), spec.classic)
@@ -699,11 +755,11 @@ def _cap(ax, y, cap, St):
 
 def _axis_critical_stokes(spec, cube, extra):
     """St_c against ``spec.axis``, a curve per eps; the classic film's St_c dashed."""
-    fig = _figure()
+    fig = _figure(_CURVES_SIZE)
     ax = fig.add_subplot()
     rows = [r for r in critical_stokes(cube) if math.isfinite(r["St_c"])]
     eps_values = [float(e) for e in cube["eps"].values]
-    colors = _eps_colors(len(eps_values))
+    colors = eps_colors(eps_values)
     axis = spec.axis
     for i in range(len(eps_values) - 1, -1, -1):
         mine = [r for r in rows if r["eps"] == eps_values[i]]
@@ -726,6 +782,6 @@ def _axis_critical_stokes(spec, cube, extra):
     ax.set_ylim(bottom=0.0)
     ax.set_title(spec.st_c_title)
     ax.grid(True, which="major", lw=0.4, alpha=0.5)
-    ax.legend(loc=spec.st_c_legend, frameon=False)
+    _legend_outside(ax)
     _footer(fig, cube, extra)
     return fig

@@ -25,7 +25,8 @@ __all__ = ["Check", "premise_checks", "outcome_checks", "THRESHOLDS", "model_rea
            "roughness_check", "combined_roughness", "cavitation_crosses", "cavitation_reason",
            "physics_label", "cavitation_label", "gas", "VISCOSITY_SWITCH", "DENSITY_SWITCH",
            "viscosity_switch", "density_switch", "density_rise", "viscosity_reason",
-           "density_reason", "pressure_notes", "per_gpa", "law_viscosity_ratio"]
+           "density_reason", "pressure_notes", "pressure_checks", "per_gpa",
+           "law_viscosity_ratio", "ALPHA_KNOWN_LIQUID"]
 
 # Thresholds of the validity checks (each check warns when its number exceeds the threshold).
 THRESHOLDS = {
@@ -364,17 +365,50 @@ def density_reason(scene: Scene, physics, base_p_max: float | None, *, forced: b
             f"1 + c1 p / (1 + c2 p)")
 
 
+# A liquid without a pressure-viscosity coefficient: the smallest alpha of a liquid with a known,
+# nonzero one in the shipped table (glycerol, 5.9 1/GPa; mineral oils 20-42 1/GPa, Stachowiak &
+# Batchelor, Table 2.3). Where the alpha at which the viscosity switch would fire is at or below
+# it, a liquid like those would need the pressure-dependent viscosity: a warning; above it (the
+# peak pressure is low) a note.
+ALPHA_KNOWN_LIQUID = 5.9e-9  # 1/Pa
+
+
+def _alpha_needed(p_peak: float) -> float:
+    """The pressure-viscosity coefficient [1/Pa] from which the switch fires at ``p_peak``."""
+    return VISCOSITY_SWITCH / p_peak
+
+
+def pressure_checks(scene: Scene, p_peak: float | None, base=None) -> list[Check]:
+    """The ``pressure_viscosity`` warning: the liquid has no alpha, and at the peak pressure
+    ``p_peak`` [Pa] of the film solved first (``base``) the viscosity would matter from an alpha
+    at or below ``ALPHA_KNOWN_LIQUID`` on (the switch's own criterion, ``VISCOSITY_SWITCH``)."""
+    f = scene.fluid
+    if f.gas or f.pressure_viscosity is not None or p_peak is None or p_peak <= 0.0:
+        return []
+    need = _alpha_needed(p_peak)
+    if need > ALPHA_KNOWN_LIQUID:
+        return []
+    film = _first_film(base) if base is not None else "the classic film"
+    return [Check("pressure_viscosity", need, ALPHA_KNOWN_LIQUID, (
+        f"{f.name} has no pressure-viscosity coefficient, and at the peak pressure "
+        f"{format_quantity(p_peak, 'Pa')} of {film} the viscosity would change the collision "
+        f"from alpha = {per_gpa(need)} on (alpha p_peak >= {VISCOSITY_SWITCH:g}), below the "
+        f"{per_gpa(ALPHA_KNOWN_LIQUID)} of glycerol (mineral oils: 20-42 1/GPa): this result "
+        "keeps the viscosity constant; give fluid.pressure_viscosity"))]
+
+
 def pressure_notes(scene: Scene, p_peak: float | None, base=None) -> list[str]:
     """Notes where a liquid's pressure dependence is not known: no alpha (with the alpha from
     which the switch would fire at the peak pressure ``p_peak`` [Pa] of the film solved first,
-    ``base``, default the classic film), no Dowson-Higginson constants."""
+    ``base``, default the classic film), unless that alpha is small enough for the warning of
+    ``pressure_checks``; no Dowson-Higginson constants."""
     f, notes = scene.fluid, []
     if f.gas or p_peak is None or p_peak <= 0.0:
         return notes
     film = _first_film(base) if base is not None else "the classic film"
     peak = f"the peak pressure {format_quantity(p_peak, 'Pa')} of {film}"
-    if f.pressure_viscosity is None:
-        need = per_gpa(VISCOSITY_SWITCH / p_peak)
+    if f.pressure_viscosity is None and not pressure_checks(scene, p_peak, base):
+        need = per_gpa(_alpha_needed(p_peak))
         notes.append(f"pressure-dependent viscosity not checked: {f.name} has no "
                      f"pressure_viscosity; at {peak} it would matter from alpha = {need} on "
                      f"(alpha p_peak >= {VISCOSITY_SWITCH:g}; mineral oils: 20-42 1/GPa); give "

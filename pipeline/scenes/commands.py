@@ -38,13 +38,13 @@ for _n in (1, 2):
 
 
 def _usage_error(msg):
-    from ..cli import UsageError
+    from ..errors import UsageError
 
     return UsageError(msg)
 
 
 def _read_scene_file(path: str) -> dict:
-    from ..cli import UsageError
+    from ..errors import UsageError
     from .materials import read_toml
 
     return read_toml(path, "scene file", UsageError)
@@ -104,7 +104,7 @@ def _q(value, unit, spec=".4g"):
 
 
 def _g(value, spec=".4g"):
-    from ..cli import format_value
+    from ..cli_shared import format_value
 
     return format_value(value, spec)
 
@@ -229,13 +229,13 @@ def cmd_scene(args) -> int:
         scene = load_scene(args.file, flags, args.materials or ())
     except ValueError as exc:
         raise _usage_error(str(exc)) from None
-    from ..cli import _numerics_overrides, check_output_paths
+    from ..cli_shared import check_output_paths, numerics_overrides
 
     check_output_paths(plot=args.plot)
     try:
         # profiles only for the figures: the pressure extremes come from the solver
         result = run_scene(scene, accuracy=args.accuracy, save_profiles=bool(args.plot),
-                           **_numerics_overrides(args))
+                           **numerics_overrides(args))
     except ValueError as exc:
         raise _usage_error(str(exc)) from None
     except ArithmeticError as exc:  # a numerical failure inside the solver: report, no traceback
@@ -257,12 +257,13 @@ def cmd_scene(args) -> int:
     else:
         print(format_report(d))
     if args.plot and not failed:
-        from ..plots.scene_plots import plot_scene
+        from ..plots.scene_plots import plot_scene, si_scales
 
         from ..writes import guarded_dir
 
         with guarded_dir(args.plot, f"--plot {args.plot}"):
-            paths = plot_scene(result.collision, args.plot, title=scene.title)
+            paths = plot_scene(result.collision, args.plot, title=scene.title,
+                               scales=si_scales(scene))
         if not args.json:
             print(f"figures: {', '.join(str(p) for p in paths if p.suffix == '.png')}")
     if failed:
@@ -309,7 +310,7 @@ def _list_materials(args) -> int:
 
 
 def cmd_paper_figures(args) -> int:
-    from ..cli import check_output_dir
+    from ..cli_shared import check_output_dir
     from ..plots.paper_figures import paper_figures
     from ..writes import guarded_dir
 
@@ -328,12 +329,11 @@ def cmd_paper_figures(args) -> int:
 
 
 def _build_scene(sub) -> None:
-    from ..cli import _add_numerics_flags
+    from ..cli_shared import add_numerics_flags
     from .scene import CAVITATION_CHOICES, DENSITY_CHOICES, VISCOSITY_CHOICES
 
     p = sub.add_parser(
-        "scene", help="solve a collision given in physical units (bodies, fluid, speed)",
-        description="Solve one collision given in physical units, check the model's premises, "
+        "scene", description="Solve one collision given in physical units, check the model's premises, "
                     "and report the results in SI and in the scalings. Values are SI numbers or "
                     "strings with units ('50 um', '10 cm/s', '1 mPa s'). Flags override the file.")
     p.add_argument("file", nargs="?", default=None, help="scene file (TOML; see docs/scenes.md)")
@@ -396,7 +396,7 @@ def _build_scene(sub) -> None:
                    help="extra materials/fluids TOML file (repeatable; overrides shipped entries)")
     p.add_argument("--list-materials", action="store_true",
                    help="print the known materials and fluids with their sources, then exit")
-    _add_numerics_flags(p)
+    add_numerics_flags(p)
     p.add_argument("--json", action="store_true",
                    help="print exactly one JSON object (keys in docs/scenes.md)")
     p.add_argument("--plot", metavar="DIR", default=None,
@@ -407,10 +407,14 @@ def _build_scene(sub) -> None:
 
 
 def _build_paper_figures(sub) -> None:
-    p = sub.add_parser("paper-figures", help="write the in-depth figures 2-11 (kernel, I(xi), "
-                                             "St = 2.5/5/10 at eps = 0.01)")
+    from ..cli_shared import accuracy_help
+
+    p = sub.add_parser("paper-figures", description="Write the classic paper's in-depth figures "
+                       "2-11: the elastic kernel, I(xi), and the collisions at St = 2.5, 5, 10 "
+                       "with eps = 0.01 (PNG and PDF).")
     p.add_argument("--out", required=True, metavar="DIR", help="output directory")
-    p.add_argument("--accuracy", default="standard", help="solver preset: fast, standard or fine")
+    p.add_argument("--accuracy", default="standard", metavar="{fast,standard,fine}",
+                   help=accuracy_help("preset of the solves"))
     p.set_defaults(func=cmd_paper_figures)
 
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from solver.physics import Physics
 
 from .checks import (Check, cavitation_crosses, cavitation_reason, density_reason, density_switch,
-                     model_reason, outcome_checks, premise_checks, pressure_notes,
+                     model_reason, outcome_checks, premise_checks, pressure_checks, pressure_notes,
                      viscosity_reason, viscosity_switch)
 from .scene import Scene
 
@@ -145,6 +145,9 @@ def run_scene(scene: Scene, accuracy: str = "standard", **overrides) -> SceneRes
     """
     from solver import collide
 
+    from ..environment import compile_notice
+
+    compile_notice()  # one line when the solver is about to compile (a silent minute otherwise)
     auto_cav = scene.cavitation == "auto"
     auto_visc = scene.viscosity_law == "auto"
     auto_dens = scene.density_law == "auto"
@@ -181,6 +184,7 @@ def run_scene(scene: Scene, accuracy: str = "standard", **overrides) -> SceneRes
         p_max, p_min = c.p_max * p_star, c.p_min * p_star
         post, notes = outcome_checks(scene, c, p_max, p_min)
         warnings += post
+    warnings += pressure_checks(scene, base_p_max, base)
     notes += pressure_notes(scene, base_p_max, base)
     if scene.sound_speed is None:
         notes.append("elastic-wave check skipped: no density known for either solid")

@@ -36,7 +36,9 @@ def register(sub) -> None:
                     "scenes ok, 2 bad input, 3 finished with failed scenes, 4 scheduler lost "
                     "mid-sweep, 5 damaged metadata the sweep cannot repair, 74 a write failed "
                     "(disk full), 130 interrupted, 143 terminated (SIGTERM).")
-    p.add_argument("sweep_file", metavar="SWEEP_FILE", help="sweep definition, e.g. sweeps/paper.toml")
+    p.add_argument("sweep_file", metavar="SWEEP_FILE",
+                   help="sweep definition, e.g. sweeps/paper.toml, or the name of a shipped one: "
+                        "paper, quick, cavitation, piezoviscous")
     p.add_argument("--store", metavar="PATH", default=None,
                    help="zarr store to use instead of the one named in the sweep file")
     where = p.add_mutually_exclusive_group()
@@ -81,10 +83,11 @@ def register(sub) -> None:
 
 
 def cmd_sweep(args) -> int:
+    from ..shipped import resolve_sweep
     from .config import load_sweep
     from .run import run_sweep
 
-    sweep = load_sweep(args.sweep_file)  # ConfigError: one line, exit 2 (pipeline/errors.py)
+    sweep = load_sweep(resolve_sweep(args.sweep_file))  # ConfigError: one line, exit 2 (pipeline/errors.py)
     summary = run_sweep(sweep, store=args.store, runner=args.executor or "processes",
                         workers=args.workers, address=args.scheduler,
                         scheduler_file=args.scheduler_file, retry_failed=args.retry_failed,
@@ -209,14 +212,18 @@ def _status_table(plane, extra: dict, format_physics) -> None:
 
 def cmd_figures(args) -> int:
     from ..cli import check_output_dir
+    from ..plots.stamp import up_to_date
+
+    check_output_dir("--out", args.out)
+    if up_to_date(args.store, args.out):  # the store's files unchanged since the last render
+        print(f"figures in {args.out} are up to date with {args.store}")
+        return 0
     from ..errors import StoreDamaged, UsageError
     from ..plots.sweep_maps import update_figures
     from ..writes import guarded_dir
     from .analysis import PlaneError
     from .layout import STATUS_CODES
-    from .store import open_results
 
-    check_output_dir("--out", args.out)
     checked, damage, _skipped = _open_checked(args.store)
     if damage:
         raise StoreDamaged(f"store {args.store} is damaged: "
@@ -226,10 +233,9 @@ def cmd_figures(args) -> int:
     if not (checked["status"].values == STATUS_CODES["ok"]).any():
         raise UsageError(f"store {args.store} holds no finished scene yet: nothing to draw; run "
                          "its sweep first (ehd sweep SWEEP_FILE)")
-    ds = open_results(args.store, check=False, chunks=None)  # checked whole just above
-    try:
+    try:  # the store as read and checked above: one read per command
         with guarded_dir(args.out, f"--out {args.out}"):
-            paths, rendered = update_figures(ds, args.out)
+            paths, rendered = update_figures(checked, args.out, store=args.store)
     except PlaneError as exc:
         raise UsageError(f"no figures for {args.store}: {exc}") from None
     if not rendered:

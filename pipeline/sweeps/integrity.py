@@ -280,7 +280,9 @@ def load_checked(path):
                 damage.coords[d] = how
             coord_attrs = {k: v for k, v in (arrays[d].get("attributes") or {}).items()
                            if not k.startswith("_")}
-            coords[d] = (d, copy, coord_attrs)
+            # a Variable on xarray's fast path: the (dims, values, attrs) tuple form makes xarray
+            # import dask.array (0.5 s) to ask whether the values are a dask array
+            coords[d] = xr.Variable(d, copy, coord_attrs, fastpath=True)
         lazy = xr.open_zarr(path, consolidated=True, chunks=None, drop_variables=list(dims))
     lazy = lazy.assign_coords(coords)
     for name in list(lazy.data_vars):

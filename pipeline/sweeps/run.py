@@ -183,6 +183,10 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
             jobs = [(cell, (st.scene(cell), sweep.accuracy, overrides)) for cell in todo]
             bar = Progress(len(jobs), stream=progress)
             warm_fn = _Warm(sweep.accuracy, overrides) if warm_up else None
+            if warm_up and progress is not None:  # the warm-up compiles on a fresh install
+                from ..environment import compile_notice
+
+                compile_notice(progress)
             try:
                 with open_runner(runner, workers, address, None, warm=warm_fn,
                                  stream=progress, **runner_kw) as run:

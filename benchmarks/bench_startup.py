@@ -1,0 +1,207 @@
+"""Start-up of ``ehd``: what a command costs before it does any work, as ratios to a bare Python.
+
+Cases (each a fresh process, repeated; the median of wall and CPU time, user + system, of the
+child processes):
+
+- ``python -c "import argparse"`` (the venv's Python): the floor every command pays;
+- ``ehd --help``, ``ehd --version``, ``ehd run --help``, ``ehd sweep --help``;
+- ``make sweep`` with nothing to do: its two commands, ``ehd sweep sweeps/paper.toml --store S``
+  and ``ehd figures S --out F``, on a complete paper store (built once first in a temporary folder
+  when ``--store`` is not given: about a minute) whose figures are up to date.
+
+Targets (issue 20): ``ehd --help`` within 1.5x of the bare Python; the no-op ``make sweep`` in at
+most 2 s on 2 cores. The machine is shared, so CPU time is the steadier measure; both are shown.
+
+``--source DIR`` measures another checkout (e.g. ``git archive main | tar -x -C DIR``) with this
+venv's packages: ``python -S -P -m pipeline.cli`` with ``PYTHONPATH=DIR:site-packages`` instead of
+the ``ehd`` script; that is how the "before" columns of benchmarks/startup.md were measured
+(``--before FILE`` shows them).
+
+Usage: ``make bench`` (writes ``benchmarks/startup.md`` and ``startup.json``) or
+``python benchmarks/bench_startup.py [--repeat N] [--store S] [--source DIR] [--out FILE]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import resource
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+HELP_TARGET = 1.5  # ehd --help over the bare Python start (issue 20)
+NOOP_TARGET_S = 2.0  # the no-op make sweep, seconds on 2 cores (issue 20)
+BASE = "python -c 'import argparse'"
+
+
+def _child_cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def _timed(cmd, env, cwd=REPO, ok=(0,), optional=False) -> tuple[float, float] | None:
+    """Wall and CPU seconds of one run of ``cmd`` (None: it failed and is ``optional``, e.g.
+    ``--version`` of a checkout that has none)."""
+    cpu = _child_cpu()
+    t = time.perf_counter()
+    proc = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True)
+    wall = time.perf_counter() - t
+    if proc.returncode not in ok:
+        if optional:
+            return None
+        sys.exit(f"{' '.join(map(str, cmd))} failed ({proc.returncode}):\n{proc.stderr[-2000:]}")
+    return wall, _child_cpu() - cpu
+
+
+def _median(runs) -> dict | None:
+    runs = [r for r in runs if r is not None]
+    if not runs:
+        return None
+    return {"wall_s": statistics.median(w for w, _ in runs),
+            "cpu_s": statistics.median(c for _, c in runs), "runs": len(runs)}
+
+
+def measure(repeat: int, store: Path, figures: Path, ehd: list[str], env: dict) -> dict:
+    python = [sys.executable]
+    cases = {
+        BASE: [*python, "-c", "import argparse"],
+        "ehd --help": [*ehd, "--help"],
+        "ehd --version": [*ehd, "--version"],
+        "ehd run --help": [*ehd, "run", "--help"],
+        "ehd sweep --help": [*ehd, "sweep", "--help"],
+    }
+    out = {}
+    for _ in range(2):  # warm the file system cache and the .pyc files; not counted
+        for cmd in cases.values():
+            _timed(cmd, env, optional=True)
+    runs = {name: [] for name in cases}
+    for _ in range(repeat):  # interleaved: a burst of load on the machine hits every case
+        for name, cmd in cases.items():
+            runs[name].append(_timed(cmd, env, optional=True))
+    out.update({name: _median(r) for name, r in runs.items()})
+    sweep = [*ehd, "sweep", "sweeps/paper.toml", "--store", str(store)]
+    figs = [*ehd, "figures", str(store), "--out", str(figures)]
+    _timed(sweep, env, ok=(0, 3))
+    _timed(figs, env)  # draws once if the folder is not up to date yet
+    noop = {"ehd sweep (nothing to do)": [], "ehd figures (up to date)": [],
+            "no-op make sweep (both)": []}
+    for _ in range(repeat):
+        a = _timed(sweep, env, ok=(0, 3))
+        b = _timed(figs, env)
+        noop["ehd sweep (nothing to do)"].append(a)
+        noop["ehd figures (up to date)"].append(b)
+        noop["no-op make sweep (both)"].append((a[0] + b[0], a[1] + b[1]))
+    out.update({name: _median(r) for name, r in noop.items()})
+    return out
+
+
+def render(results: dict, meta: dict, before: dict | None) -> str:
+    base = results[BASE]
+    lines = [
+        "# Start-up of `ehd` (`benchmarks/bench_startup.py`)", "",
+        f"{meta['date']}, {meta['cores']} cores (shared: load average {meta['load']} at the "
+        f"start), median of {meta['repeat']} runs each, all from one run of the script. "
+        "CPU = user + system time of the process; the ratios are to the bare Python start "
+        "measured in the same run.", "",
+        "| command | wall [s] | CPU [s] | wall / python | CPU / python |"
+        + (" before: wall [s] | before: CPU [s] |" if before else ""),
+        "|---|---:|---:|---:|---:|" + ("---:|---:|" if before else ""),
+    ]
+    for name, r in results.items():
+        if r is None:
+            continue
+        row = (f"| `{name}` | {r['wall_s']:.3f} | {r['cpu_s']:.3f} | "
+               f"{r['wall_s'] / base['wall_s']:.2f} | {r['cpu_s'] / base['cpu_s']:.2f} |")
+        if before:
+            b = before.get(name)
+            row += (f" {b['wall_s']:.3f} | {b['cpu_s']:.3f} |" if b else " - | - |")
+        lines.append(row)
+    h = results["ehd --help"]
+    noop = results["no-op make sweep (both)"]
+    lines += [
+        "",
+        f"Targets: `ehd --help` within {HELP_TARGET:g}x of the bare Python start: "
+        f"{h['wall_s'] / base['wall_s']:.2f}x wall, {h['cpu_s'] / base['cpu_s']:.2f}x CPU "
+        f"({'met' if h['cpu_s'] / base['cpu_s'] <= HELP_TARGET else 'not met'} on CPU). "
+        f"The no-op `make sweep` in at most {NOOP_TARGET_S:g} s: {noop['wall_s']:.2f} s wall, "
+        f"{noop['cpu_s']:.2f} s CPU "
+        f"({'met' if noop['cpu_s'] <= NOOP_TARGET_S else 'not met'} on CPU; the wall time "
+        "includes waiting for the cores other processes hold).",
+    ]
+    if before:
+        lines += ["", f"Before: {meta.get('before_source')}, run as `python -S -P -m "
+                  "pipeline.cli` with this venv's packages (`--source`), in a separate run of "
+                  "this script shortly before; its own bare-Python start was "
+                  f"{before[BASE]['wall_s']:.3f} s wall, {before[BASE]['cpu_s']:.3f} s CPU."]
+    lines += ["", "Where the time goes: `ehd --help` imports only the command registry "
+              "(`pipeline/cli.py`); a command imports its own module when chosen. The no-op "
+              "`ehd sweep` reads the store once, whole (its integrity check: 40 arrays of 64 "
+              "chunks, each chunk's checksum verified since store schema 6), and imports xarray, "
+              "zarr and dask.distributed; the up-to-date `ehd figures` lists the store's files "
+              "and reads nothing (`pipeline/plots/stamp.py`). Measured before schema 6 (the "
+              "same script, this branch before main's checksums were merged): `ehd --help` "
+              "1.33x, the no-op `make sweep` 1.87 s wall, 1.72 s CPU, of which `ehd sweep` "
+              "1.59 s CPU.",
+              ""]
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--repeat", type=int, default=7, help="runs per case (default 7)")
+    p.add_argument("--store", default=None,
+                   help="a complete paper store to use (default: build one in a temporary folder)")
+    p.add_argument("--source", default=None,
+                   help="measure the checkout in DIR instead (python -m pipeline.cli)")
+    p.add_argument("--before", default=None,
+                   help="a JSON file of this script (e.g. from --source) shown as 'before' columns")
+    p.add_argument("--out", default=str(REPO / "benchmarks" / "startup.md"),
+                   help="markdown file for the table ('-': print only); the JSON goes beside it")
+    args = p.parse_args(argv)
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    # as after a pip install, which writes the .pyc files: a PYTHONDONTWRITEBYTECODE in the
+    # environment would make every run compile every module again
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    if args.source:
+        import sysconfig
+
+        # -S: no .pth files (this venv's editable install would shadow the other checkout), -P: nor
+        # the working directory
+        env["PYTHONPATH"] = os.pathsep.join([str(Path(args.source).resolve()),
+                                             sysconfig.get_paths()["purelib"]])
+        ehd = [sys.executable, "-S", "-P", "-m", "pipeline.cli"]
+    else:
+        ehd = [str(Path(sys.executable).parent / "ehd")]
+    tmp = Path(tempfile.mkdtemp(prefix="ehd-bench-startup-"))
+    try:
+        store = Path(args.store) if args.store else tmp / "paper.zarr"
+        meta = {"date": datetime.date.today().isoformat(), "cores": os.cpu_count(),
+                "load": f"{os.getloadavg()[0]:.1f}", "repeat": args.repeat,
+                "source": args.source or str(REPO)}
+        results = measure(args.repeat, store, tmp / "figures", ehd, env)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    before = None
+    if args.before:
+        doc = json.loads(Path(args.before).read_text())
+        before = doc["results"]
+        meta["before_source"] = doc["meta"].get("source")
+    text = render(results, meta, before)
+    print(text)
+    if args.out != "-":
+        Path(args.out).write_text(text)
+        Path(args.out).with_suffix(".json").write_text(
+            json.dumps({"meta": meta, "results": results, "before": before}, indent=1) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

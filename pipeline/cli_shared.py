@@ -1,0 +1,105 @@
+"""What the sub-command modules share (``pipeline/cli.py``, ``scenes/commands.py``,
+``sweeps/commands.py``, ``dem/commands.py``, ``shipped.py``): the numerics flags, the output-path
+checks made before any solve, and the formatting of a report value. Imports nothing heavy: the
+presets' numbers are read only when a parser with the numerics flags is built.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+from .errors import PathError
+
+__all__ = ["add_numerics_flags", "numerics_overrides", "format_value", "check_output_dir",
+           "check_output_paths", "accuracy_help"]
+
+
+def accuracy_help(what: str = "preset") -> str:
+    """Help text of ``--accuracy``: its choices and the default."""
+    from solver.settings import PRESETS
+
+    return (f"numerical {what}: {', '.join(PRESETS)} (default standard; what each buys: "
+            "README, benchmarks/accuracy.md)")
+
+
+def add_numerics_flags(p) -> None:
+    """``--accuracy`` and the preset overrides, each with its choices or the preset defaults."""
+    from solver.settings import PRESETS
+
+    def preset_values(name):
+        return ", ".join(f"{k} {getattr(v, name):g}" for k, v in PRESETS.items())
+
+    # checked by the solver (one line, exit 2), not by argparse's choices (a usage block)
+    p.add_argument("--accuracy", default="standard", metavar="{" + ",".join(PRESETS) + "}",
+                   help=accuracy_help())
+    p.add_argument("--switch", type=float, default=None,
+                   help="hand-over threshold on W(0)/X from the rigid approach (default: the "
+                        f"preset's: {preset_values('switch')})")
+    p.add_argument("--release", type=float, default=None,
+                   help="max|W|/X below which the departing spheres are rigid again (default: "
+                        f"the preset's: {preset_values('release')})")
+    p.add_argument("--n-inner", type=int, default=None,
+                   help=f"grid cells across the contact region (default: {preset_values('n_inner')})")
+    p.add_argument("--rtol", type=float, default=None,
+                   help=f"time-step error tolerance (default: {preset_values('rtol')})")
+    p.add_argument("--max-steps", type=int, default=None,
+                   help=f"step budget of the coupled solve (default: {preset_values('max_steps')})")
+
+
+def numerics_overrides(args) -> dict:
+    return {"switch": args.switch, "release": args.release, "n_inner": args.n_inner,
+            "rtol": args.rtol, "max_steps": args.max_steps}
+
+
+def format_value(v, spec=".6g"):
+    """A value of a report row: numbers with ``spec`` (non-finite as ``inf``/``nan``), flags as
+    yes/no, missing (or empty text, e.g. no viscosity table) as "-", anything else as text."""
+    if v is None or v == "":
+        return "-"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, float):
+        return format(v, spec) if math.isfinite(v) else str(v)
+    return str(v)
+
+
+def check_output_dir(flag: str, value: str | None) -> None:
+    """PathError, before any work, when the folder ``value`` of ``flag`` cannot be made or
+    written: empty, an existing file, a file among its parents, or a read-only parent."""
+    if value is None:
+        return
+    from pathlib import Path  # here: pathlib costs a third of ``ehd --help``'s start-up
+
+    if not str(value).strip():
+        raise PathError(f"{flag}: empty path; give a folder")
+    path = Path(value)
+    if path.exists() and not path.is_dir():
+        raise PathError(f"{flag} {value}: exists and is not a directory")
+    existing = next((p for p in (path, *path.parents) if p.exists()), Path("."))
+    if not existing.is_dir():
+        raise PathError(f"{flag} {value}: {str(existing)!r} is not a directory")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise PathError(f"{flag} {value}: {str(existing)!r} is not writable")
+
+
+def check_output_paths(save: str | None = None, plot: str | None = None) -> None:
+    """PathError, before any solve, when ``--save FILE`` or ``--plot DIR`` cannot be written:
+    a missing or read-only parent directory, or an existing path of the wrong kind (a ``.zarr``
+    store and ``DIR`` are directories, a ``.nc`` file is a file)."""
+    from pathlib import Path
+
+    if save is not None:
+        if not save.endswith((".nc", ".zarr")):
+            raise PathError(f"--save: unknown file type {save!r}; use a .nc or .zarr path")
+        path = Path(save)
+        parent = path.parent
+        if not parent.is_dir():
+            raise PathError(f"--save {save}: the directory {str(parent)!r} does not exist")
+        if not os.access(parent, os.W_OK | os.X_OK):
+            raise PathError(f"--save {save}: the directory {str(parent)!r} is not writable")
+        if save.endswith(".zarr") and path.exists() and not path.is_dir():
+            raise PathError(f"--save {save}: exists and is not a directory (a .zarr store is one)")
+        if save.endswith(".nc") and path.is_dir():
+            raise PathError(f"--save {save}: is a directory, not a file")
+    check_output_dir("--plot", plot)

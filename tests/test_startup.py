@@ -1,0 +1,221 @@
+"""A newcomer's first commands (issue 20): what ``ehd`` imports before it works, one version,
+the files shipped with the package, ``ehd examples``, named sweeps, the figures' quick stamp.
+Speed itself is measured in benchmarks/bench_startup.py, not here."""
+
+import json
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parent.parent
+HEAVY = ("numba", "scipy", "xarray", "zarr", "distributed", "matplotlib", "pint",
+         "solver.collision")
+
+
+def _modules_after(argv, extra="") -> set[str]:
+    """The modules loaded by ``ehd ARGV`` in a fresh interpreter (after it exits: --help)."""
+    code = ("import sys\nfrom pipeline.cli import main\n" + extra +
+            f"try:\n    main({argv!r})\nexcept SystemExit:\n    pass\n"
+            "print('\\n'.join(sorted(sys.modules)), file=sys.stderr)\n")
+    p = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True,
+                       timeout=120)
+    return set(p.stderr.split())
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["sweep", "--help"], ["figures", "--help"],
+                                  ["scene", "--help"], ["examples", "--help"]])
+def test_help_loads_neither_numba_nor_the_stack(argv):
+    loaded = _modules_after(argv)
+    assert "pipeline.cli" in loaded  # the probe worked
+    assert not {m for m in HEAVY if m in loaded}, sorted(m for m in HEAVY if m in loaded)
+
+
+def test_run_help_reads_the_physics_without_compiled_code():
+    loaded = _modules_after(["run", "--help"])
+    assert "solver.physics" in loaded and "numba" not in loaded and "scipy" not in loaded
+
+
+def test_version_is_the_package_and_the_solver_version(capsys):
+    from importlib.metadata import version
+
+    from pipeline.cli import main
+    from solver import SOLVER_VERSION
+
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    out = capsys.readouterr().out.strip()
+    assert out == f"ehd-collision {version('ehd-collision')} (solver {SOLVER_VERSION})"
+    assert version("ehd-collision") == SOLVER_VERSION  # one number, read from one attribute
+
+
+def test_pyproject_version_is_dynamic_and_pytest_is_a_test_extra():
+    meta = tomllib.loads((REPO / "pyproject.toml").read_text())
+    project = meta["project"]
+    assert "version" not in project and "version" in project["dynamic"]
+    assert meta["tool"]["setuptools"]["dynamic"]["version"] == {
+        "attr": "solver.result.SOLVER_VERSION"}
+    assert not [d for d in project["dependencies"] if d.startswith("pytest")]
+    assert [d for d in project["optional-dependencies"]["test"] if d.startswith("pytest")]
+    # make install and make test install the extra
+    assert "pip install --quiet -e .[test]" in (REPO / "Makefile").read_text()
+
+
+def test_shipped_files_are_the_clone_folders():
+    from pipeline import shipped
+
+    for kind in shipped.FOLDERS:
+        assert shipped.folder(kind) == REPO / kind  # an editable install: the clone's own
+    assert {"paper", "quick", "cavitation", "piezoviscous"} <= set(shipped.sweep_names())
+    assert shipped.resolve_sweep("paper") == str(REPO / "sweeps" / "paper.toml")
+    # a path stays a path (the reader names any problem); an unknown bare name is refused
+    assert shipped.resolve_sweep("sweeps/quick.toml") == "sweeps/quick.toml"
+    assert shipped.resolve_sweep("nosuch.toml") == "nosuch.toml"
+    from pipeline.errors import UsageError
+
+    with pytest.raises(UsageError, match="no shipped sweep of that name .*paper"):
+        shipped.resolve_sweep("nosuch")
+
+
+def test_build_hook_ships_the_same_folders():
+    """setup.py copies exactly ``shipped.FOLDERS`` into the wheel (one list, two readers)."""
+    import ast
+
+    from pipeline import shipped
+
+    tree = ast.parse((REPO / "setup.py").read_text())
+    value = next(n.value for n in tree.body if isinstance(n, ast.Assign)
+                 and getattr(n.targets[0], "id", "") == "SHIPPED")
+    assert ast.literal_eval(value) == shipped.FOLDERS
+
+
+def test_ehd_examples_copies_the_shipped_files_and_keeps_changed_ones(tmp_path, capsys):
+    from pipeline.cli import main
+
+    target = tmp_path / "mine"
+    assert main(["examples", str(target)]) == 0
+    for kind in ("examples", "sweeps"):
+        src = sorted(p.name for p in (REPO / kind).iterdir() if p.suffix in (".toml", ".py"))
+        assert sorted(p.name for p in (target / kind).iterdir()) == src
+        for name in src:
+            assert (target / kind / name).read_bytes() == (REPO / kind / name).read_bytes()
+    assert main(["examples", str(target)]) == 0  # the same files again: nothing to refuse
+    mine = target / "sweeps" / "quick.toml"
+    mine.write_text("# my edits\n")
+    capsys.readouterr()
+    assert main(["examples", str(target)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "quick.toml" in err and "--force" in err
+    assert mine.read_text() == "# my edits\n"  # kept
+    assert main(["examples", str(target), "--force"]) == 0
+    assert mine.read_bytes() == (REPO / "sweeps" / "quick.toml").read_bytes()
+
+
+def test_named_sweep_runs_without_a_path(tmp_path, monkeypatch, capsys):
+    """``ehd sweep quick`` from a folder without sweep files: the shipped one (its 24 scenes
+    are not solved here: --store of a stand-in, exit 2 tells it read the right file)."""
+    from pipeline.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "busy.zarr").write_text("not a store")
+    assert main(["sweep", "quick", "--store", "busy.zarr"]) == 2
+    err = capsys.readouterr().err
+    assert "--store busy.zarr: exists and is not a directory" in err  # the file was read
+    assert main(["sweep", "nosuch"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "no shipped sweep" in err and "quick" in err
+
+
+def test_figures_stamp_skips_reading_an_unchanged_store(tmp_path, monkeypatch):
+    from pipeline.plots import stamp, sweep_maps
+    from pipeline.plots.sweep_maps import update_figures
+    from tests.test_pipeline import open_results, synthetic_store
+
+    def render(ds, out):  # the stamp's logic only: a stand-in that writes the files it names
+        paths = [out / f"{n}.{f}" for n in sweep_maps.FIGURES for f in sweep_maps.FORMATS]
+        paths.append(out / sweep_maps.CSV_NAME)
+        for p in paths:
+            p.write_text("x")
+        return paths
+
+    monkeypatch.setattr(sweep_maps, "render_all", render)
+    ds = synthetic_store(tmp_path)
+    store = tmp_path / "s.zarr"
+    assert stamp.up_to_date(store, tmp_path / "f") is None  # nothing drawn yet
+    paths, rendered = update_figures(ds, tmp_path / "f", store=store)
+    assert rendered
+    quick = stamp.up_to_date(store, tmp_path / "f")
+    assert quick is not None and sorted(map(str, quick)) == sorted(map(str, paths))
+    data = json.loads((tmp_path / "f" / stamp.STAMP_NAME).read_text())
+    assert data["store_state"] == stamp.store_state(store)
+    # any file of the store written again (a sweep's merge) sends it to the full check
+    chunk = next(p for p in sorted(store.rglob("*")) if p.is_file() and p.name != "zarr.json")
+    chunk.write_bytes(chunk.read_bytes())
+    assert stamp.up_to_date(store, tmp_path / "f") is None
+    # the full check finds the contents unchanged: no redraw, and the stamp is current again
+    _, rendered = update_figures(open_results(store), tmp_path / "f", store=store)
+    assert not rendered and stamp.up_to_date(store, tmp_path / "f") is not None
+    (tmp_path / "f" / paths[0].name).unlink()  # a figure deleted: not up to date
+    assert stamp.up_to_date(store, tmp_path / "f") is None
+
+
+def test_scene_figures_carry_si_axes_in_the_scene_units(tmp_path):
+    from matplotlib.figure import Figure
+
+    from pipeline.plots.scene_plots import plot_motion, plot_profiles, si_scales
+    from pipeline.scenes.commands import load_scene
+    from pipeline.scenes.run import run_scene
+
+    scene = load_scene(str(REPO / "examples" / "glass_beads_water.toml"))
+    r = run_scene(scene, accuracy="fast", save_profiles=True)
+    scales = si_scales(scene)
+    assert scales["H"] == scene.x1 and scales["tau"] == scene.x0 / scene.v0
+    fig = Figure(layout="constrained")
+    ax = fig.subplots()
+    plot_profiles(ax, r.collision, "P", scales=scales)
+    axes = [*fig.axes, *(c for a in fig.axes for c in a.child_axes)]  # SI axes are children
+    labels = [a.get_ylabel() for a in axes] + [a.get_xlabel() for a in axes]
+    assert "pressure [MPa]" in labels and "radius [µm]" in labels  # 100s of MPa, um radii
+    # the SI axis is the dimensionless one times the scale: the top of both agree
+    fig.draw_without_rendering()  # secondary axes take their limits when drawn
+    sec = next(a for a in axes if a.get_ylabel() == "pressure [MPa]")
+    top = ax.get_ylim()[1]
+    assert sec.get_ylim()[1] == pytest.approx(top * scene.pressure_scale / 1e6, rel=1e-9)
+    fig = Figure(layout="constrained")
+    plot_motion(fig, r.collision, scales=scales)
+    axes = [*fig.axes, *(c for a in fig.axes for c in a.child_axes)]
+    labels = [a.get_ylabel() for a in axes] + [a.get_xlabel() for a in axes]
+    assert "force [µN]" in labels and "time [µs]" in labels
+    assert any("= 4.319 nm" in lab for lab in labels)  # the symlog separation: x1 in its label
+
+
+def test_sticking_threshold_separates_sticking_from_rebounding(tmp_path, capsys):
+    from pipeline.cli import main
+    from pipeline.dem.export import scene_path
+    from pipeline.scenes.commands import load_scene
+    from pipeline.scenes.run import run_scene
+    from pipeline.scenes.threshold import RTOL, sticking_threshold
+
+    path = str(REPO / "examples" / "glass_beads_water.toml")
+    scene = load_scene(path)
+    t = sticking_threshold(scene, "v0", "fast", start=0.3, stop=3.0, n=5)
+    assert t.St_c is not None and t.bracket[1] / t.bracket[0] - 1.0 <= RTOL
+    # just outside the final bracket: one side sticks, the other rebounds
+    below, above = scene_path(scene, "v0", [t.bracket[0] * (1 - RTOL), t.bracket[1] * (1 + RTOL)])
+    assert run_scene(below, accuracy="fast").collision.e_wet == 0.0
+    assert run_scene(above, accuracy="fast").collision.e_wet > 0.0
+    assert below.stokes < t.St_c < above.stokes
+    assert t.value == pytest.approx(scene.v0 * t.factor)
+    # a path that never changes says so
+    none = sticking_threshold(scene, "v0", "fast", start=5.0, stop=10.0, n=2)
+    assert none.St_c is None and "rebound at every v0" in none.note
+    # the command: the table, the threshold line, the figure
+    code = main(["restitution", path, "--accuracy", "fast", "--from", "0.3", "--to", "3",
+                 "--n", "5", "--threshold", "--plot", str(tmp_path / "fig")])
+    out = capsys.readouterr().out
+    assert code == 0 and f"St_c = {t.St_c:.4g}" in out
+    assert (tmp_path / "fig" / "restitution.png").stat().st_size > 1000
+    assert (tmp_path / "fig" / "restitution.pdf").is_file()
