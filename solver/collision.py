@@ -336,7 +336,8 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
 
     result = Collision(
         physics=physics, accuracy=accuracy, numerics=numerics, model="ehd", status=name,
-        message=message, steps=int(counters[stepper.STEPS]), rejected_steps=int(counters[stepper.REJECTED]),
+        message=message, steps=int(counters[stepper.STEPS]),
+        rejected_steps=int(counters[stepper.REJECTED]),
         newton_iterations=int(counters[stepper.NEWTON]),
         lu_factorizations=int(counters[stepper.LU]),
         tau_handover=t_switch * tau_per_t, radius=grid.radius)
@@ -351,8 +352,8 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
         result.v_r = result.dimple_depth_x1 = math.nan
         result.dimple = result.cavitated = None
         result.series = _concat(blocks)
-        result.message = (f"{message} (St={stokes:g}, eps={physics.eps:g}, after {counters[stepper.STEPS]} "
-                          f"steps at tau={t_c[-1] * tau_per_t:.4g})")
+        result.message = (f"{message} (St={stokes:g}, eps={physics.eps:g}, after "
+                          f"{counters[stepper.STEPS]} steps at tau={t_c[-1] * tau_per_t:.4g})")
         return result
 
     # rigid departure from the release state: with the Reynolds floor a scalar ODE until the

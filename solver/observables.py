@@ -63,7 +63,8 @@ class Observable:
 _P = "mu a v0 / x1^2"
 OBSERVABLES = (
     Observable("v_r", "float", "maximum rebound (separation) velocity max(-v)/v0, 0 without "
-               "rebound", "v0", "rebound velocity v_r/v0", master="lin velocity", start=0.0),
+               "rebound", "v0", "rebound velocity v_r/v0", master="lin velocity",
+               start=0.0),
     Observable("e_wet", "float", "wet coefficient of restitution: separation speed where the "
                "spheres pass back out through x_ref (default x0) over the approach speed there; "
                "0 when they stick", "v0/v0", "wet restitution e_wet (at x_ref)"),
