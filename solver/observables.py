@@ -74,7 +74,8 @@ OBSERVABLES = (
                "x0", "  h_m/x0", derived=True),
     Observable("h_m_approach_x1", "float", "closest approach until v first reaches 0", "x1",
                "closest approach on approach /x1", master="log length"),
-    Observable("h_m_approach_x0", "float", "closest approach until v first reaches 0", "x0", derived=True),
+    Observable("h_m_approach_x0", "float", "closest approach until v first reaches 0", "x0",
+               derived=True),
     Observable("x_e_x1", "float", "equilibrium separation of the undeformed surfaces (inf: exp "
                "overflow, see ln_x_e_x1)", "x1", "equilibrium separation x_e/x1", derived=True),
     Observable("x_e_x0", "float", "equilibrium separation of the undeformed surfaces (inf: exp "
