@@ -26,13 +26,17 @@ $(STAMP): pyproject.toml setup.py solver/result.py
 
 install: $(STAMP)
 
+# The install tests (marker "install": a fresh venv and an empty compile cache each, about
+# 80 s apiece) run in make test-install, which .ci/run calls, so make test stays under 10 minutes
 test: $(STAMP)
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -m "not install"
 
 # pip install of the clone into a fresh venv, then the README's first commands from an empty
-# folder (tests/install_from_pip.py; a few minutes: the fresh install compiles the solver)
+# folder (tests/install_from_pip.py), and the install tests of the compile cache's folder (a few
+# minutes: each fresh install compiles the solver)
 test-install: $(STAMP)
 	$(PY) -m pytest -q tests/install_from_pip.py
+	$(PY) -m pytest -q -m install tests/test_environment.py
 
 # The exported DEM snippets run in the real programs (tests/test_dem_programs.py, ~30 s): the
 # Debian packages liggghts (3.8.0) and yade (2023.02a) are installed when missing, with

@@ -115,6 +115,7 @@ def test_unwritable_cache_folder_warns_once_and_falls_back(tmp_path):
     assert used.is_dir()
 
 
+@pytest.mark.install
 def test_editable_install_commands_share_the_documented_cache(tmp_path):
     home = tmp_path / "home"
     env = _user_env(home)
@@ -124,6 +125,7 @@ def test_editable_install_commands_share_the_documented_cache(tmp_path):
     assert str(tmp_path / "xdg" / "ehd-collision" / "numba" / "solver-") in p.stdout
 
 
+@pytest.mark.install
 def test_non_editable_install_caches_in_the_documented_folder_not_site_packages(tmp_path):
     # what `pip install .` puts into site-packages: copies of the two packages (copied here, as
     # building a wheel needs the `wheel` package and possibly the network)
