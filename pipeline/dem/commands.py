@@ -176,10 +176,7 @@ def register(sub) -> None:
     p.add_argument("--fit-range", nargs=2, type=float, default=None, metavar=("LO", "HI"),
                    help="fit and calibrate only on rows with LO <= St <= HI (our St: where your "
                         "collisions are); errors are still reported on every row")
-    p.add_argument("--accuracy", default="standard",
-                   help="numerical preset of the solves: fast, standard, fine (default standard)")
-    p.add_argument("--materials", action="append", default=None, metavar="FILE",
-                   help="extra materials/fluids TOML file (repeatable; overrides shipped entries)")
+    _add_solve_flags(p)
     p.set_defaults(func=cmd_export_dem)
 
     p = sub.add_parser("restitution", help="e(St) of a scene along a path in impact speed or size")
@@ -198,8 +195,14 @@ def register(sub) -> None:
     p.add_argument("--threshold", action="store_true",
                    help="also find the sticking threshold St_c (and its v0 or radius) by "
                         "bisection along the path")
-    p.add_argument("--accuracy", default="standard",
-                   help="numerical preset of the solves: fast, standard, fine (default standard)")
+    _add_solve_flags(p)
+    p.set_defaults(func=cmd_restitution)
+
+
+def _add_solve_flags(p) -> None:
+    """The flags of the scenes' solves that export-dem and restitution share."""
+    from ..cli_shared import accuracy_help
+
+    p.add_argument("--accuracy", default="standard", help=accuracy_help("preset of the solves"))
     p.add_argument("--materials", action="append", default=None, metavar="FILE",
                    help="extra materials/fluids TOML file (repeatable; overrides shipped entries)")
-    p.set_defaults(func=cmd_restitution)
