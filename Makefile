@@ -71,6 +71,7 @@ figures: $(STAMP)
 	$(VENV)/bin/ehd paper-figures --out figures
 
 bench: $(STAMP)
+	$(PY) benchmarks/bench_contact.py
 	$(PY) benchmarks/bench_startup.py
 	$(PY) benchmarks/bench_solver.py
 	$(PY) benchmarks/bench_accuracy.py

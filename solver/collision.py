@@ -152,12 +152,15 @@ def handover_separation(physics, numerics):
     """Where the coupled phase takes over on the classic rigid approach: the first separation
     where the deformation ``W(0)/X`` reaches ``switch`` (rigid.handover_separation) or the
     liquid's pressure dependence changes the rigid film by as much (rigid.law_onset_separation:
-    up to there the classic rigid approach is exact to ``switch``); None when the spheres come to
+    up to there the classic rigid approach is exact to ``switch``), or before the asperities
+    touch (rigid.contact_onset_separation); None when the spheres come to
     rest before either (the scene is rigid throughout)."""
     found = [x for x in (
         rigid.handover_separation(physics.x_start, physics.St, numerics.switch),
         rigid.law_onset_separation(physics.x_start, physics.St, rigid.law_slopes(physics)[0],
-                                   numerics.switch)) if x is not None]
+                                   numerics.switch),
+        rigid.contact_onset_separation(physics.x_start, physics.St, physics.roughness))
+        if x is not None]
     return max(found) if found else None
 
 
@@ -359,7 +362,8 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
     # rigid departure from the release state: with the Reynolds floor a scalar ODE until the
     # cavity closes (model/cavitation.py), then the classic closed form
     t_rel, x_rel, v_rel = t_c[-1], x_c[-1], v_c[-1]
-    lost = cols["dissipated"][-1] + cols["void_work"][-1]  # energy lost by the release
+    # energy lost by the release
+    lost = cols["dissipated"][-1] + cols["void_work"][-1] + cols["solid_loss"][-1]
     if shortcuts.departure == "floor" and v_rel < 0.0:
         x_rel, u_rel, t_rel, path = cavitation.departure(x_rel, -v_rel, t_rel, stokes, physics.Pi)
         v_rel = -u_rel
@@ -485,7 +489,8 @@ def _coupled_observables(result, cols, tau_per_t, ln_x_e, v_rel):
     result.dimple = bool(deep.size > 0)
     if deep.size:
         result.tau_dimple = float(tau[deep[0]])
-    total = cols["E_k"] + cols["E_s"] + cols["E_c"] + cols["dissipated"] + cols["void_work"]
+    total = cols["E_k"] + cols["E_s"] + cols["E_c"] + cols["E_a"] + cols["dissipated"] \
+        + cols["void_work"] + cols["solid_loss"]
     result.energy_error = float(np.max(np.abs(total - total[0])))
     cavity = np.nonzero(cols["cavity_radius"] > 0.0)[0]
     result.cavitated = bool(cavity.size > 0)

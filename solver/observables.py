@@ -182,7 +182,7 @@ SERIES = (
     Column("T", "time v0 t / x1", "x1/v0"),
     Column("X", "separation of undeformed surfaces", "x1"),
     Column("V", "approach velocity", "v0"),
-    Column("F", "film force", "6 pi mu a^2 v0 / x1"),
+    Column("F", "force on the spheres (film and asperity contact)", "6 pi mu a^2 v0 / x1"),
     Column("W0", "central deformation W(0)", "x1"),
     Column("H_min", "minimum gap", "x1"),
     Column("R_H_min", "radius of the minimum gap", "sqrt(a x1)"),
@@ -197,5 +197,8 @@ SERIES = (
     Column("void_volume", "void volume Int_cav (H - H_onset) ds", "2 pi a x1^2"),
     Column("void_work", "work done against the cavitation floor so far", "m v0^2/2"),
     Column("E_c", "energy stored in the compressed liquid", "m v0^2/2"),
+    Column("F_contact", "asperity contact force (part of F)", "6 pi mu a^2 v0 / x1"),
+    Column("E_a", "energy stored in the asperities", "m v0^2/2"),
+    Column("solid_loss", "energy lost in the solids so far (e_dry)", "m v0^2/2"),
 )
 SERIES_INDEX = {c.name: k for k, c in enumerate(SERIES)}

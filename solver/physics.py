@@ -23,7 +23,8 @@ import numpy as np
 
 __all__ = ["Physics", "Group", "GROUPS", "ST", "EPS", "PI", "CAVITATION", "CAVITATION_MODELS",
            "DEFAULT_CAVITATION", "BETA", "VISCOSITY", "ROELANDS_Z", "ROELANDS_PR", "DENSITY",
-           "DH_C1", "DH_C2", "TABLE", "TENSION", "TENSION_CHOICES", "VISCOSITY_LAWS", "DENSITY_LAWS",
+           "DH_C1", "DH_C2", "TABLE", "ROUGHNESS", "ASPERITY_K", "E_DRY", "TENSION",
+           "TENSION_CHOICES", "VISCOSITY_LAWS", "DENSITY_LAWS",
            "INDEX", "codes"]
 
 
@@ -178,6 +179,20 @@ GROUPS = (
           "Dowson-Higginson c1", 0.0, 100.0, closed_lo=True, default=0.3),
     Group("dh_c2", "Dowson-Higginson c2 p* (1.7e-9 1/Pa times the pressure scale)",
           "Dowson-Higginson c2", 0.0, 100.0, closed_lo=True, default=0.85),
+    # rough surfaces: asperities of the combined rms roughness sigma carry load where the gap
+    # falls below it (docs/model.md, "Surface roughness"); 0: smooth surfaces, the classic film
+    Group("roughness", "combined rms surface roughness sigma / x1 (asperity contact below it)",
+          "roughness", 0.0, 1.0e4, closed_lo=True, default=0.0, off=0.0,
+          doc="Where the local gap ``H`` falls below it the asperities carry the pressure "
+              "``k (sigma - H)^1.5 sigma / H`` (model/contact.py)."),
+    Group("asperity_stiffness", "asperity stiffness k: the contact pressure (sigma - H)^1.5 "
+          "sigma / H times k, in mu a v0 / x1^2.5", "asperity stiffness", 0.0, 1.0e8,
+          default=10.0, doc="Scenes derive it from the materials (Greenwood-Williamson, "
+                            "docs/model.md); not used without roughness."),
+    Group("e_dry", "dry coefficient of restitution of the solids (losses where they touch)",
+          "dry restitution", 0.0, 1.0, default=1.0, off=1.0,
+          doc="Acts only where the asperities touch: a smooth collision never loses energy in "
+              "the solids (docs/model.md, \"Losses in the solids\")."),
     # measured mu(p): ln(mu/mu0) linear between the points, extended with the last slope
     Group("viscosity_table", "measured viscosity against pressure, \"P:mu/mu0, ...\" from 0:1 "
           "with P increasing (P in mu a v0 / x1^2)", "viscosity table", math.nan, math.nan,
@@ -196,6 +211,7 @@ BETA, VISCOSITY, TENSION = INDEX["beta"], INDEX["viscosity_law"], INDEX["viscosi
 ROELANDS_Z, ROELANDS_PR = INDEX["roelands_Z"], INDEX["roelands_PR"]
 DENSITY, DH_C1, DH_C2 = INDEX["density_law"], INDEX["dh_c1"], INDEX["dh_c2"]
 TABLE = INDEX["viscosity_table"]
+ROUGHNESS, ASPERITY_K, E_DRY = INDEX["roughness"], INDEX["asperity_stiffness"], INDEX["e_dry"]
 
 
 def codes(name: str) -> tuple:
@@ -272,6 +288,10 @@ class _PhysicsMethods:
         object.__setattr__(self, "viscosity_law", law)
         if self.density_law == "dowson-higginson" and self.dh_c1 == 0.0:
             object.__setattr__(self, "density_law", "constant")
+        if self.roughness >= self.x_start:
+            raise ValueError(f"roughness (roughness) = {self.roughness!r} must be smaller than the "
+                             f"start gap x0/x1 = eps^-0.4 = {self.x_start:.6g}: the asperities "
+                             "would touch before the collision starts (start farther out)")
 
     # ---- the declaration, for code that iterates over the groups ----------------------------
     @staticmethod
@@ -327,7 +347,12 @@ class _PhysicsMethods:
         """True when no physics beyond Davis, Serayssol & Hinch (1986) is switched on, so every
         analytic shortcut of the classic model (rigid phases, hand-over, release, master curve)
         is exact."""
-        return self.cavitation == "off" and self.isoviscous
+        return self.cavitation == "off" and self.isoviscous and self.smooth
+
+    @property
+    def smooth(self) -> bool:
+        """True when the surfaces are smooth (no asperity contact, so ``e_dry`` never acts)."""
+        return self.roughness == 0.0
 
     @property
     def isoviscous(self) -> bool:

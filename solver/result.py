@@ -21,7 +21,7 @@ from .settings import Numerics
 __all__ = ["Collision", "JSON_KEYS", "SOLVER_VERSION"]
 
 # Bump with any change that can alter numbers: stamped into every result and store.
-SOLVER_VERSION = "1.6.0"
+SOLVER_VERSION = "1.7.0"
 
 JSON_KEYS = (*Physics.names(), *LABELS, *(o.name for o in OBSERVABLES), "x_ref_x0",
              "solver_version")

@@ -34,9 +34,10 @@ def _state(rng, grid, phys):
     return x, v, p
 
 
-def _residual(grid, phys, bh, hist, y, marks, cells):
+def _residual(grid, phys, bh, hist, y, marks, cells, scalars):
     """The step's residual at the unknowns ``y`` with the active set of ``marks`` held; a JFO
-    cavity's slot ``y[i]`` is its fraction ``theta_i`` (``P_i`` fixed at ``-Pi`` there)."""
+    cavity's slot ``y[i]`` is its fraction ``theta_i`` (``P_i`` fixed at ``-Pi`` there); the gap
+    (with a rough film's contact) as the loop computes it, ``step.surface_gap``."""
     n = grid.s.size
     yy, cells = y.copy(), cells.copy()
     if phys[step.CAVITATION] == step.JFO:
@@ -44,9 +45,12 @@ def _residual(grid, phys, bh, hist, y, marks, cells):
         cells[step.THETA][active] = y[:n - 1][active]
         yy[:n - 1][active] = -phys[PI]
     w, h, q, res = np.empty(n), np.empty(n), np.empty(n - 1), np.empty(n + 2)
-    gap(grid.s, grid.influence, yy[n], yy[:n], w, h)
+    scalars = scalars.copy()
+    h[:] = np.nan  # no warm start: the contact gap must not depend on it
+    step.surface_gap(grid.s, grid.influence, phys, yy, scalars, w, h)
     step.step_residual(grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, phys, bh,
-                       hist[0], hist[1], hist[2], yy, marks.copy(), cells, False, q, w, h, res)
+                       hist[0], hist[1], hist[2], yy, marks.copy(), cells, scalars, False, q, w, h,
+                       res)
     return res
 
 
@@ -78,6 +82,12 @@ FILMS = {  # every film the physics can build: the classic one, each floor, each
     "roelands+dh+jfo": dict(beta=2.0, viscosity_law="roelands", density_law="dowson-higginson",
                             Pi=0.05, cavitation="jfo"),
     "barus+reynolds": dict(beta=2.0, Pi=0.05, cavitation="reynolds"),
+    # rough films: the roughness is set from the state so that about a third of the nodes touch
+    "rough": dict(roughness=1.0, asperity_stiffness=5.0),
+    "rough-unloading": dict(roughness=1.0, asperity_stiffness=5.0, e_dry=0.8),
+    "rough+jfo": dict(roughness=1.0, asperity_stiffness=5.0, Pi=0.05, cavitation="jfo"),
+    "rough+barus+reynolds": dict(roughness=1.0, asperity_stiffness=20.0, beta=2.0, Pi=0.05,
+                                 cavitation="reynolds"),
 }
 
 
@@ -113,21 +123,42 @@ def test_every_films_jacobian_matches_central_differences(film, seed):
         x += 0.1 - np.min(h)
         y[n] = x
         gap(grid.s, grid.influence, x, p, w, h)
+    yp = y.copy()
+    yp[:n] = p  # the Jacobian reads the pressures (a JFO slot's P is the floor)
+    scalars = step.new_state(np.zeros(n - 1))[2]
+    if physics.roughness:
+        if physics.e_dry < 1.0:  # unloading: c = e_dry^2 through a set load
+            scalars[step.LOAD_SCALE] = physics.e_dry ** 2
+            step.node_block(scalars, step.T_SET)[:] = np.abs(p) * rng.uniform(0.5, 1.5, n)
+            step.node_block(scalars, step.H_SET)[:] = h * rng.uniform(0.97, 1.0, n)
+        # the contact law's second derivative is singular where the asperities first touch
+        # (H = sigma): keep every node's gap 0.2 % of sigma away from it, 10x more than the
+        # differences move a gap (3e-4 of the pressure through K, and the contact stiffens it)
+        for _ in range(50):
+            physics = physics.replace(roughness=float(np.quantile(h, rng.uniform(0.3, 0.5))))
+            phys = physics.as_array()
+            step.surface_gap(grid.s, grid.influence, phys, yp, scalars, w, h)
+            c, h_set = scalars[step.LOAD_SCALE], step.node_block(scalars, step.H_SET)
+            law_gap = h if c == 1.0 else h_set + (h - h_set) / c  # where the law is read
+            if np.min(np.abs(law_gap - physics.roughness)) > 2e-3 * physics.roughness \
+                    and np.count_nonzero(step.node_block(scalars, step.PA)) >= 2:
+                break
+            gap(grid.s, grid.influence, x, p, w, h)
+        else:
+            raise AssertionError("no roughness found whose contact keeps clear of first touch")
     bh = 10.0 ** rng.uniform(-4.0, 0.0)
     hist = (x + grid.s + rng.uniform(0.0, 0.1, n), x + 0.01, v + 0.01)
     jac = np.empty((n + 2, n + 2))
-    yp = y.copy()
-    yp[:n] = p  # the Jacobian reads the pressures (a JFO slot's P is the floor)
     step.step_jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, phys,
-                       bh, yp, h, marks, cells, jac, np.empty((n, 3)))
+                       bh, yp, h, marks, cells, scalars, jac, np.empty((n, 3)))
     assert step.settled(marks)  # the Jacobian records the set it was built with
 
     # the mobility exp(-beta P) makes the residual's third derivatives large (a plain difference
     # was 7e-6 off at its step, converging to the Jacobian as step^2): Richardson extrapolation
     # of two steps cancels that term
     def differences(rel_step):
-        return _central_differences(lambda yy: _residual(grid, phys, bh, hist, yy, marks, cells),
-                                    y, p, rel_step)
+        return _central_differences(
+            lambda yy: _residual(grid, phys, bh, hist, yy, marks, cells, scalars), y, p, rel_step)
 
     fd = (4.0 * differences(1.5e-4) - differences(3e-4)) / 3.0
     scale = np.max(np.abs(jac), axis=1, keepdims=True)  # each row at its own scale

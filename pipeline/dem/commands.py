@@ -34,7 +34,8 @@ def solve_path(scene, vary: str, factors, accuracy: str = "standard", progress=N
     for k, s in enumerate(path):
         factor = s.v0 / scene.v0 if vary == "v0" else s.body1.radius / scene.body1.radius
         try:
-            results.append(run_scene(s, accuracy=accuracy, save_profiles=False))
+            results.append(run_scene(s, accuracy=accuracy, save_profiles=False,
+                                      sensitivity_solves=False))
         except SceneError as exc:
             skipped.append(f"{vary} x {factor:.3g}: {exc}")
         elapsed = time.perf_counter() - t0

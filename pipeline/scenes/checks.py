@@ -22,7 +22,7 @@ from .scene import Scene
 from .units import format_quantity
 
 __all__ = ["Check", "premise_checks", "outcome_checks", "THRESHOLDS", "model_reason",
-           "roughness_check", "combined_roughness", "cavitation_crosses", "cavitation_reason",
+           "roughness_check", "roughness_reason", "contact_switch", "combined_roughness", "cavitation_crosses", "cavitation_reason",
            "physics_label", "cavitation_label", "gas", "VISCOSITY_SWITCH", "DENSITY_SWITCH",
            "viscosity_switch", "density_switch", "density_rise", "viscosity_reason",
            "density_reason", "pressure_notes", "pressure_checks", "per_gpa",
@@ -145,8 +145,8 @@ def outcome_checks(scene: Scene, c, p_max: float, p_min: float) -> tuple[list[Ch
     elif p_cav is None and not gas(scene) and p_min < 0.0:
         notes.append(f"cavitation not checked: {scene.cavitation_pressure_source}; the film "
                      f"tension reaches {format_quantity(p_min, 'Pa')}")
-    rough = roughness_check(scene, c)
-    if rough is not None:
+    rough = roughness_check(scene, c) if c.physics.smooth else None
+    if rough is not None:  # the smooth film was kept (asperity_contact = "off")
         out.append(rough)
     lam = scene.fluid.mean_free_path
     if lam is not None and math.isfinite(c.h_m_x1):
@@ -182,7 +182,8 @@ def cavitation_label(physics) -> str:
     "no cavitation floor" (no floor, a pressure-dependent law on) or "jfo cavitation at
     Pi = ..."."""
     if physics.cavitation == "off":
-        return "classic film" if physics.classic else "no cavitation floor"
+        # the contact is reported on its own line (roughness_reason)
+        return "classic film" if physics.replace(roughness=0.0).classic else "no cavitation floor"
     return f"{physics.cavitation} cavitation at Pi = {physics.Pi:.3g}"
 
 
@@ -216,6 +217,8 @@ def physics_label(physics) -> str:
         parts.append(viscosity_label(physics))
     if physics.density_law != "constant":
         parts.append(density_label(physics))
+    if not physics.smooth:
+        parts.append(f"asperity contact at roughness {physics.roughness:.3g} x1")
     return ", ".join(parts)
 
 
@@ -423,10 +426,7 @@ def pressure_notes(scene: Scene, p_peak: float | None, base=None) -> list[str]:
 def combined_roughness(scene: Scene) -> float | None:
     """``sqrt(s1^2 + s2^2)`` of the bodies' rms roughness [m]; None when neither gives one (a body
     without a value counts as smooth)."""
-    values = [b.solid.roughness for b in (scene.body1, scene.body2)]
-    if all(v is None for v in values):
-        return None
-    return math.sqrt(sum(v * v for v in values if v is not None))
+    return scene.roughness_rms
 
 
 def roughness_check(scene: Scene, c) -> Check | None:
@@ -445,6 +445,44 @@ def roughness_check(scene: Scene, c) -> Check | None:
         f"{format_quantity(h_m, 'm')} of the smooth model (> {t:.3g}): the asperities touch "
         "before the film gets that thin, so contact mechanics, not the film, decides this "
         "collision (its restitution included)"))
+
+
+def contact_switch(scene: Scene, c) -> bool:
+    """True when the smooth solve ``c`` says the asperities decide (``roughness_check``) and the
+    contact can be modelled from the scene's start: the roughness lies inside the starting gap
+    ``x0`` (a rougher pair touches before the start: the smooth film is kept, and
+    ``roughness_reason`` says to start farther out)."""
+    sigma = combined_roughness(scene)
+    return bool(c.ok and roughness_check(scene, c) is not None and sigma < scene.x0)
+
+
+def roughness_reason(scene: Scene, physics, base_h_m, forced: bool) -> str:
+    """One sentence: whether the asperities' contact acts in ``physics`` and why (the rule:
+    switched on where the combined rms roughness exceeds ``THRESHOLDS["roughness"]`` of the
+    smooth film's closest approach ``base_h_m`` [m]), with the dry restitution it carries."""
+    sigma = combined_roughness(scene)
+    e_dry = f"; e_dry = {scene.e_dry:g} ({scene.e_dry_source})"
+    if not physics.smooth:
+        how = "forced on (asperity_contact = 'on')" if forced else (
+            f"switched on: rms roughness {format_quantity(sigma, 'm')} is "
+            f"{sigma / base_h_m:.3g} times the smooth film's closest approach "
+            f"{format_quantity(base_h_m, 'm')} (> {THRESHOLDS['roughness']:.3g})")
+        return (f"asperity contact {how}; asperity stiffness k = {physics.asperity_stiffness:.3g}"
+                f" (Greenwood-Williamson, docs/model.md){e_dry}")
+    if forced:
+        return "smooth surfaces (asperity_contact = 'off')"
+    if sigma is None:
+        return "smooth surfaces: neither body gives an rms roughness"
+    if base_h_m is None:
+        return "smooth surfaces: the smooth film was not solved"
+    if sigma >= scene.x0 and sigma > THRESHOLDS["roughness"] * base_h_m:
+        return (f"smooth surfaces kept: the rms roughness {format_quantity(sigma, 'm')} is not "
+                f"below the starting gap x0 = {format_quantity(scene.x0, 'm')}, so the asperities "
+                "touch before the modelled collision starts: start farther out (a larger x0 or "
+                "x0_over_a) to model the contact")
+    return (f"smooth surfaces: rms roughness {format_quantity(sigma, 'm')} is only "
+            f"{sigma / base_h_m:.3g} times the smooth film's closest approach "
+            f"(<= {THRESHOLDS['roughness']:.3g})")
 
 
 def _fmt_log(log_value: float) -> str:

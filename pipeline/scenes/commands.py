@@ -28,13 +28,18 @@ _FLAG_FIELDS = {
     "roelands_index": ("fluid", "roelands_index"), "roelands_pressure": ("fluid", "roelands_pressure"),
     "dowson_higginson_c1": ("fluid", "dowson_higginson_c1"),
     "dowson_higginson_c2": ("fluid", "dowson_higginson_c2"),
+    "asperity_contact": (None, "asperity_contact"), "e_dry": (None, "e_dry"),
 }
 _BODY_FLAGS = {"material": "material", "radius": "radius", "density": "density",
                "youngs_modulus": "youngs_modulus", "poisson_ratio": "poisson_ratio",
-               "yield_strength": "yield_strength"}
+               "yield_strength": "yield_strength", "roughness": "roughness"}
 for _n in (1, 2):
     for _flag, _key in _BODY_FLAGS.items():
         _FLAG_FIELDS[f"{_flag}{_n}"] = (f"body{_n}", _key)
+
+
+def _e(value):
+    return "-" if value is None else f"{value:.4f}"
 
 
 def _usage_error(msg):
@@ -201,11 +206,17 @@ def format_report(d: dict) -> str:
     lines.append(f"physics: {d['cavitation_reason']}")
     lines.append(f"viscosity: {d['viscosity_reason']}")
     lines.append(f"density: {d['density_reason']}")
+    lines.append(f"contact: {d['roughness_reason']}")
     if d["status"] != "ok":
         lines.append(f"solve FAILED ({d['status']}): {d['message']}")
     else:
         lines.append("results")
         lines += [f"  {k:<{width}}  {v}" for k, v in results]
+    if d["sensitivity"]:
+        lines.append(f"sensitivity (e_wet {_e(d['e_wet'])} as solved):")
+        lines += [f"  {label:<{width}}  e_wet {_e(r['e_wet'])}"
+                  + ("" if r["status"] == "ok" else f" ({r['status']})")
+                  for label, r in d["sensitivity"].items()]
     if d["warnings"]:
         lines.append(f"validity warnings ({len(d['warnings'])}):")
         lines += [f"  - [{w['check']}] {w['message']}" for w in d["warnings"]]
@@ -330,7 +341,7 @@ def cmd_paper_figures(args) -> int:
 
 def _build_scene(sub) -> None:
     from ..cli_shared import add_numerics_flags
-    from .scene import CAVITATION_CHOICES, DENSITY_CHOICES, VISCOSITY_CHOICES
+    from .scene import CAVITATION_CHOICES, DENSITY_CHOICES, ROUGHNESS_CHOICES, VISCOSITY_CHOICES
 
     p = sub.add_parser(
         "scene", description="Solve one collision given in physical units, check the model's premises, "
@@ -349,6 +360,8 @@ def _build_scene(sub) -> None:
                        help="Poisson ratio in (-1, 0.5]")
         g.add_argument(f"--yield-strength{n}", dest=f"yield_strength{n}", default=None,
                        help="yield strength (enables the plasticity check)")
+        g.add_argument(f"--roughness{n}", dest=f"roughness{n}", default=None,
+                       help="rms surface roughness, e.g. '0.3 um' (asperity contact)")
     p.add_argument("--wall", action="store_true", help="body2 is a plane wall (infinite radius and mass)")
     g = p.add_argument_group("fluid")
     g.add_argument("--fluid", default=None, help="named fluid (--list-materials)")
@@ -388,6 +401,15 @@ def _build_scene(sub) -> None:
                         "dowson-higginson where the fluid has its constants and the density "
                         "would rise by more than 1%% at the classic peak pressure), or forced "
                         "constant / dowson-higginson")
+    g = p.add_argument_group("contact of the solids")
+    g.add_argument("--asperity-contact", dest="asperity_contact", default=None,
+                   choices=ROUGHNESS_CHOICES,
+                   help="surface roughness as physics: auto (default: smooth, switched on where "
+                        "the combined rms roughness exceeds a third of the smooth film's closest "
+                        "approach), or forced on / off")
+    g.add_argument("--e-dry", dest="e_dry", default=None,
+                   help="dry coefficient of restitution of the pair, in (0, 1] (default 1: "
+                        "elastic; acts only where the asperities touch)")
     g = p.add_argument_group("approach")
     g.add_argument("--v0", default=None, help="approach speed, e.g. '10 cm/s'")
     g.add_argument("--x0", default=None, help="starting gap, e.g. '250 nm' (default 0.01 a)")

@@ -13,7 +13,7 @@ from solver.physics import Physics
 
 from .checks import (Check, cavitation_crosses, cavitation_reason, density_reason, density_switch,
                      model_reason, outcome_checks, premise_checks, pressure_checks, pressure_notes,
-                     viscosity_reason, viscosity_switch)
+                     contact_switch, roughness_reason, viscosity_reason, viscosity_switch)
 from .scene import Scene
 
 __all__ = ["SceneResult", "run_scene", "RESULT_KEYS", "check_solvable"]
@@ -23,7 +23,7 @@ RESULT_KEYS = (
     "title", "inputs", "reduced_radius_m", "reduced_mass_kg", "theta_per_Pa", "effective_modulus_Pa",
     "x0_m", "x0_over_a", "x1_m", *Physics.names(), "Re", "Re_x0_over_a", "sound_speed_m_per_s",
     "wave_parameter", "model", "model_reason", "cavitation_reason", "viscosity_reason",
-    "density_reason", "cavitation_pressure_Pa",
+    "density_reason", "roughness_reason", "e_dry_source", "cavitation_pressure_Pa",
     "status", "message", "v_r",
     "rebound_speed_m_per_s", "e_wet", "departure_speed_m_per_s", "closest_approach_nm", "closest_approach_on_approach_nm",
     "equilibrium_separation_m", "log10_equilibrium_separation_m", "escaped", "time_to_stop_s",
@@ -31,7 +31,7 @@ RESULT_KEYS = (
     "max_central_deformation_nm", "min_separation_nm", "dimple", "dimple_depth_nm",
     "cavitated", "cavity_radius_max_m", "void_volume_max_m3", "cavitation_onset_s",
     "viscosity_ratio_max_approach", "peak_viscosity_Pa_s", "central_gap_at_peak_pressure_nm",
-    "solidified", "warnings", "notes", "dimensionless",
+    "solidified", "sensitivity", "warnings", "notes", "dimensionless",
 )
 
 
@@ -48,6 +48,10 @@ class SceneResult:
     cavitation_reason: str = ""  # the film model used and why, one sentence with numbers
     viscosity_reason: str = ""  # the viscosity law used and why, likewise
     density_reason: str = ""  # the density law used and why, likewise
+    roughness_reason: str = ""  # whether the asperity contact acts and why, likewise
+    # the result without each piece of physics the scene switched on (and with the asperity
+    # stiffness 10x either way): {label: {"e_wet", "v_r", "status"}}
+    sensitivity: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         """All results (keys ``RESULT_KEYS``), SI with the unit in the key, non-finite as None."""
@@ -73,6 +77,7 @@ class SceneResult:
             "model": c.model, "model_reason": model_reason(s, c),
             "cavitation_reason": self.cavitation_reason,
             "viscosity_reason": self.viscosity_reason, "density_reason": self.density_reason,
+            "roughness_reason": self.roughness_reason, "e_dry_source": s.e_dry_source,
             "cavitation_pressure_Pa": s.cavitation_pressure,
             "status": c.status, "message": c.message,
             "v_r": num(c.v_r), "rebound_speed_m_per_s": num(c.v_r * s.v0),
@@ -102,6 +107,7 @@ class SceneResult:
             "peak_viscosity_Pa_s": num(c.viscosity_ratio_max_approach * s.fluid.viscosity),
             "central_gap_at_peak_pressure_nm": num(c.h_axis_at_peak_pressure_x1 * x1 * 1e9),
             "solidified": None if c.solidified is None else bool(c.solidified),
+            "sensitivity": self.sensitivity,
             "warnings": [w.as_dict() for w in self.warnings], "notes": list(self.notes),
             "dimensionless": c.to_dict(),
         }
@@ -115,7 +121,8 @@ def check_solvable(scene: Scene) -> Physics:
     return scene.physics()
 
 
-def run_scene(scene: Scene, accuracy: str = "standard", **overrides) -> SceneResult:
+def run_scene(scene: Scene, accuracy: str = "standard", sensitivity_solves: bool = True,
+              **overrides) -> SceneResult:
     """Solve a scene and check it.
 
     The scene's automatic switches (``cavitation``, ``viscosity_law``, ``density_law`` "auto",
@@ -134,6 +141,9 @@ def run_scene(scene: Scene, accuracy: str = "standard", **overrides) -> SceneRes
     scene : Scene
     accuracy : {"fast", "standard", "fine"}
         Solver preset.
+    sensitivity_solves : bool
+        Solve the scene again without each piece of physics it switched on (``sensitivity``);
+        False skips those solves (sweeps of scenes, exports).
     **overrides
         Numerical settings passed to ``solver.collide``. Profiles are not saved unless
         ``save_profiles=True`` (only the figures need them).
@@ -151,10 +161,11 @@ def run_scene(scene: Scene, accuracy: str = "standard", **overrides) -> SceneRes
     auto_cav = scene.cavitation == "auto"
     auto_visc = scene.viscosity_law == "auto"
     auto_dens = scene.density_law == "auto"
+    auto_rough = scene.asperity_contact == "auto"
     # the automatic switches start from the classic film (docs/scenes.md, "Cavitation",
-    # "Pressure-dependent viscosity and density"), with what the scene forces
+    # "Pressure-dependent viscosity and density", "Surface roughness"), with what the scene forces
     base = scene.physics("off" if auto_cav else None, "constant" if auto_visc else None,
-                         "constant" if auto_dens else None)
+                         "constant" if auto_dens else None, "off" if auto_rough else None)
     overrides = {k: v for k, v in overrides.items() if v is not None}
     overrides.setdefault("save_profiles", False)
     c = collide(base, accuracy=accuracy, **overrides)
@@ -162,10 +173,12 @@ def run_scene(scene: Scene, accuracy: str = "standard", **overrides) -> SceneRes
     p_star = scene.pressure_scale
     base_p_min = c.p_min * p_star if c.ok else None
     base_p_max = c.p_max * p_star if c.ok else None
+    base_h_m = c.h_m_x1 * scene.x1 if c.ok else None  # the base film's closest approach [m]
     final = scene.physics(
         ("auto" if cavitation_crosses(scene, base_p_min) else "off") if auto_cav else None,
         ("auto" if viscosity_switch(scene, base_p_max) else "constant") if auto_visc else None,
-        ("auto" if density_switch(scene, base_p_max) else "constant") if auto_dens else None)
+        ("auto" if density_switch(scene, base_p_max) else "constant") if auto_dens else None,
+        ("on" if contact_switch(scene, c) else "off") if auto_rough else None)
     if final != base:
         c = collide(final, accuracy=accuracy, **overrides)
     reasons = {
@@ -175,7 +188,9 @@ def run_scene(scene: Scene, accuracy: str = "standard", **overrides) -> SceneRes
                                              base=base),
         "density_reason": density_reason(scene, c.physics, base_p_max, forced=not auto_dens,
                                          base=base),
+        "roughness_reason": roughness_reason(scene, c.physics, base_h_m, forced=not auto_rough),
     }
+    sensitivity = _sensitivity(c, base, accuracy, overrides) if sensitivity_solves else {}
     warnings = premise_checks(scene)
     notes = []
     p_max = p_min = math.nan
@@ -189,4 +204,38 @@ def run_scene(scene: Scene, accuracy: str = "standard", **overrides) -> SceneRes
     if scene.sound_speed is None:
         notes.append("elastic-wave check skipped: no density known for either solid")
     return SceneResult(scene=scene, collision=c, warnings=warnings, notes=notes,
-                       peak_pressure=p_max, min_pressure=p_min, **reasons)
+                       peak_pressure=p_max, min_pressure=p_min, sensitivity=sensitivity,
+                       **reasons)
+
+
+# what switching one piece of physics off means in the physics groups
+_PIECES = (
+    ("without cavitation", lambda p: p.cavitation != "off", dict(cavitation="off")),
+    ("without pressure-dependent viscosity", lambda p: p.viscosity_law != "constant",
+     dict(viscosity_law="constant", beta=0.0, viscosity_table="")),
+    ("without pressure-dependent density", lambda p: p.density_law != "constant",
+     dict(density_law="constant")),
+    ("without roughness", lambda p: not p.smooth, dict(roughness=0.0)),
+)
+
+
+def _sensitivity(c, base, accuracy, overrides) -> dict:
+    """The scene's result without each piece of physics it switched on itself (one solve each),
+    and with a 10x stiffer and softer asperity layer (its stiffness is the least known input):
+    the spread a user should see beside the one number (docs/scenes.md, "Sensitivity")."""
+    from solver import collide
+
+    final = c.physics
+    variants = {}
+    for label, on, off in _PIECES:
+        if on(final) and not on(base):
+            variants[label] = final.replace(**off)
+    if not final.smooth:
+        for factor, label in ((10.0, "asperities 10x stiffer"), (0.1, "asperities 10x softer")):
+            variants[label] = final.replace(asperity_stiffness=final.asperity_stiffness * factor)
+    out = {}
+    for label, physics in variants.items():
+        r = collide(physics, accuracy=accuracy, **overrides)
+        out[label] = {"e_wet": float(r.e_wet) if r.ok else None,
+                      "v_r": float(r.v_r) if r.ok else None, "status": r.status}
+    return out

@@ -37,10 +37,19 @@ from .materials import FluidProps, Solid
 from .units import format_quantity
 
 __all__ = ["SceneError", "Body", "Scene", "STANDARD_ATMOSPHERE", "CAVITATION_CHOICES",
+           "ROUGHNESS_CHOICES",
            "VISCOSITY_CHOICES", "DENSITY_CHOICES"]
 
 STANDARD_ATMOSPHERE = 101325.0  # Pa: the default ambient pressure of a scene (a liquid at sea level)
 CAVITATION_CHOICES = Physics.group("cavitation").choices
+ROUGHNESS_CHOICES = ("auto", "on", "off")
+# The asperities' stiffness where the materials give no asperity data (docs/model.md, "Surface
+# roughness"): the Greenwood-Williamson roughness parameter N sigma beta, 0.03-0.05 for most
+# engineering surfaces (Greenwood & Williamson 1966), its mid value; and the summit radius
+# beta = sigma / SUMMIT_ASPECT, an assumed aspect of the summits (not measured for these
+# surfaces; the report shows what a 10x stiffer or softer layer changes)
+GW_ROUGHNESS_PARAMETER = 0.04
+SUMMIT_ASPECT = 0.01
 # a scene's viscosity and density laws: "auto" is the automatic switch (run.run_scene), the
 # others are forced; the laws are the solver's (solver.physics.codes), but a table, which a
 # fluid does not ship
@@ -100,6 +109,12 @@ class Scene:
     # "roelands"; the density law likewise: "auto", "constant", "dowson-higginson"
     viscosity_law: str = "auto"
     density_law: str = "auto"
+    # surface roughness as physics: "auto" (smooth, switched on where the combined rms roughness
+    # is not small against the smooth film's closest approach: run.run_scene), "on" or "off"
+    asperity_contact: str = "auto"
+    # the pair's dry coefficient of restitution (acts only where the asperities touch); 1: unknown
+    e_dry: float = 1.0
+    e_dry_source: str = ""  # where it came from, for the report
 
     def __post_init__(self):
         # a forced law the fluid has no constants for is refused here, before anything is solved
@@ -220,8 +235,30 @@ class Scene:
                              "= '1.7 1/GPa')")
         return law
 
+    @property
+    def roughness_rms(self) -> float | None:
+        """The combined rms roughness ``sqrt(s1^2 + s2^2)`` of the bodies [m]; None when neither
+        gives one (a body without a value counts as smooth)."""
+        values = [b.solid.roughness for b in (self.body1, self.body2)]
+        if all(v is None for v in values):
+            return None
+        return math.sqrt(sum(v * v for v in values if v is not None))
+
+    @property
+    def asperity_stiffness(self) -> float | None:
+        """The dimensionless asperity stiffness ``k`` of the rough surfaces (docs/model.md,
+        "Surface roughness"): ``(16/(3 pi)) (N sigma beta) sqrt(a/beta) x1/sigma`` with the
+        Greenwood-Williamson parameter ``N sigma beta = GW_ROUGHNESS_PARAMETER`` and the summit
+        radius ``beta = sigma / SUMMIT_ASPECT``; None without a roughness."""
+        sigma = self.roughness_rms
+        if not sigma:
+            return None
+        beta = sigma / SUMMIT_ASPECT
+        return (16.0 / (3.0 * math.pi)) * GW_ROUGHNESS_PARAMETER \
+            * math.sqrt(self.reduced_radius / beta) * self.x1 / sigma
+
     def physics(self, cavitation: str | None = None, viscosity_law: str | None = None,
-                density_law: str | None = None) -> Physics:
+                density_law: str | None = None, asperity_contact: str | None = None) -> Physics:
         """The scene's dimensionless groups: the one place a scene becomes solver input.
 
         ``cavitation`` is the model (default: the scene's own choice); "auto" is the solver's
@@ -234,6 +271,11 @@ class Scene:
         (finite) and ignored by the solver; a law's constants (``beta = alpha p*``, ``roelands_Z``,
         ``roelands_PR = p_R / p*``, ``dh_c1 = c1 p*``, ``dh_c2 = c2 p*``) are passed only with
         the law that uses them (with the constant viscosity ``beta`` is the solver's 0).
+
+        ``asperity_contact`` "on" passes the bodies' combined rms roughness over ``x1`` with its
+        asperity stiffness (``asperity_stiffness``); "off" and "auto" the smooth surfaces
+        (``run.run_scene`` decides "auto"). ``e_dry`` is always passed (it acts only where the
+        asperities touch).
 
         Raises SceneError when a group is outside what the solver accepts (the Physics' own
         range check; for a group above its range the message says what to change in the
@@ -261,6 +303,22 @@ class Scene:
         if dens != "constant":
             values["dh_c1"] = f.dowson_higginson_c1 * p_star
             values["dh_c2"] = f.dowson_higginson_c2 * p_star
+        values["e_dry"] = self.e_dry
+        rough = self.asperity_contact if asperity_contact is None else asperity_contact
+        if rough not in ROUGHNESS_CHOICES:
+            raise SceneError(f"asperity_contact must be one of {list(ROUGHNESS_CHOICES)}, got "
+                             f"{rough!r}")
+        if rough == "on":
+            sigma = self.roughness_rms
+            if not sigma:
+                raise SceneError("asperity_contact = 'on' needs the bodies' rms roughness: give "
+                                 "solid.roughness (e.g. '0.3 um') for at least one body")
+            if sigma >= self.x0:
+                raise SceneError(f"the combined rms roughness {format_quantity(sigma, 'm')} is "
+                                 f"not below the starting gap x0 = {format_quantity(self.x0, 'm')}"
+                                 ": start farther out (a larger x0 or x0_over_a)")
+            values["roughness"] = sigma / self.x1
+            values["asperity_stiffness"] = self.asperity_stiffness
         try:
             return Physics(**values)
         except ValueError as exc:

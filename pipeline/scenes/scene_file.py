@@ -10,8 +10,8 @@ import math
 
 from .materials import (FLUID_FIELDS, PRESSURE_FIELDS, SOLID_FIELDS, FluidProps, MaterialTable,
                         Solid, check_pairs)
-from .scene import (CAVITATION_CHOICES, DENSITY_CHOICES, STANDARD_ATMOSPHERE, VISCOSITY_CHOICES,
-                    Body, Scene, SceneError, _reduced)
+from .scene import (CAVITATION_CHOICES, DENSITY_CHOICES, ROUGHNESS_CHOICES, STANDARD_ATMOSPHERE,
+                    VISCOSITY_CHOICES, Body, Scene, SceneError, _reduced)
 from .units import FieldSpec, format_quantity, to_si
 
 __all__ = ["scene_from_dict", "DEFAULT_X0_OVER_A"]
@@ -25,7 +25,7 @@ _RATIO = FieldSpec("", "0.01")
 _PRESSURE = FieldSpec("[pressure]", "101.325 kPa", si_unit="Pa")
 
 _TOP_KEYS = ("title", "v0", "x0", "x0_over_a", "cavitation", "viscosity_law", "density_law",
-             "body1", "body2", "fluid", "materials", "fluids")
+             "asperity_contact", "e_dry", "body1", "body2", "fluid", "materials", "fluids")
 _BODY_KEYS = ("material", "radius", "wall", *SOLID_FIELDS)
 _FLUID_KEYS = ("name", "ambient_pressure", "cavitation_pressure", "tensile_strength",
                *FLUID_FIELDS)
@@ -226,6 +226,18 @@ def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
     title = data.get("title", "")
     if not isinstance(title, str):
         raise SceneError(f"title must be a string, got {title!r}")
+    contact = data.get("asperity_contact", "auto")
+    if contact not in ROUGHNESS_CHOICES:
+        raise SceneError(f"asperity_contact must be one of {list(ROUGHNESS_CHOICES)}, got "
+                         f"{contact!r}")
+    e_dry, e_dry_source = 1.0, "not given: elastic solids (1)"
+    if "e_dry" in data:
+        e_dry = to_si(data["e_dry"], _RATIO, "e_dry")
+        if not 0.0 < e_dry <= 1.0:
+            raise SceneError(f"e_dry = {data['e_dry']!r} is outside its valid range (0, 1] (the "
+                             "pair's dry coefficient of restitution)")
+        e_dry_source = "the scene's e_dry"
     return Scene(title=title, body1=body1, body2=body2, fluid=fluid, v0=v0, x0=x0,
                  ambient_pressure=ambient, cavitation_pressure=p_cav,
-                 cavitation_pressure_source=how, cavitation=cavitation, **laws)
+                 cavitation_pressure_source=how, cavitation=cavitation, **laws,
+                 asperity_contact=contact, e_dry=e_dry, e_dry_source=e_dry_source)

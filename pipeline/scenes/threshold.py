@@ -41,7 +41,8 @@ def _sticks(scene, vary, factor, accuracy):
 
     from .run import run_scene
 
-    r = run_scene(scene_path(scene, vary, [factor])[0], accuracy=accuracy, save_profiles=False)
+    r = run_scene(scene_path(scene, vary, [factor])[0], accuracy=accuracy, save_profiles=False,
+                   sensitivity_solves=False)
     if not r.collision.ok:
         raise ValueError(f"the solve at {vary} x {factor:.4g} failed ({r.collision.status}): "
                          f"{r.collision.message}")

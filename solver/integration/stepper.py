@@ -36,7 +36,7 @@ import numpy as np
 
 from .._jit import jit
 from ..model import step as model
-from ..model.film import energy_rates, face_fluxes, film_force, gap
+from ..model.film import face_fluxes, gap
 from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
 from .events import reached
 from .linalg import MAX_SLOTS, lowrank_prepare, lowrank_solve, lu_factor, matvec
@@ -142,13 +142,13 @@ def _factorisation(m):
 
 
 @jit
-def _factorise(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, fac, dres_dh,
-               counters):
+def _factorise(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, scalars, fac,
+               dres_dh, counters):
     """A fresh Jacobian at the iterate ``y`` (gap ``h``), LU-factorised in place; counted. False
     if the matrix is singular."""
     jac, piv, base, rank = fac[0], fac[1], fac[2], fac[10]
-    model.step_jacobian(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, jac,
-                        dres_dh)
+    model.step_jacobian(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, scalars,
+                        jac, dres_dh)
     model.mark_factorised(marks)
     if model.has_active_set(phys):  # kept for low-rank updates at a change of the set
         base[:, :] = jac
@@ -159,16 +159,16 @@ def _factorise(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells,
 
 
 @jit
-def _update_for_set(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, fac,
-                    dres_dh, counters):
+def _update_for_set(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, scalars,
+                    fac, dres_dh, counters):
     """After a change of the active set: the factorised matrix with the rows and columns of the
     slots that changed since it was factorised replaced by a fresh Jacobian's
     (linalg.lowrank_prepare), instead of a new factorisation; the other rows keep the factorised
     values (a chord iteration). False when more than ``MAX_SLOTS`` slots changed or the update is
     singular: then the caller factorises afresh."""
     jac, piv, base, fresh, u, v, z, cap, cpiv, slots, rank = fac[:11]
-    model.step_jacobian(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, fresh,
-                        dres_dh)
+    model.step_jacobian(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, scalars,
+                        fresh, dres_dh)
     counters[JACOBIANS] += 1
     k = model.changed_slots(marks, slots)
     if k > MAX_SLOTS:
@@ -209,9 +209,9 @@ def _newton(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist
     m = n + 2
     fresh = False
     if (not lu_valid) or abs(bh / bh_lu - 1.0) > 0.3:
-        gap(s, influence, y[n], y[:n], w, h)
+        model.surface_gap(s, influence, phys, y, scalars, w, h)
         lu_valid = _factorise(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells,
-                              fac, dres_dh, counters)
+                              scalars, fac, dres_dh, counters)
         bh_lu = bh
         fresh = True
         if not lu_valid:
@@ -223,7 +223,7 @@ def _newton(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist
     norm_prev = 0.0
     first = True
     set_changes = 0
-    gap(s, influence, y[n], y[:n], w, h)
+    model.surface_gap(s, influence, phys, y, scalars, w, h)
     it = 0
     while it < MAX_NEWTON or (pending and it == MAX_NEWTON):
         it += 1
@@ -234,7 +234,7 @@ def _newton(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist
         if bad:
             break
         model.step_residual(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist,
-                            v_hist, y, marks, cells, it == 1 or pending, q, w, h, res)
+                            v_hist, y, marks, cells, scalars, it == 1 or pending, q, w, h, res)
         if active_set:
             same = model.settled(marks)
             if pending and same:
@@ -248,9 +248,9 @@ def _newton(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist
                 first = True
                 it = 1
                 if not _update_for_set(s, s_face, area, weight, influence, phys, bh, y, h, marks,
-                                       cells, fac, dres_dh, counters):
+                                       cells, scalars, fac, dres_dh, counters):
                     lu_valid = _factorise(s, s_face, area, weight, influence, phys, bh, y, h,
-                                          marks, cells, fac, dres_dh, counters)
+                                          marks, cells, scalars, fac, dres_dh, counters)
                     bh_lu = bh
                     fresh = True
                     if not lu_valid:
@@ -264,7 +264,7 @@ def _newton(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist
         counters[NEWTON] += 1
         for i in range(n):
             dh[i] = h[i]
-        gap(s, influence, y[n], y[:n], w, h)
+        model.surface_gap(s, influence, phys, y, scalars, w, h)
         for i in range(n):
             dh[i] = h[i] - dh[i]
         norm = _norm(res[:n], res[n], res[n + 1], dh, y[:n], y[n], y[n + 1], h, rtol, p_abs)
@@ -333,7 +333,7 @@ def _record(row, t, s, area, weight, y, w, h, strain, dissipated, marks, cells, 
     row[_T] = t
     row[_X] = x
     row[_V] = v
-    row[_F] = film_force(weight, y[:n])
+    row[_F] = model.total_force(weight, y, scalars, phys)
     row[_W0] = w[0]
     row[_H_MIN] = h[imin]
     row[_R_H_MIN] = np.sqrt(2.0 * s[imin])
@@ -344,8 +344,8 @@ def _record(row, t, s, area, weight, y, w, h, strain, dissipated, marks, cells, 
     row[_W_ABSMAX] = wmax
     row[_P_MAX] = pmax
     row[_P_MIN] = pmin
-    r_event = model.record(row, s, area, y[:n], h, pmax, pmin, marks, cells, scalars, phys,
-                           PRESSURE_SCALE)
+    r_event = model.record(row, s, area, weight, y[:n], h, pmax, pmin, marks, cells, scalars,
+                           phys, PRESSURE_SCALE)
     return wmax, r_event
 
 
@@ -492,7 +492,10 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
     # initial row
     face_fluxes(s, s_face, y0[:n], h, phys, q)
     marks, cells, scalars = model.new_state(q)
-    strain, diss_rate = energy_rates(s, s_face, weight, phys, x_init, y0[:n], w, h, q)
+    model.surface_gap(s, influence, phys, y0, scalars, w, h)  # with a contact load, if any
+    h0[:] = h
+    h1[:] = h
+    strain, diss_rate = model.energies(s, s_face, weight, phys, y0, w, h, q, scalars)
     dissipated = dissipated_init
     n_rows = 0
 
@@ -529,7 +532,7 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
         if not accepted:
             # record the last accepted state with the failure status, then stop; w and h hold
             # the rejected trial, so recompute them
-            gap(s, influence, y0[n], y0[:n], w, h)
+            model.surface_gap(s, influence, phys, y0, scalars, w, h)
             continue
 
         # ---- shift history -------------------------------------------------------------------
@@ -545,9 +548,9 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
         counters[STEPS] += 1
 
         face_fluxes(s, s_face, y0[:n], h, phys, q)
-        strain_new, diss_new = energy_rates(s, s_face, weight, phys, y0[n], y0[:n], w, h, q)
+        model.accept(s, area, weight, y0, w, h0, h1, q, dt, marks, cells, scalars, phys)
+        strain_new, diss_new = model.energies(s, s_face, weight, phys, y0, w, h, q, scalars)
         dissipated += 0.5 * (diss_rate + diss_new) * dt
-        model.accept(area, h0, h1, q, dt, marks, cells, scalars, phys)
         strain = strain_new
         diss_rate = diss_new
         dt *= _step_factor(err)

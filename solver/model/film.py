@@ -326,12 +326,16 @@ def constrain(p, res, active, phys):
 
 
 @jit
-def jacobian(s, s_face, area, weight, influence, phys, bh, p, theta, h, active, jac, dres_dh):
+def jacobian(s, s_face, area, weight, influence, phys, bh, p, theta, h, active, jac, dres_dh,
+             dh_dx, force_dp, force_dx):
     """Jacobian of ``residual`` with respect to ``(P, X, V)`` into ``jac`` (N+2, N+2), from the
     terms' partial derivatives.
 
     The cell rows depend on the gap at three nodes, and the gap on every pressure through ``K``:
-    ``J = (dres/dH) K + dres/dP``, with ``dres_i/dH_i`` the content's ``theta_i``. Cavitated cells
+    ``J = (dres/dH) K + dres/dP``, with ``dres_i/dH_i`` the content's ``theta_i``. ``influence``
+    is ``dH/dP`` (``K``, or a rough film's, model/contact.py), ``dh_dx`` is ``dH/dX`` (ones
+    without contact), ``force_dp`` and ``force_dx`` the force's derivatives (``weight`` and 0
+    without contact). Cavitated cells
     (``active``, N-1 entries): under the Reynolds condition their rows are their constraint's;
     under JFO their rows stay the content rows and their slot is ``theta_i`` (``P_i = -Pi``
     fixed), so the slot's column is ``d row_i / d theta_i = H_i e_i``. ``dres_dh`` (N, 3) is work
@@ -394,14 +398,15 @@ def jacobian(s, s_face, area, weight, influence, phys, bh, p, theta, h, active, 
         for k in range(lo, hi_ + 1):
             d = dres_dh[i, k - i + 1]
             if d != 0.0:
-                dx += d
+                dx += d * dh_dx[k]
                 for j in range(n):
                     jac[i, j] += d * influence[k, j]
         jac[i, n] = dx
     jac[n, n] = 1.0
     jac[n, n + 1] = bh
     for j in range(n):
-        jac[n + 1, j] = bh * weight[j] / (3.0 * phys[ST])
+        jac[n + 1, j] = bh * force_dp[j] / (3.0 * phys[ST])
+    jac[n + 1, n] = bh * force_dx / (3.0 * phys[ST])
     jac[n + 1, n + 1] = 1.0
     if jfo:  # a cavitated cell's slot is theta (P = -Pi fixed): its column is d row_i/d theta_i
         for i in range(n - 1):

@@ -26,6 +26,7 @@ from scipy import optimize, special
 
 from ..integration.events import RELAXED
 from ..physics import parse_table
+from . import contact
 
 __all__ = [
     "I0",
@@ -216,6 +217,21 @@ def law_onset_separation(x_start, stokes, slope, tol):
         return None
     u = optimize.brentq(log_ratio, 0.0, u_peak, xtol=1e-14, rtol=1e-14)
     return x_start * math.exp(-u)
+
+
+def contact_onset_separation(x_start, stokes, roughness):
+    """Where the rigid approach from ``(x_start, 1)`` must hand over before the asperities touch
+    (model/contact.py): ``contact.CONTACT_MARGIN`` times the roughness, where the rigid gap (at least
+    ``X``) is still clear of them; ``x_start`` when that lies beyond the start, ``None`` without
+    roughness or when the spheres come to rest (at ``x_start exp(-St)``) before it."""
+    if roughness <= 0.0:
+        return None
+    x_c = contact.CONTACT_MARGIN * roughness
+    if x_c >= x_start:
+        return x_start
+    if math.log(x_start / x_c) >= stokes:
+        return None
+    return x_c
 
 
 def approach_peaks(x_start, stokes, x_end):

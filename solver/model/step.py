@@ -31,9 +31,11 @@ import numpy as np
 
 from .._jit import jit
 from ..observables import SERIES_INDEX
-from ..physics import CAVITATION, DENSITY, PI, ST
-from .film import (JFO, NO_FLOOR, cavity_edge, cell_content, compression_work, constrain, gap,
-                   jacobian, jfo_void, residual, update_cavity, update_cavity_jfo, void_work)
+from ..physics import CAVITATION, DENSITY, E_DRY, PI, ROUGHNESS, ST
+from .contact import asperity_work, contact_derivatives, contact_gap, holds_contact
+from .film import (JFO, NO_FLOOR, cavity_edge, cell_content, compression_work, constrain,
+                   energy_rates, film_force, gap, jacobian, jfo_void, residual, strain_energy,
+                   update_cavity, update_cavity_jfo, void_work)
 from .liquid import CONSTANT, isoviscous, kirchhoff_difference
 
 # rows of ``marks`` (bool, one entry per cell): the cavitated cells of the current iterate, of the
@@ -46,11 +48,20 @@ ACTIVE, ACTIVE_LU, ACTIVE0, ACTIVE_BASE = 0, 1, 2, 3
 # of the last accepted state
 THETA, THETA0, THETA1, DTHETA, H_ONSET, Q_PREV = 0, 1, 2, 3, 4, 5
 # entries of ``scalars``: the work against the floor so far, the absolute pressure error scale,
-# the largest pressure seen, the accepted state's cavity radius
-WORKED, P_ABS, P_SEEN, R_EDGE = 0, 1, 2, 3
+# the largest pressure seen, the accepted state's cavity radius; for a rough film the solids'
+# unloading scale c (model/contact.py: 1 while they load, e_dry^2 once they unload), whether
+# they touched on approach, the energy lost in the solids; then blocks of one entry per node:
+# the contact pressure p_a of the last gap computed, the load T_set, the permanent set
+# (1 - c) K T_set and the gap H_set where the solids began to unload
+WORKED, P_ABS, P_SEEN, R_EDGE, LOAD_SCALE, TOUCHED, SOLID_LOST = 0, 1, 2, 3, 4, 5, 6
+NODE_BLOCKS = 7
+PA, T_SET, W_SET, H_SET = 0, 1, 2, 3
+N_BLOCKS = 4
 
 _R_CAV, _V_VOID = SERIES_INDEX["cavity_radius"], SERIES_INDEX["void_volume"]
 _W_VOID, _E_C = SERIES_INDEX["void_work"], SERIES_INDEX["E_c"]
+_E_A, _LOST, _F_A = SERIES_INDEX["E_a"], SERIES_INDEX["solid_loss"], SERIES_INDEX["F_contact"]
+_V = SERIES_INDEX["V"]
 
 
 @jit
@@ -64,7 +75,8 @@ def new_state(q):
     cells[THETA0, :] = 1.0
     cells[THETA1, :] = 1.0
     cells[Q_PREV, :] = q
-    scalars = np.zeros(4)
+    scalars = np.zeros(NODE_BLOCKS + N_BLOCKS * (cells_n + 1))
+    scalars[LOAD_SCALE] = 1.0
     # Absolute part of the pressure error scale. With a floor the film carries almost no
     # pressure once it has cavitated (|P| ~ Pi over the whole rebound), and a scale relative to
     # the instantaneous pressure made the steps collapse to 1e-9 where the last full cells at the
@@ -80,6 +92,59 @@ def new_state(q):
 def has_active_set(phys):
     """Whether the film has a constraint decided cell by cell (a cavitation floor)."""
     return phys[CAVITATION] != NO_FLOOR
+
+
+@jit
+def rough(phys):
+    """Whether the surfaces are rough (asperity contact, model/contact.py)."""
+    return phys[ROUGHNESS] != 0.0
+
+
+@jit
+def node_block(scalars, k):
+    """Block ``k`` (``PA``, ``T_SET``, ``W_SET``, ``H_SET``) of ``scalars``: one entry per
+    node."""
+    n = (scalars.size - NODE_BLOCKS) // N_BLOCKS
+    return scalars[NODE_BLOCKS + k * n:NODE_BLOCKS + (k + 1) * n]
+
+
+@jit
+def surface_gap(s, influence, phys, y, scalars, w, h):
+    """The deflection ``W`` and gap ``H`` of the iterate ``y`` into ``w``, ``h``: ``W = K P``
+    (film.gap), and for a rough film with the contact pressure it implies (contact.contact_gap,
+    from the gap ``h`` holds; a contact solve that fails leaves ``h`` NaN, which the loop treats
+    as a failed iterate)."""
+    n = s.size
+    if not rough(phys):
+        gap(s, influence, y[n], y[:n], w, h)
+        return
+    if not contact_gap(s, influence, y[n], y[:n], scalars[LOAD_SCALE], node_block(scalars, T_SET),
+                       node_block(scalars, H_SET), phys, node_block(scalars, PA), w, h):
+        h[:] = np.nan
+
+
+@jit
+def total_force(weight, y, scalars, phys):
+    """``Int (P + p_a) R dR``, the force on the spheres (film.film_force), with the contact
+    pressure of the last ``surface_gap``."""
+    n = weight.size
+    force = film_force(weight, y[:n])
+    if rough(phys):
+        force += film_force(weight, node_block(scalars, PA))
+    return force
+
+
+@jit
+def energies(s, s_face, weight, phys, y, w, h, q, scalars):
+    """Strain energy and dissipation rate of the state (film.energy_rates): for a rough film the
+    strain energy of the total load ``P + p_a`` on the elastic part of ``W`` (less the permanent
+    set)."""
+    n = s.size
+    strain, diss = energy_rates(s, s_face, weight, phys, y[n], y[:n], w, h, q)
+    if rough(phys):
+        pa, w_set = node_block(scalars, PA), node_block(scalars, W_SET)
+        strain = strain_energy(weight, s[n - 1], y[:n] + pa, w - w_set, phys)
+    return strain, diss
 
 
 @jit
@@ -127,25 +192,31 @@ def start_attempt(y, marks, cells, phys):
 
 @jit
 def step_residual(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist, y,
-                  marks, cells, decide, q, w, h, res):
+                  marks, cells, scalars, decide, q, w, h, res):
     """The scaled residual of the step at the iterate ``y`` (``film.residual``) into ``res``;
     where ``decide``, the active set is decided first from it (a JFO switch moves slots to the
     floor, so the gap ``w, h`` and the rows follow); the rows of a Reynolds cavity are replaced by
-    their constraint. ``q`` receives the face fluxes."""
+    their constraint. ``q`` receives the face fluxes. ``w``, ``h`` (and a rough film's contact
+    pressure) must be ``surface_gap``'s of ``y``."""
     n = s.size
     p = y[:n]
     theta, active = cells[THETA], marks[ACTIVE]
     residual(s, s_face, area, weight, phys, bh, c_hist, x_hist, v_hist, y[n], y[n + 1], p, theta,
              h, q, res)
+    if rough(phys):  # the contact load moves the spheres too
+        res[n + 1] += bh * film_force(weight, node_block(scalars, PA)) / (3.0 * phys[ST])
     if not has_active_set(phys):
         return
     jfo = phys[CAVITATION] == JFO
     if decide:
         if jfo:
             if update_cavity_jfo(p, theta, phys, active):
-                gap(s, influence, y[n], p, w, h)
+                surface_gap(s, influence, phys, y, scalars, w, h)
                 residual(s, s_face, area, weight, phys, bh, c_hist, x_hist, v_hist, y[n],
                          y[n + 1], p, theta, h, q, res)
+                if rough(phys):
+                    res[n + 1] += bh * film_force(weight, node_block(scalars, PA)) \
+                        / (3.0 * phys[ST])
         else:
             update_cavity(p, res, phys, active)
     if not jfo:
@@ -163,13 +234,23 @@ def settled(marks):
 
 
 @jit
-def step_jacobian(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, jac,
+def step_jacobian(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, scalars, jac,
                   dres_dh):
     """The Jacobian of ``step_residual`` at ``y`` into ``jac`` (``film.jacobian``), recording the
-    active set it is built with."""
+    active set it is built with; a rough film's gap and force derivatives come from its contact
+    (contact.contact_derivatives)."""
     n = s.size
-    jacobian(s, s_face, area, weight, influence, phys, bh, y[:n], cells[THETA], h, marks[ACTIVE],
-             jac, dres_dh)
+    if rough(phys):
+        k_eff = np.empty((n, n))
+        dh_dx = np.empty(n)
+        force_dp = np.empty(n)
+        force_dx = contact_derivatives(influence, weight, h, scalars[LOAD_SCALE],
+                                       node_block(scalars, H_SET), phys, k_eff, dh_dx, force_dp)
+        jacobian(s, s_face, area, weight, k_eff, phys, bh, y[:n], cells[THETA], h,
+                 marks[ACTIVE], jac, dres_dh, dh_dx, force_dp, force_dx)
+    else:
+        jacobian(s, s_face, area, weight, influence, phys, bh, y[:n], cells[THETA], h,
+                 marks[ACTIVE], jac, dres_dh, np.ones(n), weight, 0.0)
     marks[ACTIVE_LU, :] = marks[ACTIVE]
 
 
@@ -268,19 +349,30 @@ def step_error(y, y_pred, err_fac, marks, scalars, phys, perr, dh, scale):
 
 
 @jit
-def record(row, s, area, p, h, pmax, pmin, marks, cells, scalars, phys, floor_fraction):
+def record(row, s, area, weight, p, h, pmax, pmin, marks, cells, scalars, phys, floor_fraction):
     """The model's columns of the series row of an accepted state (cavity radius and void volume,
-    work against the floor, compression energy), and the error scale's update from the largest
+    work against the floor, compression energy; contact force, asperity energy and the energy
+    lost in the solids), and the error scale's update from the largest
     pressure seen (``floor_fraction`` of it, from the first cavity on). Returns the radius the
     terminal events see: the cavity's, tiny but positive for a JFO cavity of axis cells alone
-    (whose edge radius is zero)."""
+    (whose edge radius is zero), and positive while a rough film holds its contact
+    (contact.holds_contact)."""
     theta0 = cells[THETA0]
     row[_E_C] = compression_work(area, p, h, theta0, phys)
     row[_W_VOID] = scalars[WORKED]
+    row[_F_A] = 0.0
+    row[_E_A] = 0.0
+    row[_LOST] = scalars[SOLID_LOST]
+    held = False  # a rough film near contact holds the coupled phase as a cavity does
+    if rough(phys):
+        row[_F_A] = film_force(weight, node_block(scalars, PA))
+        row[_E_A] = asperity_work(weight, h, scalars[LOAD_SCALE], node_block(scalars, H_SET),
+                                  phys)
+        held = holds_contact(h, row[_V], phys)
     if not has_active_set(phys):  # no cavity ever
         row[_R_CAV] = 0.0
         row[_V_VOID] = 0.0
-        return 0.0
+        return 1e-300 if held else 0.0
     active0, h_onset = marks[ACTIVE0], cells[H_ONSET]
     r_cav = cavity_edge(s, p, active0, phys)
     jfo = phys[CAVITATION] == JFO
@@ -297,7 +389,7 @@ def record(row, s, area, p, h, pmax, pmin, marks, cells, scalars, phys, floor_fr
     scalars[P_SEEN] = max(scalars[P_SEEN], pmax, -pmin)
     if r_cav > 0.0:
         scalars[P_ABS] = max(scalars[P_ABS], floor_fraction * scalars[P_SEEN])
-    r_event = r_cav
+    r_event = max(r_cav, 1e-300) if held else r_cav
     if jfo:
         for i in range(active0.size):
             if active0[i]:
@@ -306,11 +398,14 @@ def record(row, s, area, p, h, pmax, pmin, marks, cells, scalars, phys, floor_fr
 
 
 @jit
-def accept(area, h0, h1, q, dt, marks, cells, scalars, phys):
-    """The model's state after an accepted step (``h0`` its gap, ``h1`` the previous one's, ``q``
-    its face fluxes): the work against the floor (JFO: ``Pi dV_void`` exactly, film.jfo_void;
-    Reynolds: film.void_work), the fractions' history, where new cavity cells opened, and the
-    accepted cavity."""
+def accept(s, area, weight, y0, w, h0, h1, q, dt, marks, cells, scalars, phys):
+    """The model's state after an accepted step (``y0`` its solution, ``w`` and ``h0`` its
+    deflection and gap, ``h1`` the previous one's, ``q`` its face fluxes): the work against the
+    floor (JFO: ``Pi dV_void`` exactly, film.jfo_void; Reynolds: film.void_work), the fractions'
+    history, where new cavity cells opened, and the accepted cavity; for a rough film, the onset
+    of the solids' unloading (``unload``)."""
+    if rough(phys):
+        unload(s, weight, y0, w, h0, scalars, phys)
     if not has_active_set(phys):
         return
     active, active0 = marks[ACTIVE], marks[ACTIVE0]
@@ -329,3 +424,33 @@ def accept(area, h0, h1, q, dt, marks, cells, scalars, phys):
             h_onset[i] = h1[i]
     active0[:] = active
     q_prev[:] = q
+
+
+@jit
+def unload(s, weight, y0, w, h, scalars, phys):
+    """The losses in the solids (model/contact.py): once the asperities have carried load on
+    approach (``V > 0``), the first accepted state with ``V <= 0`` starts the unloading along
+    ``c = e_dry^2`` through its load ``T_set = P + p_a``, with the permanent set ``(1 - c) W``,
+    and the asperities' from its gap ``H_set``; the strain and asperity energy the solids will
+    not return, ``(1 - c) (E_s + E_a)``, is lost then."""
+    if phys[E_DRY] == 1.0 or scalars[LOAD_SCALE] != 1.0:
+        return
+    n = s.size
+    pa = node_block(scalars, PA)
+    contact = False
+    for i in range(n):
+        contact = contact or pa[i] > 0.0
+    if contact and y0[n + 1] > 0.0:
+        scalars[TOUCHED] = 1.0
+    if scalars[TOUCHED] == 0.0 or y0[n + 1] > 0.0:
+        return
+    c = phys[E_DRY] * phys[E_DRY]
+    t_set, w_set = node_block(scalars, T_SET), node_block(scalars, W_SET)
+    h_set = node_block(scalars, H_SET)
+    for i in range(n):
+        t_set[i] = y0[i] + pa[i]
+        w_set[i] = (1.0 - c) * w[i]
+        h_set[i] = h[i]
+    scalars[SOLID_LOST] += (1.0 - c) * (strain_energy(weight, s[n - 1], t_set, w, phys)
+                                        + asperity_work(weight, h, 1.0, h_set, phys))
+    scalars[LOAD_SCALE] = c
