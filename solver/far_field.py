@@ -31,7 +31,7 @@ import numpy as np
 
 from .model import outer_flow
 
-__all__ = ["OuterFlow", "DEFAULT", "resistance_integral", "handover_defect"]
+__all__ = ["OuterFlow", "DEFAULT", "resistance_integral", "handover_defect", "far_restitution"]
 
 X0_OVER_A = 0.01  # the scene layer's default near-field start (docs/scenes.md)
 X_REF_OVER_A = 0.1  # where e_far reads the speeds by default (docs/model.md says why)
@@ -93,6 +93,13 @@ def handover_defect(geometry: str, x0_over_a: float) -> float:
          else outer_flow.equal_spheres_outer_regular(tiny))
     below = tiny * (c * (math.log(1.0 / tiny) + 1.0) + k)
     return below + resistance_integral(geometry, tiny, x0_over_a, 0.0, False)
+
+
+def far_restitution(e0: float, stokes: float, integral: float, s0: float = 1.0) -> float:
+    """``max(0, s0 e0 - J/St) / (s0 + J/St)``: the departure over the approach speed at the
+    point the resistance integral ``J`` (from ``x0``) reaches, ``s0 = sqrt(M(x0)/m)``."""
+    j = integral / stokes
+    return max(0.0, s0 * e0 - j) / (s0 + j)
 
 
 @dataclass(frozen=True)
@@ -165,9 +172,8 @@ class OuterFlow:
         ``x_ref``; NaN when ``e0`` is (a failed scene)."""
         if not math.isfinite(e0):
             return math.nan
-        s0 = self.mass_factor(self.x0_over_a)
-        j = self.integral(self.x_ref_over_a) / stokes
-        return max(0.0, s0 * e0 - j) / (s0 + j)
+        return far_restitution(e0, stokes, self.integral(self.x_ref_over_a),
+                               self.mass_factor(self.x0_over_a))
 
     def approach_speed(self, stokes: float) -> float:
         """The approach speed at the outer start over ``v0``: what arrives at ``x0`` with
