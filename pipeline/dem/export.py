@@ -73,7 +73,7 @@ def store_rows(ds, density_ratio: float = 0.0) -> list[dict]:
     extra = [d for d in ds["status"].dims if d not in ("eps", "St")]
     st_values, eps_values = ds["St"].values, ds["eps"].values
     # whole arrays at once (a .sel per cell took 16 s for 448 scenes)
-    # e_far: stores made before solver 1.7.0 lack it (the column stays empty)
+    # e_far: stores made before it existed lack it (the column stays empty)
     grid = {k: np.asarray(ds[k].transpose("eps", "St", *extra).values)
             for k in ("status", "e_wet", "e_far", "h_m_x1", "p_max") if k in ds}
     out = []
