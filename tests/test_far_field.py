@@ -293,3 +293,25 @@ def test_scene_json_says_which_e_for_which_dem_code():
     text = format_report(d)
     assert "far-field restitution e_far" in text and "dry DEM takes e_far" in text
     assert "resolved CFD-DEM takes e_wet" in text
+
+
+def test_export_rows_carry_e_far():
+    import xarray as xr
+
+    from pipeline.dem.export import CSV_FIELDS, scene_rows, store_rows
+    from pipeline.scenes.run import run_scene
+
+    assert CSV_FIELDS.index("e_far") == CSV_FIELDS.index("e_wet") + 1
+    r = run_scene(_scene(), accuracy="fast")
+    (row,) = scene_rows([r], "gondret")
+    assert row["e_far"] == r.collision.e_far and row["x_ref_over_a"] == pytest.approx(0.1)
+    # a store: e_far where it has the variable, an empty column where it was made before it
+    grid = {"status": [[1, 1]], "e_wet": [[0.5, 0.0]], "h_m_x1": [[0.3, 0.2]],
+            "p_max": [[2.0, 1.0]]}
+    ds = xr.Dataset({k: (("eps", "St"), np.array(v, dtype=float)) for k, v in grid.items()},
+                    coords={"eps": [1e-4], "St": [30.0, 3.0]})
+    assert [row["e_far"] for row in store_rows(ds)] == ["", ""]
+    ds["e_far"] = (("eps", "St"), np.array([[0.4, math.nan]]))
+    rows = store_rows(ds)
+    assert [row["e_far"] for row in rows] == [0.4, ""]
+    assert rows[0]["x_ref_over_a"] == ff.DEFAULT.x_ref_over_a
