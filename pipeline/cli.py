@@ -74,6 +74,42 @@ def physics_from_args(args):
         raise UsageError(str(exc)) from None
 
 
+def outer_from_args(args):
+    """The ``solver.far_field.OuterFlow`` of the ``--outer-geometry``, ``--x0-over-a``... flags:
+    how ``e_far`` reads the result (a bad value: exit 2, one line naming the flag's field)."""
+    from solver.far_field import OuterFlow
+
+    try:
+        return OuterFlow(geometry=args.outer_geometry, x0_over_a=args.x0_over_a,
+                         x_ref_over_a=args.x_ref_over_a, start_over_a=args.outer_start_over_a,
+                         density_ratio=args.density_ratio)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+
+
+def add_outer_flags(p) -> None:
+    """The flags of the outer-flow reading (``e_far``, ``v_outer_start``; docs/model.md,
+    "Outer flow: the far-field restitution")."""
+    from solver import far_field as ff
+
+    g = p.add_argument_group("far-field restitution e_far (a reading: the near-field solve does "
+                             "not depend on these)")
+    g.add_argument("--outer-geometry", choices=("wall", "spheres"), default="wall",
+                   help="sphere and plane wall, or two equal spheres; default wall")
+    g.add_argument("--x0-over-a", type=float, default=ff.X0_OVER_A, metavar="X0_OVER_A",
+                   help=f"the near-field start x0/a, in (0, 1]; default {ff.X0_OVER_A:g}")
+    g.add_argument("--x-ref-over-a", type=float, default=ff.X_REF_OVER_A, metavar="X_REF_OVER_A",
+                   help="where e_far reads approach and departure speeds, x_ref/a, in "
+                        f"[x0/a, outer start]; default {ff.X_REF_OVER_A:g}")
+    g.add_argument("--outer-start-over-a", type=float, default=ff.START_OVER_A,
+                   metavar="START_OVER_A",
+                   help="where the outer approach starts, over a, in (x0/a, "
+                        f"{ff.MAX_OVER_A:g}]; default {ff.START_OVER_A:g}")
+    g.add_argument("--density-ratio", type=float, default=0.0, metavar="RHO_F_OVER_RHO_P",
+                   help="fluid over particle density rho_f/rho_p for the added mass, in "
+                        "[0, 1e6]; default 0 (no added mass)")
+
+
 def cmd_run(args) -> int:
     from solver import collide
 
@@ -82,8 +118,9 @@ def cmd_run(args) -> int:
     from .environment import compile_notice
 
     compile_notice()
+    outer = outer_from_args(args)
     try:
-        result = collide(physics, accuracy=args.accuracy, x_ref_x0=args.x_ref,
+        result = collide(physics, accuracy=args.accuracy, x_ref_x0=args.x_ref, outer=outer,
                          save_profiles=bool(args.save or args.plot), **_numerics_overrides(args))
     except ValueError as exc:
         raise UsageError(str(exc)) from None
@@ -162,6 +199,7 @@ def _build_run(sub) -> None:
     p.add_argument("--x-ref", type=float, default=1.0, metavar="X_REF_X0",
                    help="where e_wet is seen, over x0 (>= 1; the impact Stokes number there is "
                         "St + ln(x_ref/x0)); default 1")
+    add_outer_flags(p)
     p.add_argument("--save", metavar="FILE", default=None,
                    help="write time series and profiles (.nc or .zarr)")
     p.add_argument("--plot", metavar="DIR", default=None,

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import far_field
 from ._jit import deferred_interrupt
 from .integration import stepper
 from .integration.grid import reference_grid, scaled_grid
@@ -32,7 +33,7 @@ from .physics import Physics
 from .result import JSON_KEYS, SOLVER_VERSION, Collision
 from .settings import Numerics, resolve
 
-__all__ = ["collide", "Collision", "SOLVER_VERSION", "hertz_overlap", "JSON_KEYS"]
+__all__ = ["collide", "Collision", "SOLVER_VERSION", "hertz_overlap", "JSON_KEYS", "read_far"]
 
 # Not a numerical failure: the model's premise fails. The coupled phase starts from the rigid
 # pressure's deformation, whose strain energy is 3.08 eps/St of the kinetic energy when the
@@ -104,7 +105,7 @@ def scene_grid(stokes, x_switch, numerics: Numerics, pi=math.inf):
 
 
 def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 1.0,
-            **overrides) -> Collision:
+            outer: far_field.OuterFlow | None = None, **overrides) -> Collision:
     """Solve one head-on collision of two elastic spheres through a viscous film.
 
     Parameters
@@ -121,6 +122,10 @@ def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 
         Where the wet restitution ``e_wet`` is seen, over ``x0`` (``>= 1``; default the start
         ``x0``). A reporting option, not physics: the impact Stokes number there is
         ``St_ref = St + ln(x_ref/x0)`` (``Collision.St_ref``, rigid.impact_stokes).
+    outer : far_field.OuterFlow, optional
+        How ``e_far`` and ``v_outer_start`` read the result from far away (geometry, ``x0/a``,
+        ``x_ref/a``, the outer start, the density ratio); default ``far_field.DEFAULT``. A reading,
+        not physics: the near-field solve does not depend on it.
     **overrides
         Any field of ``settings.Numerics`` (e.g. ``switch=0.005``, ``n_inner=64``).
 
@@ -144,7 +149,20 @@ def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 
     else:
         result = _coupled(physics, accuracy, numerics, head, x_ref_x0)
     result.x_ref_x0 = x_ref_x0
+    read_far(result, outer)
     result.wall_s = time.perf_counter() - wall
+    return result
+
+
+def read_far(result, outer=None):
+    """``e_far`` and ``v_outer_start`` of ``result`` (its ``e_x0``, the departure speed at x0)
+    read through ``outer`` (solver/far_field.py; default ``far_field.DEFAULT``)."""
+    outer = far_field.DEFAULT if outer is None else outer
+    if not isinstance(outer, far_field.OuterFlow):
+        raise TypeError(f"outer must be a solver.far_field.OuterFlow, got {type(outer).__name__}")
+    result.outer = outer
+    result.e_far = outer.restitution(result.e_x0, result.physics.St)
+    result.v_outer_start = outer.approach_speed(result.physics.St)
     return result
 
 
@@ -282,7 +300,7 @@ def _rigid_only(physics, accuracy, numerics, head):
     result = Collision(
         physics=physics, accuracy=accuracy, numerics=numerics, model="rigid", status="ok",
         message="deformation stays below the hand-over threshold: rigid solution (exact)",
-        v_r=0.0, e_wet=0.0, h_m_x1=x_stop, h_m_approach_x1=x_stop, ln_x_e_x1=math.log(x_stop),
+        v_r=0.0, e_wet=0.0, e_x0=0.0, h_m_x1=x_stop, h_m_approach_x1=x_stop, ln_x_e_x1=math.log(x_stop),
         tau_v_zero=math.inf, tau_max_rebound=math.nan, x_min_x1=x_stop, energy_error=0.0,
         p_min=0.0, series=head.block)
     include_rigid_peaks(result, head.peaks)
@@ -384,6 +402,8 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
     result.ln_x_e_x1 = ln_x_e
     result.e_wet = _wet_restitution(physics, x_c, v_c, x_ref_x0 * x_start,
                                     cols["cavity_radius"] + cols["void_volume"])
+    result.e_x0 = result.e_wet if x_ref_x0 == 1.0 else _wet_restitution(
+        physics, x_c, v_c, x_start, cols["cavity_radius"] + cols["void_volume"])
     _coupled_observables(result, cols, tau_per_t, ln_x_e, v_c[-1])
     if blocks[-1]["phase"][0] == 2:  # the departure's cavity (with a floor) may be the widest
         widest = max(float(np.max(b["cavity_radius"])) for b in blocks if b["phase"][0] == 2)

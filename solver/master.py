@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from .collision import DIMPLE_DEPTH, Collision, collide, include_rigid_peaks
+from .collision import DIMPLE_DEPTH, Collision, collide, include_rigid_peaks, read_far
 from .model import rigid
 from .observables import OBSERVABLES
 from .physics import Physics
@@ -89,12 +89,12 @@ class MasterCurve:
         value = float(spline(math.log(s_value)))
         return math.exp(value) if _CARRIED[name][0] == "log" else value
 
-    def collide(self, physics, eps=None, *, x_ref_x0: float = 1.0) -> Collision:
+    def collide(self, physics, eps=None, *, x_ref_x0: float = 1.0, outer=None) -> Collision:
         """A scene from the master curve; classic scenes off the curve are solved directly.
 
         ``x_ref_x0`` is where ``e_wet`` is seen (``solver.collide``); on the curve ``e_wet`` is
         computed from the interpolated ``ln_x_e_x1`` (rigid.restitution_from_rest), which fixes the
-        whole rigid departure.
+        whole rigid departure. ``outer``: how ``e_far`` reads it (``solver.collide``).
 
         Raises
         ------
@@ -111,14 +111,14 @@ class MasterCurve:
         x_switch = rigid.handover_separation(x_start, stokes, numerics.switch)
         if x_switch is None or x_switch >= x_start:
             return collide(physics, accuracy=self.accuracy, save_profiles=False,
-                           x_ref_x0=x_ref_x0, **dict(self.overrides))
+                           x_ref_x0=x_ref_x0, outer=outer, **dict(self.overrides))
         wall = time.perf_counter()
         v_s = float(rigid.velocity(x_switch, x_start, 1.0, stokes))
         t_s = float(rigid.elapsed_time(x_switch, x_start, 1.0, stokes))
         s_value = stokes * v_s
         if not self.s[0] <= s_value <= self.s[-1]:
             return collide(physics, accuracy=self.accuracy, save_profiles=False,
-                           x_ref_x0=x_ref_x0, **dict(self.overrides))
+                           x_ref_x0=x_ref_x0, outer=outer, **dict(self.overrides))
         lam = v_s**0.4
         tau_per_t = physics.tau_per_t
         # docs/model.md, "Similarity": how each quantity of the master scene scales to this one
@@ -147,6 +147,8 @@ class MasterCurve:
         result.x_ref_x0 = x_ref_x0
         result.e_wet = rigid.restitution_from_rest(values["ln_x_e_x1"], physics,
                                                    x_ref_x0 * x_start)
+        result.e_x0 = rigid.restitution_from_rest(values["ln_x_e_x1"], physics, x_start)
+        read_far(result, outer)
         include_rigid_peaks(result, rigid.approach_peaks(x_start, stokes, x_switch))
         # not carried by the curve: the approach's pressure peak lies in its coupled phase
         result.p_max_approach = result.h_axis_at_peak_pressure_x1 = math.nan

@@ -130,6 +130,14 @@ OBSERVABLES = (
                "beyond 1e4 mu0", "1", "  solidified (mu > 1e4 mu0)"),
     Observable("start_strain_energy", "float", "strain energy where the coupled phase starts, "
                "over the kinetic energy", "1", start=0.0),
+    Observable("e_far", "float", "far-field restitution: departure over approach speed, both "
+               "read at x_ref_over_a on the rigid outer path with the exact Stokes resistance "
+               "and the added mass (solver/far_field.py; defaults: sphere and wall, x0 = 0.01 a, "
+               "x_ref = 0.1 a, no added mass); 0 when the spheres stop before x_ref", "v/v",
+               "far-field restitution e_far"),
+    Observable("v_outer_start", "float", "approach speed at the outer start (outer_start_over_a) "
+               "that arrives at x0 with v0, on the same outer path", "v0",
+               "  approach speed at outer start /v0"),
     Observable("steps", "count", "accepted time steps of the coupled solve", "1", "steps",
                diagnostic=True),
     Observable("rejected_steps", "count", "rejected time steps of the coupled solve", "1",

@@ -14,6 +14,8 @@ from dataclasses import field, make_dataclass
 
 import numpy as np
 
+from .far_field import DEFAULT as _OUTER
+from .far_field import OuterFlow
 from .observables import LABELS, OBSERVABLES, SERIES
 from .physics import Physics
 from .settings import Numerics
@@ -23,8 +25,11 @@ __all__ = ["Collision", "JSON_KEYS", "SOLVER_VERSION"]
 # Bump with any change that can alter numbers: stamped into every result and store.
 SOLVER_VERSION = "1.7.0"
 
+# the outer-flow reading of e_far and v_outer_start (solver/far_field.py, OuterFlow)
+OUTER_KEYS = ("outer_geometry", "x0_over_a", "x_ref_over_a", "outer_start_over_a",
+              "density_ratio")
 JSON_KEYS = (*Physics.names(), *LABELS, *(o.name for o in OBSERVABLES), "x_ref_x0",
-             "solver_version")
+             *OUTER_KEYS, "solver_version")
 
 SCALING = ("lengths along the axis / x1 (x1 = (4 theta mu a^1.5 v0)^0.4), radius / sqrt(a x1), "
            "tau = v0 t / x0, pressure / (mu a v0 / x1^2), velocity / v0, force / "
@@ -64,6 +69,27 @@ class _CollisionMethods:
     def St_ref(self) -> float:
         """The impact Stokes number at x_ref, ``St + ln(x_ref/x0)`` (rigid.impact_stokes)."""
         return self.physics.St + math.log(self.x_ref_x0)
+
+    # ---- the outer-flow reading (solver/far_field.py) --------------------------------------------
+    @property
+    def outer_geometry(self) -> str:
+        return self.outer.geometry
+
+    @property
+    def x0_over_a(self) -> float:
+        return self.outer.x0_over_a
+
+    @property
+    def x_ref_over_a(self) -> float:
+        return self.outer.x_ref_over_a
+
+    @property
+    def outer_start_over_a(self) -> float:
+        return self.outer.start_over_a
+
+    @property
+    def density_ratio(self) -> float:
+        return self.outer.density_ratio
 
     # ---- derived quantities ---------------------------------------------------------------------
     @property
@@ -172,6 +198,8 @@ def _fields():
         ("tau_handover", float, field(default=math.nan)),  # rigid -> coupled
         ("tau_release", float, field(default=math.nan)),  # coupled -> rigid
         ("x_ref_x0", float, field(default=1.0)),  # where e_wet is seen, over x0 (>= 1)
+        ("e_x0", float, field(default=math.nan)),  # departure speed at x0 / v0 (e_wet at x0)
+        ("outer", OuterFlow, field(default=_OUTER)),  # how e_far reads the result
         ("series", dict, field(default_factory=dict, repr=False)),  # SERIES, tau, phase
         ("radius", np.ndarray, field(**arrays)),  # (N,) grid radii R
         ("profile_tau", np.ndarray, field(**arrays)),  # (rows,)

@@ -54,14 +54,18 @@ def _scene(path, materials):
         raise UsageError(str(exc)) from None
 
 
+def _cell(v):
+    return "-" if v == "" else f"{v:.4f}"
+
+
 def _print_rows(rows, skipped):
-    print(f"{'St':>10} {'St_L':>10} {'eps':>10} {'v0 [m/s]':>10} {'e_wet':>8}  note")
+    print(f"{'St':>10} {'St_L':>10} {'eps':>10} {'v0 [m/s]':>10} {'e_wet':>8} {'e_far':>8}  note")
     for r in rows:
         note = "sticks" if r["sticks"] else ""
         if r["warning_checks"]:
             note = (note + "; " if note else "") + "warnings: " + r["warning_checks"] + " (see CSV)"
         print(f"{r['St']:>10.4g} {r['St_L']:>10.4g} {r['eps']:>10.3g} {r['v0_m_s']:>10.4g} "
-              f"{r['e_wet']:>8.4f}  {note}")
+              f"{r['e_wet']:>8.4f} {_cell(r['e_far']):>8}  {note}")
     for s in skipped:
         print(f"skipped: {s}")
 

@@ -36,6 +36,7 @@ from solver import SOLVER_VERSION
 from . import liggghts, openfoam, yade
 from .conventions import CONVENTIONS, store_stokes_numbers, stokes_numbers
 from .fits import LAWS
+from solver.far_field import DEFAULT as FAR_DEFAULT
 
 __all__ = ["CSV_FIELDS", "store_rows", "scene_rows", "scene_path", "write_export", "read_csv",
            "group_settings", "export_files", "write_files", "progress_to_stderr", "ST_BANDS",
@@ -45,7 +46,7 @@ CSV_FIELDS = (
     "group", "geometry", "material1", "material2", "fluid", "radius1_m", "radius2_m",
     "density1_kg_m3", "density2_kg_m3", "youngs1_Pa", "youngs2_Pa", "poisson1", "poisson2",
     "viscosity_Pa_s", "fluid_density_kg_m3", "v0_m_s", *CONVENTIONS, "eps", "x_ref_x0", "e_wet",
-    "sticks", "closest_approach_x1", "closest_approach_m", "peak_pressure", "peak_pressure_Pa",
+    "e_far", "x_ref_over_a", "sticks", "closest_approach_x1", "closest_approach_m", "peak_pressure", "peak_pressure_Pa",
     "roughness_m", "warning", "warning_checks", "status", "solver_version",
 )
 
@@ -72,8 +73,9 @@ def store_rows(ds, density_ratio: float = 0.0) -> list[dict]:
     extra = [d for d in ds["status"].dims if d not in ("eps", "St")]
     st_values, eps_values = ds["St"].values, ds["eps"].values
     # whole arrays at once (a .sel per cell took 16 s for 448 scenes)
+    # e_far: stores made before it existed lack it (the column stays empty)
     grid = {k: np.asarray(ds[k].transpose("eps", "St", *extra).values)
-            for k in ("status", "e_wet", "h_m_x1", "p_max")}
+            for k in ("status", "e_wet", "e_far", "h_m_x1", "p_max") if k in ds}
     out = []
     for idx in itertools.product(*(range(ds.sizes[d]) for d in extra)):
         label = "".join(f" {d}={float(ds[d].values[i]):.3g}" for d, i in zip(extra, idx))
@@ -87,6 +89,9 @@ def store_rows(ds, density_ratio: float = 0.0) -> list[dict]:
                 e = float(grid["e_wet"][cell])
                 row.update(group=f"eps={float(eps):.3g}{label}", geometry="either",
                            eps=float(eps), x_ref_x0=1.0, e_wet=e, sticks=bool(e == 0.0),
+                           e_far=_far(grid, cell),
+                           # a sweep reads e_far with solver.far_field.DEFAULT
+                           x_ref_over_a=FAR_DEFAULT.x_ref_over_a if "e_far" in grid else "",
                            closest_approach_x1=float(grid["h_m_x1"][cell]),
                            peak_pressure=float(grid["p_max"][cell]), status="ok",
                            solver_version=solver_version)
@@ -94,8 +99,17 @@ def store_rows(ds, density_ratio: float = 0.0) -> list[dict]:
     return out
 
 
+def _far(grid, cell):
+    """The store's ``e_far`` of ``cell`` ("" when the store has none or it is NaN)."""
+    if "e_far" not in grid:
+        return ""
+    v = float(grid["e_far"][cell])
+    return v if math.isfinite(v) else ""
+
+
 def scene_path(scene, vary: str, factors) -> list:
-    """Scenes along a path: ``v0`` or the radii (and ``x0`` with them, keeping ``x0/a``) times
+    """Scenes along a path: ``v0`` or the radii (and ``x0``, the outer start and ``x_ref`` with
+    them, keeping their ratios to ``a``) times
     each factor. eps moves along the path with v0 and size: that is the point."""
     scenes = []
     for f in factors:
@@ -104,7 +118,11 @@ def scene_path(scene, vary: str, factors) -> list:
         elif vary == "radius":
             b1 = dataclasses.replace(scene.body1, radius=scene.body1.radius * f)
             b2 = dataclasses.replace(scene.body2, radius=scene.body2.radius * f)
-            scenes.append(dataclasses.replace(scene, body1=b1, body2=b2, x0=scene.x0 * f))
+            # the outer start and x_ref scale with the radii too (None: their defaults in a)
+            outer = {k: None if getattr(scene, k) is None else getattr(scene, k) * f
+                     for k in ("outer_start", "x_ref")}
+            scenes.append(dataclasses.replace(scene, body1=b1, body2=b2, x0=scene.x0 * f,
+                                              **outer))
         else:
             raise ValueError(f"vary must be 'v0' or 'radius', got {vary!r}")
     return scenes
@@ -136,6 +154,8 @@ def scene_rows(results, group: str) -> list[dict]:
             poisson1=b1.solid.poisson_ratio, poisson2=b2.solid.poisson_ratio,
             viscosity_Pa_s=s.fluid.viscosity, fluid_density_kg_m3=s.fluid.density, v0_m_s=s.v0,
             eps=s.eps, x_ref_x0=c.x_ref_x0, e_wet=c.e_wet, sticks=bool(c.e_wet == 0.0),
+            e_far=c.e_far if r.outer is not None and math.isfinite(c.e_far) else "",
+            x_ref_over_a=c.x_ref_over_a if r.outer is not None else "",
             closest_approach_x1=c.h_m_x1, closest_approach_m=c.h_m_x1 * s.x1,
             peak_pressure=c.p_max, peak_pressure_Pa=r.peak_pressure,
             roughness_m="" if sigma is None else sigma,

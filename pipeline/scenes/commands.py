@@ -18,6 +18,8 @@ __all__ = ["register", "cmd_scene", "cmd_paper_figures", "load_scene", "format_r
 _FLAG_FIELDS = {
     "title": (None, "title"), "v0": (None, "v0"), "x0": (None, "x0"),
     "x0_over_a": (None, "x0_over_a"),
+    "outer_start": (None, "outer_start"), "outer_start_over_a": (None, "outer_start_over_a"),
+    "x_ref": (None, "x_ref"), "x_ref_over_a": (None, "x_ref_over_a"),
     "fluid": ("fluid", "name"), "viscosity": ("fluid", "viscosity"),
     "fluid_density": ("fluid", "density"), "vapour_pressure": ("fluid", "vapour_pressure"),
     "mean_free_path": ("fluid", "mean_free_path"), "ambient_pressure": ("fluid", "ambient_pressure"),
@@ -167,6 +169,14 @@ def format_report(d: dict) -> str:
         ("wet restitution e_wet", "0: the spheres stick (they never leave the lubrication "
          "region)" if d["e_wet"] == 0.0 else f"{_g(d['e_wet'])} (leaving the lubrication region "
          f"at x0 with {_q(d['departure_speed_m_per_s'], 'm/s')})"),
+        ("far-field restitution e_far", "not computed (two unequal spheres)"
+         if d["e_far"] is None else
+         f"{_g(d['e_far'])} (speeds read at x_ref = {_q(d['x_ref_m'], 'm')} = "
+         f"{d['x_ref_over_a']:.3g} a on the exact Stokes resistance, added mass at "
+         f"rho_f/rho_p = {d['density_ratio']:.3g}; approach at the outer start "
+         f"{d['outer_start_over_a']:.3g} a: {_q(d['outer_start_speed_m_per_s'], 'm/s')})"),
+        *((f"  {v['code']} takes {v['key']}", f"{_g(v['value'])}: {v['why']}")
+          for v in d["dem_restitution"].values()),
         ("closest approach", f"{_g(d['closest_approach_nm'])} nm "
                              f"(h_m/x1 = {_g(d['dimensionless']['h_m_x1'])})"),
         ("  during approach", f"{_g(d['closest_approach_on_approach_nm'])} nm"),
@@ -213,8 +223,8 @@ def format_report(d: dict) -> str:
         lines.append("results")
         lines += [f"  {k:<{width}}  {v}" for k, v in results]
     if d["sensitivity"]:
-        lines.append(f"sensitivity (e_wet {_e(d['e_wet'])} as solved):")
-        lines += [f"  {label:<{width}}  e_wet {_e(r['e_wet'])}"
+        lines.append(f"sensitivity (as solved: e_wet {_e(d['e_wet'])}, e_far {_e(d['e_far'])})")
+        lines += [f"  {label:<{width}}  e_wet {_e(r['e_wet'])}, e_far {_e(r['e_far'])}"
                   + ("" if r["status"] == "ok" else f" ({r['status']})")
                   for label, r in d["sensitivity"].items()]
     if d["warnings"]:
@@ -414,6 +424,16 @@ def _build_scene(sub) -> None:
     g.add_argument("--v0", default=None, help="approach speed, e.g. '10 cm/s'")
     g.add_argument("--x0", default=None, help="starting gap, e.g. '250 nm' (default 0.01 a)")
     g.add_argument("--x0-over-a", dest="x0_over_a", default=None, help="starting gap as x0/a")
+    g.add_argument("--outer-start", dest="outer_start", default=None,
+                   help="where the outer approach (exact Stokes resistance, added mass) starts, "
+                        "e.g. '3 mm' (default 1 a)")
+    g.add_argument("--outer-start-over-a", dest="outer_start_over_a", default=None,
+                   help="the outer start over a (default 1)")
+    g.add_argument("--x-ref", dest="x_ref", default=None,
+                   help="where e_far reads approach and departure speeds, in [x0, outer start] "
+                        "(default 0.1 a)")
+    g.add_argument("--x-ref-over-a", dest="x_ref_over_a", default=None,
+                   help="x_ref over a (default 0.1)")
     p.add_argument("--materials", action="append", metavar="FILE",
                    help="extra materials/fluids TOML file (repeatable; overrides shipped entries)")
     p.add_argument("--list-materials", action="store_true",

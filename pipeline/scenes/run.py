@@ -16,7 +16,8 @@ from .checks import (Check, cavitation_crosses, cavitation_reason, density_reaso
                      contact_switch, roughness_reason, viscosity_reason, viscosity_switch)
 from .scene import Scene
 
-__all__ = ["SceneResult", "run_scene", "RESULT_KEYS", "check_solvable"]
+__all__ = ["SceneResult", "run_scene", "RESULT_KEYS", "check_solvable", "dem_restitution",
+           "DEM_COUPLING"]
 
 # Keys of SceneResult.to_dict() (a contract for scripts using `ehd scene --json`; see docs/scenes.md)
 RESULT_KEYS = (
@@ -25,7 +26,10 @@ RESULT_KEYS = (
     "wave_parameter", "model", "model_reason", "cavitation_reason", "viscosity_reason",
     "density_reason", "roughness_reason", "e_dry_source", "cavitation_pressure_Pa",
     "status", "message", "v_r",
-    "rebound_speed_m_per_s", "e_wet", "departure_speed_m_per_s", "closest_approach_nm", "closest_approach_on_approach_nm",
+    "rebound_speed_m_per_s", "e_wet", "departure_speed_m_per_s", "e_far", "x_ref_m",
+    "x_ref_over_a", "outer_start_m", "outer_start_over_a", "outer_start_speed_m_per_s",
+    "outer_geometry", "density_ratio", "dem_restitution",
+    "closest_approach_nm", "closest_approach_on_approach_nm",
     "equilibrium_separation_m", "log10_equilibrium_separation_m", "escaped", "time_to_stop_s",
     "time_of_max_rebound_s", "peak_force_N", "peak_pressure_Pa", "min_pressure_Pa",
     "max_central_deformation_nm", "min_separation_nm", "dimple", "dimple_depth_nm",
@@ -50,8 +54,9 @@ class SceneResult:
     density_reason: str = ""  # the density law used and why, likewise
     roughness_reason: str = ""  # whether the asperity contact acts and why, likewise
     # the result without each piece of physics the scene switched on (and with the asperity
-    # stiffness 10x either way): {label: {"e_wet", "v_r", "status"}}
+    # stiffness 10x either way): {label: {"e_wet", "e_far", "v_r", "status"}}
     sensitivity: dict = field(default_factory=dict)
+    outer: object = None  # the solver.far_field.OuterFlow e_far was read with (None: none)
 
     def to_dict(self) -> dict:
         """All results (keys ``RESULT_KEYS``), SI with the unit in the key, non-finite as None."""
@@ -85,6 +90,16 @@ class SceneResult:
             # approach speed there, St_ref/St v0 (rigid.impact_stokes)
             "e_wet": num(c.e_wet),
             "departure_speed_m_per_s": num(c.e_wet * c.St_ref / c.St * s.v0),
+            # the near-field result read from x_ref on the exact Stokes resistance with the
+            # added mass (solver/far_field.py); null for two unequal spheres
+            "e_far": num(c.e_far) if self.outer else None,
+            "x_ref_m": s.x_ref_distance, "x_ref_over_a": s.x_ref_distance / s.reduced_radius,
+            "outer_start_m": s.outer_start_distance,
+            "outer_start_over_a": s.outer_start_distance / s.reduced_radius,
+            "outer_start_speed_m_per_s": num(c.v_outer_start * s.v0) if self.outer else None,
+            "outer_geometry": s.outer_geometry,
+            "density_ratio": self.outer.density_ratio if self.outer else s.density_ratio,
+            "dem_restitution": dem_restitution(c.e_wet, c.e_far if self.outer else math.nan),
             "closest_approach_nm": num(c.h_m_x1 * x1 * 1e9),
             "closest_approach_on_approach_nm": num(c.h_m_approach_x1 * x1 * 1e9),
             "equilibrium_separation_m": num(math.exp(ln_xe_m)) if ln_xe_m < 700 else None,
@@ -113,6 +128,29 @@ class SceneResult:
         }
         assert tuple(out) == RESULT_KEYS
         return out
+
+
+# Which restitution a DEM code should take (docs/scenes.md, "The approach from far away")
+DEM_COUPLING = {
+    "resolved_cfd_dem": ("resolved CFD-DEM", "e_wet",
+                         "the CFD computes the fluid force on the particle down to near "
+                         "contact, so the contact law carries only the loss inside x0 that its "
+                         "grid cannot resolve"),
+    "dry_dem": ("dry DEM", "e_far", "no fluid forces in the code: the contact law carries the "
+                "whole loss the fluid causes, seen from x_ref on the way in and out"),
+}
+
+
+def dem_restitution(e_wet: float, e_far: float) -> dict:
+    """``{coupling: {"code", "key", "value", "why"}}``: the restitution each kind of DEM code
+    takes (``key`` names the result, ``value`` is it)."""
+    values = {"e_wet": e_wet, "e_far": e_far}
+    out = {}
+    for coupling, (label, key, why) in DEM_COUPLING.items():
+        v = float(values[key])
+        out[coupling] = {"code": label, "key": key, "value": v if math.isfinite(v) else None,
+                         "why": why}
+    return out
 
 
 def check_solvable(scene: Scene) -> Physics:
@@ -168,6 +206,8 @@ def run_scene(scene: Scene, accuracy: str = "standard", sensitivity_solves: bool
                          "constant" if auto_dens else None, "off" if auto_rough else None)
     overrides = {k: v for k, v in overrides.items() if v is not None}
     overrides.setdefault("save_profiles", False)
+    outer = scene.outer_flow()  # None: two unequal spheres (no e_far)
+    overrides["outer"] = outer
     c = collide(base, accuracy=accuracy, **overrides)
     # the base film's pressure extremes [Pa, gauge], when it was solved
     p_star = scene.pressure_scale
@@ -203,9 +243,19 @@ def run_scene(scene: Scene, accuracy: str = "standard", sensitivity_solves: bool
     notes += pressure_notes(scene, base_p_max, base)
     if scene.sound_speed is None:
         notes.append("elastic-wave check skipped: no density known for either solid")
+    if outer is None:
+        notes.append("e_far not computed: the outer flow is modelled for a sphere and a wall or "
+                     "two equal spheres only (solver/far_field.py)")
+    elif outer.geometry == "spheres" and not math.isclose(
+            scene.body1.mass, scene.body2.mass, rel_tol=1e-9):
+        notes.append("e_far: the two spheres' masses differ; the outer flow treats their "
+                     "relative motion with the reduced mass and the symmetric resistance, exact "
+                     "for equal masses only")
+    if outer is not None and scene.fluid.density is None:
+        notes.append("e_far without added mass: the fluid has no density")
     return SceneResult(scene=scene, collision=c, warnings=warnings, notes=notes,
                        peak_pressure=p_max, min_pressure=p_min, sensitivity=sensitivity,
-                       **reasons)
+                       outer=outer, **reasons)
 
 
 # what switching one piece of physics off means in the physics groups
@@ -236,6 +286,8 @@ def _sensitivity(c, base, accuracy, overrides) -> dict:
     out = {}
     for label, physics in variants.items():
         r = collide(physics, accuracy=accuracy, **overrides)
+        e_far = float(r.e_far) if r.ok else math.nan
         out[label] = {"e_wet": float(r.e_wet) if r.ok else None,
+                      "e_far": e_far if math.isfinite(e_far) else None,
                       "v_r": float(r.v_r) if r.ok else None, "status": r.status}
     return out

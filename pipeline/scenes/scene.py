@@ -115,6 +115,10 @@ class Scene:
     # the pair's dry coefficient of restitution (acts only where the asperities touch); 1: unknown
     e_dry: float = 1.0
     e_dry_source: str = ""  # where it came from, for the report
+    # the outer-flow reading of e_far [m] (solver/far_field.py): where the outer approach starts
+    # and where e_far reads the speeds; None: the defaults, 1 a and 0.1 a (docs/scenes.md)
+    outer_start: float | None = None
+    x_ref: float | None = None
 
     def __post_init__(self):
         # a forced law the fluid has no constants for is refused here, before anything is solved
@@ -330,6 +334,56 @@ class Scene:
                         raise SceneError(_TOO_LARGE[name](self, value)) from None
                     break
             raise SceneError(f"the scene is outside the solver's range: {exc}") from None
+
+    # ---- the outer flow: how e_far reads the near-field result (solver/far_field.py) -----------
+    @property
+    def outer_geometry(self) -> str | None:
+        """``"wall"``, ``"spheres"`` (two equal radii) or None (unequal spheres: the outer flow
+        of two unequal free spheres is not modelled, e_far is not computed)."""
+        if self.body2.wall:
+            return "wall"
+        if math.isclose(self.body1.radius, self.body2.radius, rel_tol=1e-9):
+            return "spheres"
+        return None
+
+    @property
+    def outer_start_distance(self) -> float:
+        """Where the outer approach starts [m] (default ``far_field.START_OVER_A`` a)."""
+        from solver.far_field import START_OVER_A
+
+        return START_OVER_A * self.reduced_radius if self.outer_start is None else self.outer_start
+
+    @property
+    def x_ref_distance(self) -> float:
+        """Where e_far reads the speeds [m] (default ``far_field.X_REF_OVER_A`` a)."""
+        from solver.far_field import X_REF_OVER_A
+
+        return X_REF_OVER_A * self.reduced_radius if self.x_ref is None else self.x_ref
+
+    @property
+    def density_ratio(self) -> float:
+        """``phi``: the fluid mass the particle displaces over its mass, ``rho_f / rho_p``
+        (wall: ``rho_f V1 / m1``; two spheres: ``rho_f V_sphere / (2 m)``); 0 without a fluid
+        density (no added mass)."""
+        rho_f = self.fluid.density
+        if not rho_f:
+            return 0.0
+        volume = 4.0 / 3.0 * math.pi * self.body1.radius**3
+        share = 1.0 if self.body2.wall else 0.5
+        return rho_f * volume * share / self.reduced_mass
+
+    def outer_flow(self):
+        """The ``solver.far_field.OuterFlow`` of the scene, or None (``outer_geometry``)."""
+        from solver.far_field import OuterFlow
+
+        geometry = self.outer_geometry
+        if geometry is None:
+            return None
+        a = self.reduced_radius
+        return OuterFlow(geometry=geometry, x0_over_a=self.x0 / a,
+                         x_ref_over_a=self.x_ref_distance / a,
+                         start_over_a=self.outer_start_distance / a,
+                         density_ratio=self.density_ratio)
 
     # ---- scales of the dimensionless solution -----------------------------------------------
     @property

@@ -24,8 +24,9 @@ _GAP = FieldSpec("[length]", "500 nm", si_unit="m")
 _RATIO = FieldSpec("", "0.01")
 _PRESSURE = FieldSpec("[pressure]", "101.325 kPa", si_unit="Pa")
 
-_TOP_KEYS = ("title", "v0", "x0", "x0_over_a", "cavitation", "viscosity_law", "density_law",
-             "asperity_contact", "e_dry", "body1", "body2", "fluid", "materials", "fluids")
+_TOP_KEYS = ("title", "v0", "x0", "x0_over_a", "outer_start", "outer_start_over_a", "x_ref",
+             "x_ref_over_a", "cavitation", "viscosity_law", "density_law", "asperity_contact",
+             "e_dry", "body1", "body2", "fluid", "materials", "fluids")
 _BODY_KEYS = ("material", "radius", "wall", *SOLID_FIELDS)
 _FLUID_KEYS = ("name", "ambient_pressure", "cavitation_pressure", "tensile_strength",
                *FLUID_FIELDS)
@@ -177,6 +178,40 @@ def _cavitation_pressure(raw, fluid: FluidProps, ambient: float):
     return p_cav, how
 
 
+def _outer_length(data, name, a):
+    """``data[name]`` (a length) or ``data[name + '_over_a']`` (a ratio) in m; None if neither."""
+    if name in data and f"{name}_over_a" in data:
+        raise SceneError(f"give either {name} (a length) or {name}_over_a (a ratio), not both")
+    if name in data:
+        return to_si(data[name], _GAP, name), name
+    if f"{name}_over_a" in data:
+        return to_si(data[f"{name}_over_a"], _RATIO, f"{name}_over_a") * a, f"{name}_over_a"
+    return None, name
+
+
+def _outer(data, a, x0):
+    """The outer start and ``x_ref`` [m] (None: the defaults, ``far_field.START_OVER_A`` a and
+    ``X_REF_OVER_A`` a), checked: ``x0 < outer_start <= MAX_OVER_A a`` and
+    ``x0 <= x_ref <= outer_start`` (docs/scenes.md, "The approach from far away")."""
+    from solver.far_field import MAX_OVER_A, START_OVER_A, X_REF_OVER_A
+
+    start, start_name = _outer_length(data, "outer_start", a)
+    ref, ref_name = _outer_length(data, "x_ref", a)
+    s = START_OVER_A * a if start is None else start
+    r = X_REF_OVER_A * a if ref is None else ref
+
+    def q(v):
+        return f"{format_quantity(v, 'm')} = {v / a:.4g} a"
+
+    if not x0 < s <= MAX_OVER_A * a:
+        raise SceneError(f"{start_name} = {q(s)}: the outer start must lie beyond the start of "
+                         f"the close stage x0 = {q(x0)}, in ({q(x0)}, {q(MAX_OVER_A * a)}]")
+    if not x0 <= r <= s:
+        raise SceneError(f"{ref_name} = {q(r)}: the reference distance of e_far must be in "
+                         f"[{q(x0)}, {q(s)}] (between x0 and the outer start)")
+    return start, ref
+
+
 def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
     """Build a ``Scene`` from a parsed scene document (see docs/scenes.md for the format).
 
@@ -223,6 +258,7 @@ def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
         x0 = to_si(data["x0_over_a"], _RATIO, "x0_over_a") * a
     else:
         x0 = DEFAULT_X0_OVER_A * a
+    outer_start, x_ref = _outer(data, a, x0)
     title = data.get("title", "")
     if not isinstance(title, str):
         raise SceneError(f"title must be a string, got {title!r}")
@@ -239,5 +275,6 @@ def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
         e_dry_source = "the scene's e_dry"
     return Scene(title=title, body1=body1, body2=body2, fluid=fluid, v0=v0, x0=x0,
                  ambient_pressure=ambient, cavitation_pressure=p_cav,
-                 cavitation_pressure_source=how, cavitation=cavitation, **laws,
+                 cavitation_pressure_source=how, cavitation=cavitation,
+                 outer_start=outer_start, x_ref=x_ref, **laws,
                  asperity_contact=contact, e_dry=e_dry, e_dry_source=e_dry_source)

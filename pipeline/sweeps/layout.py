@@ -30,8 +30,9 @@ __all__ = ["STORE_SCHEMA", "VARIABLES", "FLOATS", "FLAGS", "COUNTS", "DIAGNOSTIC
            "STATUS_CODES", "MODEL_CODES", "CODECS", "empty_dataset", "zarr_warnings"]
 
 # bump when variables, their encoding or their meaning change (an old store is then refused);
-# 6: checksummed chunks (crc32c), the coordinates' copy ``grid`` and ``metadata_sha256``
-STORE_SCHEMA = 6
+# 6: checksummed chunks (crc32c), the coordinates' copy ``grid`` and ``metadata_sha256``;
+# 7: the far-field observables e_far and v_outer_start
+STORE_SCHEMA = 7
 
 _DTYPE = {"float": "f8", "flag": "i1", "count": "i4"}
 # name: (dtype, long_name, units), generated from the registry; flags are int8 0/1 with fill -1

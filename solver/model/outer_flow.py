@@ -55,7 +55,8 @@ import numpy as np
 __all__ = [
     "WALL_LOG", "EQUAL_LOG", "wall_resistance", "equal_spheres_resistance", "pair_forces",
     "wall_outer", "equal_spheres_outer", "wall_outer_regular", "equal_spheres_outer_regular",
-    "alpha_wall", "alpha_equal",
+    "alpha_wall", "alpha_equal", "GEOMETRIES", "resistance", "outer",
+    "wall_added_mass", "equal_spheres_added_mass", "added_mass", "ZETA3",
 ]
 
 # coefficient of ln(a/x) in R (units of the module docstring): Cox & Brenner (1967) for the wall;
@@ -281,3 +282,76 @@ def equal_spheres_outer(gap: float, tol: float = TOL) -> float:
 def equal_spheres_outer_regular(gap: float, tol: float = TOL) -> float:
     """``R - a/x - (9/20) ln(a/x)`` for two equal spheres: bounded as ``x -> 0``."""
     return equal_spheres_outer(gap, tol) - EQUAL_LOG * math.log(1.0 / gap)
+
+
+# ---- the outer phase: resistance by geometry, and the added mass of potential flow ----------------
+
+GEOMETRIES = ("wall", "spheres")  # a sphere and a plane wall; two equal spheres (head-on)
+
+ZETA3 = 1.2020569031595942  # Riemann zeta(3): the contact value of the image series below
+
+
+def _check_geometry(geometry: str) -> str:
+    if geometry not in GEOMETRIES:
+        raise ValueError(f"geometry must be one of {', '.join(GEOMETRIES)}, got {geometry!r}")
+    return geometry
+
+
+def resistance(geometry: str, gap: float, tol: float = TOL) -> float:
+    """``R = F / (6 pi mu a v)`` of ``geometry`` ("wall": ``wall_resistance``; "spheres": two
+    equal spheres, ``equal_spheres_resistance``) at gap ``x = gap * a``."""
+    if _check_geometry(geometry) == "wall":
+        return wall_resistance(gap, tol)
+    return equal_spheres_resistance(gap, tol)
+
+
+def outer(geometry: str, gap: float, tol: float = TOL) -> float:
+    """``R - a/x`` of ``geometry``: what the exact resistance adds to the film's ``a/x``."""
+    return resistance(geometry, gap, tol) - 1.0 / _check_gap(gap)
+
+
+def wall_added_mass(gap: float, tol: float = TOL) -> float:
+    """Added-mass coefficient ``C = m_a / (rho_f V)`` of a sphere (radius ``a``, volume ``V``)
+    moving normal to a plane wall at gap ``x = gap * a``, in potential flow:
+
+        C = 1/2 + (3/2) sum_(n>=2) (sinh alpha / sinh(n alpha))^3,    cosh alpha = 1 + x/a.
+
+    The wall is the mirror plane of the sphere and its image approaching each other; an axial
+    dipole outside a sphere at distance ``f`` from its centre has the image dipole ``(a/f)^3``
+    times as strong at the inverse point (the sphere theorem; Milne-Thomson, *Theoretical
+    Hydrodynamics*, ch. 16), and the chain of images has strengths ``(sinh alpha/sinh n alpha)^3``
+    (Hicks 1880; Lamb 1932, art. 98); the kinetic energy of the fluid gives ``C`` (docs/model.md,
+    "Outer flow: the far-field restitution"). Far away ``C = 1/2 + (3/16)(a/h)^3 + ...``
+    (``h = a + x``); at contact ``1/2 + (3/2)(zeta(3) - 1) = 0.80309``: finite.
+
+    Terms ``t_n`` fall with ratio below ``exp(-3 alpha)``, so the tail after ``N`` is below
+    ``t_N exp(-3 alpha) / (1 - exp(-3 alpha))``; terms are added until that is below ``tol``.
+    """
+    alpha = alpha_wall(gap)
+    q = math.exp(-3.0 * alpha)
+    n_terms = 64
+    while True:
+        n = np.arange(2, n_terms + 2, dtype=float)
+        # sinh a / sinh(n a) = exp(-(n-1) a) (1 - exp(-2a)) / (1 - exp(-2 n a)), no overflow
+        ratio = np.exp(-(n - 1.0) * alpha) * (-math.expm1(-2.0 * alpha)) / (-np.expm1(-2.0 * n * alpha))
+        t = ratio ** 3
+        if t[-1] * q / (1.0 - q) < tol:
+            return 0.5 + 1.5 * float(np.sum(t[::-1]))
+        if n_terms >= _N_MAX:
+            raise FloatingPointError(f"added-mass series not converged with {n_terms} terms")
+        n_terms *= 2
+
+
+def equal_spheres_added_mass(gap: float, tol: float = TOL) -> float:
+    """``C`` of each of two equal spheres (radius ``2a``, ``a`` the reduced radius) approaching
+    each other at gap ``x = gap * a``: the midplane is a plane of symmetry, so each sphere sees
+    the wall at gap ``x/2``, i.e. ``wall_added_mass(gap / 4)`` in units of its own radius."""
+    return wall_added_mass(_check_gap(gap) / 4.0, tol)
+
+
+def added_mass(geometry: str, gap: float, tol: float = TOL) -> float:
+    """``C`` of ``geometry`` at gap ``x = gap * a`` (``wall_added_mass`` or
+    ``equal_spheres_added_mass``)."""
+    if _check_geometry(geometry) == "wall":
+        return wall_added_mass(gap, tol)
+    return equal_spheres_added_mass(gap, tol)
