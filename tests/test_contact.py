@@ -57,7 +57,7 @@ def test_contact_is_off_above_the_roughness_and_closes_the_layer():
     assert work == pytest.approx(c * contact.asperity_energy(h_set, phys), rel=1e-10)
 
 
-def _rigid_limit(stokes, e_dry):
+def _rigid_limit(stokes, e_dry, **numerics):
     """A rigid collision with a hard cut-off: eps 1e-12 puts the start 63000 x1 out and the
     roughness at x0 e^-2, so the film never deforms the solids and the asperity layer (at most
     (p/k)^(2/3) ~ 0.5 x1 deep) and the Hertz contact (~10 x1) are 1e-3 of the gap."""
@@ -67,21 +67,23 @@ def _rigid_limit(stokes, e_dry):
     physics = Physics(St=stokes, eps=eps, roughness=x0 * math.exp(-log_ratio),
                       asperity_stiffness=100.0, e_dry=e_dry)
     exact = e_dry * (1.0 - log_ratio / stokes) - log_ratio / stokes
-    return collide(physics), exact
+    return collide(physics, save_profiles=False, **numerics), exact
 
 
-@pytest.mark.parametrize("stokes, e_dry, tol", [
-    # the film's loss on the way in and out, ln(x0/sigma)/St each, and e_dry in between. At St
-    # 200 the difference is 4.7e-5; at St 20 it is 3.9e-4 at the standard preset and 2.0e-4 at
-    # the fine one (measured): the time integration of the slow rigid film phase, converging
-    # with rtol, not a missing term (a missing e_dry would be off by 0.08, a missing film loss
-    # on either side by 0.1)
-    (200.0, 0.9, 1e-4),
-    (20.0, 0.9, 6e-4),
-    (20.0, 1.0, 6e-4),
+# The film's loss on the way in and out, ln(x0/sigma)/St each, and e_dry in between; a missing
+# e_dry would be off by 0.08 here, a missing film loss on either side by 0.1. The differences
+# measured at St 20 come from the grid's outer cells, which resolve the rigid film at X ~ 1e4 x1
+# (where smooth scenes never hand over): 4.4e-4, 3.5e-4, 1.7e-4 with the outer cells' largest
+# size max_rel 0.3 (standard), 0.15, 0.075; rtol 1e-4 to 1e-5 changes nothing (3.8-4.4e-4). The
+# remaining 1.7e-4 is the film inside the contact and the rigid film's hand-over and release at
+# twice the roughness. At St 200 the film's share is 10x smaller: 4.7e-5 at the standard preset.
+@pytest.mark.parametrize("stokes, e_dry, numerics, tol", [
+    (200.0, 0.9, {}, 1e-4),
+    (20.0, 0.9, dict(max_rel=0.075), 2.5e-4),
+    (20.0, 1.0, dict(max_rel=0.075), 2.5e-4),
 ])
-def test_rigid_limit_with_a_hard_cut_off_matches_the_closed_form(stokes, e_dry, tol):
-    result, exact = _rigid_limit(stokes, e_dry)
+def test_rigid_limit_with_a_hard_cut_off_matches_the_closed_form(stokes, e_dry, numerics, tol):
+    result, exact = _rigid_limit(stokes, e_dry, **numerics)
     assert result.status == "ok", result.message
     assert abs(result.e_wet - exact) < tol
     # the solids lost (1 - e_dry^2) of the energy they held when the spheres stopped
@@ -147,3 +149,21 @@ def test_rough_collision_closes_its_energy_and_loses_in_the_solids():
 def test_bad_contact_input_is_refused_naming_the_field(changes, field):
     with pytest.raises(ValueError, match=field):
         Physics(St=5.0, eps=1e-4, **changes)
+
+
+@pytest.mark.parametrize("argv, field", [
+    (["run", "--St", "5", "--eps", "1e-4", "--e-dry", "1.5"], "e_dry"),
+    (["run", "--St", "5", "--eps", "1e-4", "--roughness", "-1"], "roughness"),
+    (["run", "--St", "5", "--eps", "1e-4", "--roughness", "100"], "start gap"),
+    (["scene", "--material1", "chrome_steel", "--radius1", "1 mm", "--material2", "glass",
+      "--wall", "--fluid", "water", "--v0", "0.5 m/s", "--e-dry", "0"], "e_dry"),
+    (["scene", "--material1", "chrome_steel", "--radius1", "1 mm", "--material2", "glass",
+      "--wall", "--fluid", "water", "--v0", "0.5 m/s", "--roughness1", "-1 um"],
+     "body1.roughness"),
+])
+def test_bad_contact_input_on_the_command_line_is_exit_2_and_one_line(argv, field, capsys):
+    from pipeline.cli import main
+
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and field in err[0], err
