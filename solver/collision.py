@@ -26,7 +26,7 @@ from ._jit import deferred_interrupt
 from .integration import stepper
 from .integration.grid import reference_grid, scaled_grid
 from .integration.events import RELAXED_FULL
-from .model import cavitation, liquid, piezoviscous, rigid
+from .model import cavitation, contact, liquid, piezoviscous, rigid
 from .shortcuts import plan
 from .observables import SERIES, STATUS, failure_message
 from .physics import Physics
@@ -387,7 +387,10 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
         v_rel = -u_rel
         blocks.append(_floor_block(path, physics, tau_per_t, lost, v_c[-1]))
         lost = blocks[-1]["dissipated"][-1]
-    if math.isinf(x_rel):  # no floor at all (Pi = 0): no suction, the spheres never stop
+    resting = not physics.smooth and abs(v_rel) < contact.REST_SPEED
+    if resting:  # at rest on the asperities: the gap they hold is the equilibrium
+        ln_x_e = math.log(float(cols["H_min"][-1]))
+    elif math.isinf(x_rel):  # no floor at all (Pi = 0): no suction, the spheres never stop
         ln_x_e = math.inf
     else:
         ln_x_e = rigid.rest_separation(x_rel, v_rel, stokes)
@@ -400,10 +403,13 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
     result.series = _concat(blocks)
     result.tau_release = t_c[-1] * tau_per_t
     result.ln_x_e_x1 = ln_x_e
-    result.e_wet = _wet_restitution(physics, x_c, v_c, x_ref_x0 * x_start,
-                                    cols["cavity_radius"] + cols["void_volume"])
-    result.e_x0 = result.e_wet if x_ref_x0 == 1.0 else _wet_restitution(
-        physics, x_c, v_c, x_start, cols["cavity_radius"] + cols["void_volume"])
+    if resting:  # they stick
+        result.e_wet = result.e_x0 = 0.0
+    else:
+        result.e_wet = _wet_restitution(physics, x_c, v_c, x_ref_x0 * x_start,
+                                        cols["cavity_radius"] + cols["void_volume"])
+        result.e_x0 = result.e_wet if x_ref_x0 == 1.0 else _wet_restitution(
+            physics, x_c, v_c, x_start, cols["cavity_radius"] + cols["void_volume"])
     _coupled_observables(result, cols, tau_per_t, ln_x_e, v_c[-1])
     if blocks[-1]["phase"][0] == 2:  # the departure's cavity (with a floor) may be the widest
         widest = max(float(np.max(b["cavity_radius"])) for b in blocks if b["phase"][0] == 2)

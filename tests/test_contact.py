@@ -167,3 +167,17 @@ def test_bad_contact_input_on_the_command_line_is_exit_2_and_one_line(argv, fiel
     assert main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and field in err[0], err
+
+
+def test_a_rough_collision_that_sticks_ends_at_rest_on_its_asperities():
+    """St 8 with e_dry 0.5: the spheres bounce on their asperities, come back and rest there,
+    dented (the permanent set keeps W from relaxing): the coupled phase ends at rest
+    (contact.contact_state), they stick (e_wet 0) and the equilibrium is the gap the asperities
+    hold, below the start and about the roughness."""
+    physics = Physics(St=8.0, eps=1e-4, roughness=1.0, asperity_stiffness=2.0, e_dry=0.5)
+    result = collide(physics, save_profiles=False)
+    assert result.status == "ok", result.message
+    assert result.e_wet == 0.0 and result.v_r > 0.0  # a small bounce, then they stick
+    gap = math.exp(result.ln_x_e_x1)
+    assert 0.5 < gap < 2.0 * physics.roughness
+    assert abs(result.series["V"][-1]) < contact.REST_SPEED

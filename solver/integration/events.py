@@ -27,12 +27,15 @@ RELAXED_FULL = 2
 def reached(kind, params, steps, x, v, w_absmax, active_radius):
     """True when the event ``kind`` with ``params`` has happened at the accepted state
     (``steps`` accepted steps so far, separation ``x``, velocity ``v``, largest ``|W|``, radius out
-    to which the film's active set reaches, 0 without: model/step.py, ``record``)."""
+    to which the film's active set reaches, 0 without, negative when the film says the motion
+    has ended: model/step.py, ``record``)."""
     relaxed = (steps > 0 and x > 0.0 and w_absmax < params[0] * x
                and (v < 0.0 or v < params[1]))
     slope = params[2] if v > 0.0 else params[3]
     if slope > 0.0:
         relaxed = relaxed and slope * 3.0 * abs(v) / (x * x) < params[4]
+    if active_radius < 0.0:  # the film says the motion has ended (at rest in contact)
+        return steps > 0
     if kind == RELAXED:
         return relaxed
     if kind == RELAXED_FULL:

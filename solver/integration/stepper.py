@@ -210,6 +210,9 @@ def _newton(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist
     fresh = False
     if (not lu_valid) or abs(bh / bh_lu - 1.0) > 0.3:
         model.surface_gap(s, influence, phys, y, scalars, w, h)
+        for i in range(n):
+            if not (h[i] > 0.0):  # the predictor's gap is not admissible: a smaller step
+                return DIVERGED, lu_valid, bh_lu, True
         lu_valid = _factorise(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells,
                               scalars, fac, dres_dh, counters)
         bh_lu = bh

@@ -36,13 +36,13 @@ derivatives of the gap and of the force on the spheres follow by the implicit fu
 import numpy as np
 
 from .._jit import jit
-from ..integration.linalg import matvec
+from ..integration.linalg import lu_factor, lu_solve, matvec
 from ..physics import ASPERITY_K, ROUGHNESS, ST
 
 # the rigid film holds where every gap is at least this many roughnesses: the coupled phase
 # starts before it on approach (rigid.contact_onset_separation) and ends after it on departure
 CONTACT_MARGIN = 2.0
-# a film in contact whose spheres approach slower than this (in v0) rests on its asperities
+# a film near contact whose spheres move slower than this (in v0) rests on its asperities
 REST_SPEED = 1e-6
 MAX_ITERATIONS = 60
 GAP_TOL = 1e-14  # relative Newton tolerance of the contact gap (of sigma): rounding level
@@ -150,6 +150,7 @@ def contact_gap(s, influence, x, p, c, t_set, h_set, phys, pa, w, h):
     dc = np.empty(m)
     mat = np.empty((m, m))
     rhs = np.empty(m)
+    piv = np.empty(m, dtype=np.int32)
     converged = False
     for _ in range(MAX_ITERATIONS):
         for a in range(m):
@@ -161,7 +162,9 @@ def contact_gap(s, influence, x, p, c, t_set, h_set, phys, pa, w, h):
                 mat[a, b] = -kcc[a, b] * dc[b]
             mat[a, a] += 1.0
             rhs[a] = -r
-        dh = np.linalg.solve(mat, rhs)
+        if not np.all(np.isfinite(mat)) or not lu_factor(mat, piv):
+            return False
+        dh = lu_solve(mat, piv, rhs)
         step = 0.0
         for a in range(m):
             new = hc[a] + dh[a]
@@ -189,7 +192,8 @@ def contact_derivatives(influence, weight, h, c, h_set, phys, k_eff, dh_dx, forc
     contact nodes, ``D = dp_a/dH`` there, ``M = I - c K_CC D``, ``Z = M^-1 c K_C:`` and ``z =
     M^-1 1_C``: ``dH/dP = c K + c K_:C D Z`` into ``k_eff``, ``dH/dX = 1 + c K_:C D z`` into
     ``dh_dx``, ``dF/dP = weight + (weight_C D) Z`` into ``force_dp``; returns ``dF/dX =
-    (weight_C D) z``."""
+    (weight_C D) z``; NaN where the contact's matrix is singular or ``h`` is not finite (the
+    loop then sees a singular Newton matrix)."""
     n = h.size
     m = 0
     for i in range(n):
@@ -220,7 +224,19 @@ def contact_derivatives(influence, weight, h, c, h_set, phys, k_eff, dh_dx, forc
         for j in range(n):
             rhs[a, j] = c * influence[idx[a], j]
         rhs[a, n] = 1.0
-    z = np.linalg.solve(mat, rhs)  # (m, n + 1): Z, then z
+    piv = np.empty(m, dtype=np.int32)
+    z = np.full((m, n + 1), np.nan)  # Z, then z (NaN: a singular or non-finite contact)
+    if np.all(np.isfinite(mat)) and lu_factor(mat, piv):
+        col = np.empty(m)
+        for j in range(n + 1):
+            for a in range(m):
+                col[a] = rhs[a, j]
+            lu_solve(mat, piv, col)
+            for a in range(m):
+                z[a, j] = col[a]
+    if not np.all(np.isfinite(z)):
+        k_eff[:, :] = np.nan
+        return np.nan
     kd = np.empty((n, m))
     for i in range(n):
         for a in range(m):
@@ -239,14 +255,22 @@ def contact_derivatives(influence, weight, h, c, h_set, phys, k_eff, dh_dx, forc
     return force_dx
 
 
+# what a rough film near contact tells the end of the coupled phase (contact_state)
+FREE, HOLD, REST = 0, 1, 2
+
+
 @jit
-def holds_contact(h, v, phys):
-    """Whether the rigid departure cannot start yet (events.RELAXED_FULL): some gap is within
-    ``CONTACT_MARGIN`` roughnesses and the spheres are not at rest on the asperities."""
+def contact_state(h, v, phys):
+    """``HOLD`` while the rigid departure cannot start yet (some gap within ``CONTACT_MARGIN``
+    roughnesses and the spheres moving), ``REST`` when they are near contact and at rest
+    (``|V| < REST_SPEED``: they stick on their asperities, whatever their deformation, which a
+    permanent set keeps), ``FREE`` otherwise."""
     near = False
     for i in range(h.size):
         near = near or h[i] < CONTACT_MARGIN * phys[ROUGHNESS]
-    return near and not (0.0 <= v < REST_SPEED)
+    if not near:
+        return FREE
+    return REST if abs(v) < REST_SPEED else HOLD
 
 
 @jit

@@ -32,7 +32,7 @@ import numpy as np
 from .._jit import jit
 from ..observables import SERIES_INDEX
 from ..physics import CAVITATION, DENSITY, E_DRY, PI, ROUGHNESS, ST
-from .contact import asperity_work, contact_derivatives, contact_gap, holds_contact
+from .contact import HOLD, REST, asperity_work, contact_derivatives, contact_gap, contact_state
 from .film import (JFO, NO_FLOOR, cavity_edge, cell_content, compression_work, constrain,
                    energy_rates, film_force, gap, jacobian, jfo_void, residual, strain_energy,
                    update_cavity, update_cavity_jfo, void_work)
@@ -355,20 +355,24 @@ def record(row, s, area, weight, p, h, pmax, pmin, marks, cells, scalars, phys, 
     lost in the solids), and the error scale's update from the largest
     pressure seen (``floor_fraction`` of it, from the first cavity on). Returns the radius the
     terminal events see: the cavity's, tiny but positive for a JFO cavity of axis cells alone
-    (whose edge radius is zero), and positive while a rough film holds its contact
-    (contact.holds_contact)."""
+    (whose edge radius is zero), positive while a rough film holds its contact and -1 when
+    it rests on its asperities (contact.contact_state; events.reached ends the phase)."""
     theta0 = cells[THETA0]
     row[_E_C] = compression_work(area, p, h, theta0, phys)
     row[_W_VOID] = scalars[WORKED]
     row[_F_A] = 0.0
     row[_E_A] = 0.0
     row[_LOST] = scalars[SOLID_LOST]
-    held = False  # a rough film near contact holds the coupled phase as a cavity does
+    # a rough film near contact holds the coupled phase as a cavity does, and ends it at rest
+    held = False
     if rough(phys):
         row[_F_A] = film_force(weight, node_block(scalars, PA))
         row[_E_A] = asperity_work(weight, h, scalars[LOAD_SCALE], node_block(scalars, H_SET),
                                   phys)
-        held = holds_contact(h, row[_V], phys)
+        state = contact_state(h, row[_V], phys)
+        if state == REST:
+            return -1.0
+        held = state == HOLD
     if not has_active_set(phys):  # no cavity ever
         row[_R_CAV] = 0.0
         row[_V_VOID] = 0.0
