@@ -310,7 +310,7 @@ def _local_error(influence, phys, y, y_pred, err_fac, h, marks, scalars, rtol, r
     matvec(influence, res[:n], kdp)
     for i in range(n):
         dh[i] = res[n] + kdp[i]
-    p_scale = scale if model.step_error(y, y_pred, err_fac, marks, scalars, phys, res[:n], dh,
+    p_scale = scale if model.step_error(y, y_pred, err_fac, h, marks, scalars, phys, res[:n], dh,
                                         scale) else y[:n]
     return _norm(res[:n], res[n], res[n + 1], dh, p_scale, y[n], y[n + 1], h, 1.0,
                  model.pressure_scale(scalars)) / rtol

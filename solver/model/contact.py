@@ -45,7 +45,7 @@ CONTACT_MARGIN = 2.0
 # a film near contact whose spheres move slower than this (in v0) rests on its asperities
 REST_SPEED = 1e-6
 MAX_ITERATIONS = 60
-GAP_TOL = 1e-14  # relative Newton tolerance of the contact gap (of sigma): rounding level
+GAP_TOL = 1e-12  # Newton tolerance of the contact gap, of sigma: far below any step tolerance
 
 
 @jit
@@ -152,6 +152,8 @@ def contact_gap(s, influence, x, p, c, t_set, h_set, phys, pa, w, h):
     rhs = np.empty(m)
     piv = np.empty(m, dtype=np.int32)
     converged = False
+    fresh = True  # factorise the matrix at the next iteration (chord iterations in between)
+    step_prev = np.inf
     for _ in range(MAX_ITERATIONS):
         for a in range(m):
             pc[a], dc[a] = contact_pressure(hc[a], h_set[idx[a]], c, phys)
@@ -159,11 +161,14 @@ def contact_gap(s, influence, x, p, c, t_set, h_set, phys, pa, w, h):
             r = hc[a] - base[a]
             for b in range(m):
                 r -= kcc[a, b] * pc[b]
-                mat[a, b] = -kcc[a, b] * dc[b]
-            mat[a, a] += 1.0
             rhs[a] = -r
-        if not np.all(np.isfinite(mat)) or not lu_factor(mat, piv):
-            return False
+        if fresh:
+            for a in range(m):
+                for b in range(m):
+                    mat[a, b] = -kcc[a, b] * dc[b]
+                mat[a, a] += 1.0
+            if not np.all(np.isfinite(mat)) or not lu_factor(mat, piv):
+                return False
         dh = lu_solve(mat, piv, rhs)
         step = 0.0
         for a in range(m):
@@ -176,6 +181,8 @@ def contact_gap(s, influence, x, p, c, t_set, h_set, phys, pa, w, h):
         if step <= GAP_TOL * sigma:
             converged = True
             break
+        fresh = step > 0.25 * step_prev  # a chord step that does not contract 4x: refactorise
+        step_prev = step
     for a in range(m):
         pa[idx[a]] = contact_pressure(hc[a], h_set[idx[a]], c, phys)[0]
     for i in range(n):

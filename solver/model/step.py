@@ -223,6 +223,24 @@ def step_residual(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, 
         constrain(p, res, active, phys)
 
 
+# the band of gaps around first touch, relative to the roughness, where the contact law's
+# second derivative is singular (contact.asperity_pressure: p_a ~ (sigma - H)^1.5)
+TOUCH_BAND = 0.1
+
+
+@jit
+def first_touch(h, phys, perr, dh):
+    """Take the nodes whose gap lies within ``TOUCH_BAND`` of first touch out of the error
+    norm: there the gap and the pressure are not smooth in time (the contact's stiffness grows
+    like ``(sigma - H)^0.5`` from zero), and no step size makes their extrapolation accurate;
+    the nodes inside the contact, outside it, ``X`` and ``V`` control the step."""
+    sigma = phys[ROUGHNESS]
+    for i in range(h.size):
+        if abs(h[i] - sigma) < TOUCH_BAND * sigma:
+            perr[i] = 0.0
+            dh[i] = 0.0
+
+
 @jit
 def settled(marks):
     """Whether the iterate's active set is the one the factorised Jacobian was built with."""
@@ -302,7 +320,7 @@ def update_norm(norm, cells, phys, rtol):
 
 
 @jit
-def step_error(y, y_pred, err_fac, marks, scalars, phys, perr, dh, scale):
+def step_error(y, y_pred, err_fac, h, marks, scalars, phys, perr, dh, scale):
     """Adjust the local error estimate of a converged step. On entry ``perr`` holds the pressure
     part ``err_fac (y - y_pred)`` and ``dh`` the gap's.
 
@@ -323,6 +341,8 @@ def step_error(y, y_pred, err_fac, marks, scalars, phys, perr, dh, scale):
     Returns True when ``scale`` holds the Kirchhoff pressures, False when the errors are measured
     against the pressures themselves (``scale`` untouched)."""
     n = perr.size
+    if rough(phys):
+        first_touch(h, phys, perr, dh)
     rough_in_time = False
     if has_active_set(phys):
         active, active0 = marks[ACTIVE], marks[ACTIVE0]
