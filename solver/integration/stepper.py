@@ -319,7 +319,8 @@ def _local_error(influence, phys, y, y_pred, err_fac, h, marks, scalars, rtol, r
 @jit
 def _record(row, t, s, area, weight, y, w, h, strain, dissipated, marks, cells, scalars, phys):
     """The series row of the accepted state ``y`` at ``t`` (gap ``h``, deflection ``w``); returns
-    the largest ``|W|`` and the radius the terminal events see (model/step.py: ``record``)."""
+    the largest ``|W|`` that can still relax and the radius the terminal events see
+    (model/step.py: ``relaxing_deflection``, ``record``)."""
     n = s.size
     x = y[n]
     v = y[n + 1]
@@ -349,7 +350,7 @@ def _record(row, t, s, area, weight, y, w, h, strain, dissipated, marks, cells, 
     row[_P_MIN] = pmin
     r_event = model.record(row, s, area, weight, y[:n], h, pmax, pmin, marks, cells, scalars,
                            phys, PRESSURE_SCALE)
-    return wmax, r_event
+    return model.relaxing_deflection(w, wmax, scalars, phys), r_event
 
 
 @jit

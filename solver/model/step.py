@@ -124,6 +124,19 @@ def surface_gap(s, influence, phys, y, scalars, w, h):
 
 
 @jit
+def relaxing_deflection(w, w_absmax, scalars, phys):
+    """The largest ``|W|`` the terminal events wait to relax (``w_absmax``, ``max |W|``): a rough
+    film's permanent set (model/contact.py) never relaxes, so ``max |W - (1 - c) K T_set|``."""
+    if not rough(phys) or scalars[LOAD_SCALE] == 1.0:
+        return w_absmax
+    w_set = node_block(scalars, W_SET)
+    out = 0.0
+    for i in range(w.size):
+        out = max(out, abs(w[i] - w_set[i]))
+    return out
+
+
+@jit
 def total_force(weight, y, scalars, phys):
     """``Int (P + p_a) R dR``, the force on the spheres (film.film_force), with the contact
     pressure of the last ``surface_gap``."""
