@@ -67,8 +67,9 @@ def contact_pressure(h, h_set, c, phys):
     """The asperities' pressure and its derivative in ``H`` while loading (``c = 1``:
     ``asperity_pressure``) and while unloading from the gap ``h_set`` of the onset: the loading
     law read at ``h_set + (H - h_set)/c``, so the asperities give back ``c`` times the work they
-    took, as the bulk does (Walton & Braun 1986)."""
-    if c == 1.0:
+    took, as the bulk does (Walton & Braun 1986). A node whose asperities were not touching at
+    the onset (``h_set >= sigma``) was never loaded: it keeps the loading law."""
+    if c == 1.0 or h_set >= phys[ROUGHNESS]:
         return asperity_pressure(h, phys)
     p, d = asperity_pressure(h_set + (h - h_set) / c, phys)
     return p, d / c
@@ -173,7 +174,8 @@ def contact_gap(s, influence, x, p, c, t_set, h_set, phys, pa, w, h):
         step = 0.0
         for a in range(m):
             new = hc[a] + dh[a]
-            floor = h_set[idx[a]] * (1.0 - c) if c != 1.0 else 0.0  # where the law closes
+            # where the law closes (contact_pressure: a loaded node's unloading law earlier)
+            floor = h_set[idx[a]] * (1.0 - c) if c != 1.0 and h_set[idx[a]] < sigma else 0.0
             if new <= floor:  # past the closed layer: approach it geometrically
                 new = floor + 0.1 * (hc[a] - floor)
             step = max(step, abs(new - hc[a]))
@@ -288,7 +290,8 @@ def asperity_work(weight, h, c, h_set, phys):
     (``contact_pressure``)."""
     total = 0.0
     for i in range(h.size):
-        hh = h[i] if c == 1.0 else h_set[i] + (h[i] - h_set[i]) / c
+        loaded = c != 1.0 and h_set[i] < phys[ROUGHNESS]  # contact_pressure's two laws
+        hh = h_set[i] + (h[i] - h_set[i]) / c if loaded else h[i]
         if hh < phys[ROUGHNESS]:
-            total += weight[i] * c * asperity_energy(hh, phys)
+            total += weight[i] * (c if loaded else 1.0) * asperity_energy(hh, phys)
     return 2.0 * total / (3.0 * phys[ST])
