@@ -38,6 +38,23 @@ def test_run_help_reads_the_physics_without_compiled_code():
     assert "solver.physics" in loaded and "numba" not in loaded and "scipy" not in loaded
 
 
+def test_a_sweep_with_nothing_to_do_loads_neither_dask_nor_the_solver(tmp_path):
+    """``make sweep`` on a complete store: no cluster is started, so distributed (and dask, pint,
+    numba...) is never imported (benchmarks/startup.md measures what that saves)."""
+    from pipeline.sweeps.config import load_sweep
+    from pipeline.sweeps.run import run_sweep
+    from tests.test_pipeline import fake_solve, sweep_text
+
+    toml = tmp_path / "s.toml"
+    toml.write_text(sweep_text([1.0, 3.0], [1e-4, 1e-2], store=str(tmp_path / "s.zarr")))
+    assert run_sweep(load_sweep(str(toml)), runner="serial", solve=fake_solve,
+                     progress=None).exit_code == 0
+    loaded = _modules_after(["sweep", str(toml)])
+    assert "pipeline.sweeps.store" in loaded  # the probe opened the store
+    heavy = {m for m in HEAVY if m not in ("xarray", "zarr")} | {"dask"}
+    assert not heavy & loaded, sorted(heavy & loaded)
+
+
 def test_version_is_the_package_and_the_solver_version(capsys):
     from importlib.metadata import version
 
