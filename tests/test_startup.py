@@ -49,8 +49,13 @@ def test_a_sweep_with_nothing_to_do_loads_neither_dask_nor_the_solver(tmp_path):
     toml.write_text(sweep_text([1.0, 3.0], [1e-4, 1e-2], store=str(tmp_path / "s.zarr")))
     assert run_sweep(load_sweep(str(toml)), runner="serial", solve=fake_solve,
                      progress=None).exit_code == 0
-    loaded = _modules_after(["sweep", str(toml)])
-    assert "pipeline.sweeps.store" in loaded  # the probe opened the store
+    code = ("import sys\nfrom pipeline.cli import main\n"
+            f"print('exit', main({['sweep', str(toml)]!r}))\n"
+            "print('\\n'.join(sorted(sys.modules)), file=sys.stderr)\n")
+    p = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True,
+                       timeout=120)
+    assert "exit 0" in p.stdout and "cached 4" in p.stdout, p.stdout + p.stderr  # nothing to do
+    loaded = set(p.stderr.split())
     heavy = {m for m in HEAVY if m not in ("xarray", "zarr")} | {"dask"}
     assert not heavy & loaded, sorted(heavy & loaded)
 
