@@ -3,7 +3,7 @@
 - One BLAS/OpenMP thread per process (``configure``), set before numpy/scipy load their BLAS: a
   sweep runs one scene per core, and threaded BLAS is slower for these matrix sizes and changes
   the last digits of results (docs/solver.md). Existing settings win. ``pipeline/__init__.py``
-  calls it first thing, and the dask worker plugin (``pipeline.sweeps.runners.WorkerSetup``) on
+  calls it first thing, and the dask worker plugin (``pipeline.sweeps.worker.WorkerSetup``) on
   every worker, also on workers that join the cluster later. This module imports nothing heavy.
   A worker started by ``dask worker`` has loaded numpy before the plugin runs, so there the
   variables must also be exported by whoever starts it (docs/pipeline.md, SLURM); local clusters

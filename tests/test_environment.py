@@ -182,7 +182,7 @@ def _record_warm():
 def test_worker_plugin_sets_up_workers_that_join_later(monkeypatch):
     from dask.distributed import Client, LocalCluster
 
-    from pipeline.sweeps.runners import WorkerSetup
+    from pipeline.sweeps.worker import WorkerSetup
 
     monkeypatch.delenv("OPENBLAS_NUM_THREADS", raising=False)
     WARMED.clear()

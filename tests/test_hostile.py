@@ -743,6 +743,63 @@ def test_metadata_of_the_wrong_shape_is_one_line_for_every_reader(ws, capsys, se
     assert tree_hash(ws / "s.zarr") == before and CALLS == []
 
 
+def _same_stat(damage, rel):
+    """``damage``, then the chunk's size and time stamps put back as they were: a change that a
+    check of the files' sizes and mtimes would miss."""
+    def make(ws):
+        p = ws / rel
+        st = p.stat()
+        damage(ws)
+        assert p.stat().st_size == st.st_size
+        os.utime(p, ns=(st.st_atime_ns, st.st_mtime_ns))
+    return make
+
+
+def _undecodable(rel):
+    """Replace a chunk by bytes that are no zstd stream, under a valid CRC-32C: only decoding it
+    tells (a writer computing a checksum over garbage)."""
+    def make(ws):
+        import google_crc32c
+
+        data = b"no zstd frame here"
+        (ws / rel).write_bytes(data + google_crc32c.value(data).to_bytes(4, "little"))
+    return make
+
+
+def test_a_sweep_with_nothing_to_do_checks_the_chunks_it_does_not_decode(ws, base, capsys):
+    """A sweep with nothing to do decodes only what it plans with (pipeline/sweeps/store.py
+    PLANNED, integrity.CHECKED); the other variables' chunks are verified from their bytes: one
+    flipped byte in a chunk of ``steps``, with its size and mtime as before, is still found and
+    its row recomputed."""
+    from pipeline.sweeps.integrity import CHECKED
+    from pipeline.sweeps.store import PLANNED
+
+    assert "steps" not in {*PLANNED, *CHECKED}  # the case this test is about: a lazy variable
+    _same_stat(_flip("s.zarr/steps/c/2/0", 5), "s.zarr/steps/c/2/0")(ws)
+    code, out, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    assert code == 0 and "repaired" in out, out + err
+    assert sorted(CALLS) == sorted((ST[2], e) for e in EPS)  # that row, nothing else
+    xr.testing.assert_identical(_stored(ws / "s.zarr"), _stored(base / "s.zarr"))
+    assert ehd(capsys, "status", "s.zarr")[0] == 0
+
+
+def test_a_chunk_that_only_decoding_finds_is_found_before_a_sweep_writes(ws, base, capsys):
+    """A chunk with a valid checksum over bytes that do not decode, in a variable a sweep does
+    not plan with: ``ehd status`` (it decodes everything) lists it; a sweep with work decodes
+    every variable before its first solve, turns those cells into "not run" and computes them
+    again with its own work."""
+    _undecodable("s.zarr/steps/c/1/0")(ws)
+    code, _, err = ehd(capsys, "status", "s.zarr")
+    assert code == EXIT_DAMAGED and "steps (unreadable)" in err, err
+    (ws / "s.toml").write_text(sweep_text([*ST, 40.0], EPS, store="s.zarr"))  # one more St
+    code, out, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    assert code == 0 and "repaired" in out, out + err
+    assert sorted(CALLS) == sorted((s, e) for s in (ST[1], 40.0) for e in EPS)
+    assert ehd(capsys, "status", "s.zarr")[0] == 0
+    grown = _stored(ws / "s.zarr").sel(St=ST)
+    xr.testing.assert_identical(grown, _stored(base / "s.zarr"))
+
+
 def test_every_chunk_of_every_array_is_checksummed(ws):
     from pipeline.sweeps.layout import VARIABLES
 

@@ -38,6 +38,28 @@ def test_run_help_reads_the_physics_without_compiled_code():
     assert "solver.physics" in loaded and "numba" not in loaded and "scipy" not in loaded
 
 
+def test_a_sweep_with_nothing_to_do_loads_neither_dask_nor_the_solver(tmp_path):
+    """``make sweep`` on a complete store: no cluster is started, so distributed (and dask, pint,
+    numba...) is never imported (benchmarks/startup.md measures what that saves)."""
+    from pipeline.sweeps.config import load_sweep
+    from pipeline.sweeps.run import run_sweep
+    from tests.test_pipeline import fake_solve, sweep_text
+
+    toml = tmp_path / "s.toml"
+    toml.write_text(sweep_text([1.0, 3.0], [1e-4, 1e-2], store=str(tmp_path / "s.zarr")))
+    assert run_sweep(load_sweep(str(toml)), runner="serial", solve=fake_solve,
+                     progress=None).exit_code == 0
+    code = ("import sys\nfrom pipeline.cli import main\n"
+            f"print('exit', main({['sweep', str(toml)]!r}))\n"
+            "print('\\n'.join(sorted(sys.modules)), file=sys.stderr)\n")
+    p = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True,
+                       timeout=120)
+    assert "exit 0" in p.stdout and "cached 4" in p.stdout, p.stdout + p.stderr  # nothing to do
+    loaded = set(p.stderr.split())
+    heavy = {m for m in HEAVY if m not in ("xarray", "zarr")} | {"dask"}
+    assert not heavy & loaded, sorted(heavy & loaded)
+
+
 def test_version_is_the_package_and_the_solver_version(capsys):
     from importlib.metadata import version
 

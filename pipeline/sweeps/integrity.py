@@ -2,7 +2,13 @@
 
 A store is checked whole when it is loaded (``load_checked``, used by ``ehd sweep``, ``ehd
 status``, ``ehd figures`` and ``pipeline.open_results``; the stores are small, so every chunk is
-read once). What is checked, in this order:
+read once). A reader that needs only some variables (``ehd sweep``: the status, the model and the
+messages to plan; ``read=``) has every chunk's checksum verified from its bytes (a few
+milliseconds for thousands of chunks, where decoding them through zarr takes about 0.2 ms each)
+and decodes only the variables it reads and those the checks below need; the others stay lazy
+(:func:`load_rest` decodes them when the writer needs them). A chunk whose checksum fails sends
+the load to the full decode, so what is found damaged is the same either way. What is checked,
+in this order:
 
 - the root metadata (``zarr.json``): a zarr group whose attributes have the shapes this pipeline
   writes (``store_schema`` a whole number equal to ``STORE_SCHEMA``, ``axes`` a list of names,
@@ -17,7 +23,11 @@ read once). What is checked, in this order:
   replaced by that copy (protected by ``metadata_sha256``) and listed in ``Damage.coords``;
   ``ehd sweep`` rewrites it.
 - every chunk of every variable: a chunk that cannot be read or whose CRC-32C does not match (a
-  truncated, garbled or flipped-byte chunk) damages every cell of that chunk;
+  truncated, garbled or flipped-byte chunk) damages every cell of that chunk; nothing about a
+  chunk's file (its size, its time stamps) is trusted, only its bytes. A lazy variable's chunk
+  whose checksum holds but whose compressed bytes do not decode (only a writer computing a
+  checksum over garbage makes one) is found when it is decoded: by ``load_rest``, or by any
+  reader that decodes it (``ehd status``, ``ehd figures``, zarr itself);
 - a cell whose status says ``ok`` but whose data say "never written" (``REQUIRED``: variables that
   an ok scene always has, e.g. ``v_r``, read NaN, or ``model`` reads 0): a deleted data chunk
   whose status chunk is intact (zarr reads a missing chunk as its fill value);
@@ -35,6 +45,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -46,10 +57,13 @@ from ..errors import StoreDamaged, StoreMismatch, UsageError
 from .config import format_physics
 from .layout import CODECS, STORE_SCHEMA, VARIABLES, zarr_warnings
 
-__all__ = ["Damage", "load_checked", "read_root", "metadata_digest", "REQUIRED", "DIGEST_KEY"]
+__all__ = ["Damage", "load_checked", "load_rest", "read_root", "metadata_digest",
+           "bad_checksums", "REQUIRED", "CHECKED", "DIGEST_KEY"]
 
 # floats an ok scene always has (finite or inf, never NaN): NaN there means a lost chunk
 REQUIRED = ("v_r", "h_m_x1", "h_m_x0", "ln_x_e_x1", "ln_x_e_x0")
+# the variables the checks below read: decoded by every load, whatever the reader asks for
+CHECKED = ("status", "model", *REQUIRED)
 DIGEST_KEY = "metadata_sha256"
 FIX = "restore the store from a copy, or move it aside and run its sweep again"
 
@@ -236,8 +250,72 @@ def _is_float(text) -> bool:
         return False
 
 
-def load_checked(path):
-    """Load a sweep store whole, checking its metadata, coordinates and every chunk once.
+def _chunk_files(path: str, meta: dict):
+    """``(chunk index, file)`` of every chunk an array's metadata says it has (zarr's default
+    chunk key encoding, ``c/i/j``), or None for a layout this pipeline does not write (the
+    caller then decodes the array through zarr)."""
+    try:
+        shape = [int(n) for n in meta["shape"]]
+        chunks = [int(n) for n in meta["chunk_grid"]["configuration"]["chunk_shape"]]
+        encoding = meta["chunk_key_encoding"]
+        sep = (encoding.get("configuration") or {}).get("separator", "/")
+    except (KeyError, TypeError, ValueError, AttributeError):
+        return None
+    if encoding.get("name") != "default" or sep not in ("/", ".") or len(shape) != len(chunks) \
+            or not all(c > 0 for c in chunks):
+        return None
+    grid = [-(-n // c) for n, c in zip(shape, chunks)]
+    # plain strings: thousands of pathlib joins cost more than reading the files
+    return [(idx, os.path.join(path, sep.join(("c", *map(str, idx)))))
+            for idx in np.ndindex(*grid)]
+
+
+def bad_checksums(path, arrays: dict, names) -> dict | None:
+    """The chunks of the arrays ``names`` whose bytes fail their CRC-32C: ``{name: [chunk index,
+    ...]}`` (only names with a failing chunk), from the files alone, without zarr.
+
+    The check zarr's ``crc32c`` codec makes when it decodes a chunk (the zarr v3 spec: the last 4
+    bytes are the little-endian CRC-32C of the bytes before them): a chunk that cannot be read,
+    is shorter than its checksum or whose checksum does not match fails. A missing chunk does not
+    (zarr reads it as the fill value: the data checks of :func:`load_checked` find lost ones).
+    None: an array whose last codec is not ``crc32c`` or whose chunk layout is not zarr's
+    default, which only zarr can check."""
+    import google_crc32c  # zarr's own CRC-32C (its crc32c codec imports it)
+
+    bad = {}
+    for name in names:
+        meta = arrays.get(name) or {}
+        codecs = meta.get("codecs") or [{}]
+        files = _chunk_files(os.path.join(path, name), meta)
+        if files is None or not isinstance(codecs[-1], dict) \
+                or codecs[-1].get("name") != "crc32c":
+            return None
+        for idx, file in files:
+            try:
+                with open(file, "rb") as f:
+                    data = f.read()
+            except FileNotFoundError:
+                continue
+            except OSError:
+                data = b""
+            if len(data) < 4 or \
+                    google_crc32c.value(data[:-4]) != int.from_bytes(data[-4:], "little"):
+                bad.setdefault(name, []).append(idx)
+    return bad
+
+
+def load_checked(path, read=None):
+    """Load a sweep store, checking its metadata, coordinates and every chunk once.
+
+    Parameters
+    ----------
+    path : str or Path
+        The store.
+    read : iterable of str, optional
+        The variables the caller reads (default: all, decoded). The others are decoded only if
+        a chunk's checksum fails (then everything is, so damage is found as without ``read``);
+        otherwise they stay lazy (their checksums verified from the chunks' bytes; decode them
+        with :func:`load_rest`). ``CHECKED`` is always decoded.
 
     Returns
     -------
@@ -250,6 +328,7 @@ def load_checked(path):
     FileNotFoundError, UsageError, StoreMismatch, StoreDamaged
         As :func:`read_root`: no sweep store, or metadata that cannot be trusted.
     """
+    import pandas as pd
     import xarray as xr
     import zarr
 
@@ -280,18 +359,21 @@ def load_checked(path):
                 damage.coords[d] = how
             coord_attrs = {k: v for k, v in (arrays[d].get("attributes") or {}).items()
                            if not k.startswith("_")}
-            # a Variable on xarray's fast path: the (dims, values, attrs) tuple form makes xarray
-            # import dask.array (0.5 s) to ask whether the values are a dask array
-            coords[d] = xr.Variable(d, copy, coord_attrs, fastpath=True)
+            # a Variable on xarray's fast path, over a pandas Index: the (dims, values, attrs)
+            # tuple form, or plain values made into the coordinate's index, make xarray import
+            # dask and pint (0.5 s) to ask whether the values are one of their arrays
+            coords[d] = xr.Variable(d, pd.Index(copy, name=d), coord_attrs, fastpath=True)
         lazy = xr.open_zarr(path, consolidated=True, chunks=None, drop_variables=list(dims))
     lazy = lazy.assign_coords(coords)
-    for name in list(lazy.data_vars):
-        variable = lazy.variables[name]
-        try:
-            variable.load()  # in place: the dataset keeps the values
-        except Exception:  # noqa: BLE001 - any decode failure of any codec: find the chunks
-            variable.data = _read_by_chunk(name, lazy[name], damage)
-    ds = lazy.load()
+    names = list(lazy.data_vars)
+    decode = names
+    if read is not None:
+        rest = [n for n in names if n not in {*read, *CHECKED}]
+        if rest and bad_checksums(path, arrays, rest) == {}:
+            decode = [n for n in names if n not in rest]
+    for name in decode:
+        _load_variable(lazy, name, damage)
+    ds = lazy
     status = ds["status"].values
     known = np.isin(status, list(STATUS_CODES.values()))
     for cell in np.argwhere(~known):
@@ -309,6 +391,21 @@ def load_checked(path):
         for cell in np.argwhere(~np.isin(model, [0, *MODEL_CODES.values()])):
             damage.add(cell, f"model (unknown code {int(model[tuple(cell)])})")
     return ds, damage
+
+
+def load_rest(ds, damage: Damage) -> None:
+    """Decode, in place, the variables of ``ds`` that ``load_checked(read=...)`` left lazy;
+    chunks that do not decode hold their fill value and add their cells to ``damage``."""
+    for name in list(ds.data_vars):
+        _load_variable(ds, name, damage)  # a decoded variable: nothing to do
+
+
+def _load_variable(ds, name, damage: Damage) -> None:
+    variable = ds.variables[name]
+    try:
+        variable.load()  # in place: the dataset keeps the values
+    except Exception:  # noqa: BLE001 - any decode failure of any codec: find the chunks
+        variable.data = _read_by_chunk(name, ds[name], damage)
 
 
 def _read_by_chunk(name, var, damage: Damage) -> np.ndarray:

@@ -171,12 +171,20 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
             print(f"store {st.shown} ready; listing the scenes it lacks...", file=progress,
                   flush=True)
         cells = st.cells(sweep)
-        status = st.status_of(cells)
-        rerun = (status == 0) | (retry_failed & (status >= 2))
-        todo = [c for c, r in zip(cells, rerun) if r]
-        summary.scenes, summary.cached = len(cells), len(cells) - len(todo)
+
+        def plan():
+            status = st.status_of(cells)
+            rerun = (status == 0) | (retry_failed & (status >= 2))
+            return [c for c, r in zip(cells, rerun) if r]
+
+        todo = plan()
         if todo:
             st.require_writable()  # before any solve, not at the first merge
+            late = st.load_all()  # the variables planning did not need, before any solve
+            if late:  # cells damaged in a way only decoding finds: computed again too
+                summary.repaired += late
+                todo = plan()
+        summary.scenes, summary.cached = len(cells), len(cells) - len(todo)
         if todo and sweep.fast_path and solve is solve_scene:
             solve = _master_solve(sweep, progress)
         if todo:

@@ -13,8 +13,11 @@ whatever runs the scenes:
 dask futures go through ``client.get_executor()``, a standard ``concurrent.futures`` executor, and
 ``concurrent.futures.as_completed``. Compiled code is warmed once in this process *before* any
 worker starts (it writes the on-disk numba cache, solver/_jit.py), then every worker loads it
-before its first scene (the worker plugin :class:`WorkerSetup`, which also sets the environment;
-workers that join later run it too), so no worker compiles on its own.
+before its first scene (the worker plugin :class:`~pipeline.sweeps.worker.WorkerSetup`, which also
+sets the environment; workers that join later run it too), so no worker compiles on its own.
+
+distributed is imported only where a cluster is started or reached (0.3-0.5 s: a sweep with
+nothing to do never pays it).
 """
 
 from __future__ import annotations
@@ -26,9 +29,6 @@ import time
 from concurrent.futures import as_completed
 from contextlib import contextmanager
 
-from distributed import WorkerPlugin
-
-from ..environment import configure
 from ..errors import SchedulerError, SchedulerLost
 
 __all__ = ["open_runner", "check_runner", "check_seconds", "check_address", "probe_scheduler",
@@ -236,20 +236,13 @@ def max_local_workers() -> int:
     return 4 * default_workers()
 
 
-class WorkerSetup(WorkerPlugin):
-    """Runs on every dask worker before its first task, also on workers that join later: the
-    process environment (pipeline/environment.py), then ``warm()``, which loads the kernels the
-    parent compiled into the on-disk cache instead of compiling them again."""
+def __getattr__(name):
+    # ``runners.WorkerSetup`` as before; it lives in .worker, which imports distributed
+    if name == "WorkerSetup":
+        from .worker import WorkerSetup
 
-    name = "ehd-worker-setup"
-
-    def __init__(self, warm=None):
-        self.warm = warm
-
-    def setup(self, worker):
-        configure()
-        if self.warm is not None:
-            self.warm()
+        return WorkerSetup
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 class Runner:
@@ -458,6 +451,8 @@ def _wait_for_workers(client, n: int, timeout: float, stream) -> None:
 
 
 def _dask_runner(client, description: str, warm) -> Runner:
+    from .worker import WorkerSetup
+
     try:
         # every worker (also one that joins later) sets the environment and loads the cached
         # kernels before its first scene

@@ -11,9 +11,12 @@ Rules this module enforces (docs/pipeline.md):
   the new coordinates along every axis, existing cells copied over.
 - One writer: :class:`SweepStore` is the only code that writes a store; an exclusive lock
   (``<store>.lock``, released by the OS even after ``kill -9``) keeps a second sweep out.
-- Integrity: the store is read whole, chunk by chunk where a chunk cannot be decoded, when a
-  sweep opens it (:mod:`pipeline.sweeps.integrity`); damaged cells are turned into "not run"
-  and their chunks rewritten, so the sweep recomputes them and never reads them as data.
+- Integrity: every chunk is checked when a sweep opens the store (:mod:`pipeline.sweeps.integrity`):
+  the variables a sweep plans with (``PLANNED``) and those the checks need are decoded, the
+  others' checksums verified from their bytes and decoded, chunk by chunk where a chunk cannot
+  be, only before the first write (:meth:`SweepStore.load_all`): a sweep with nothing to do
+  decodes a fifth of the store. Damaged cells are turned into "not run" and their chunks
+  rewritten, so the sweep recomputes them and never reads them as data.
 - Provenance: the root attr ``sweeps`` lists every sweep file that wrote into the store (name,
   path, sha256 of the file, time); another sweep file needs ``add_sweep`` (``--add-sweep``).
 - The store is known by its real path (symlinks resolved): one lock and one journal per store.
@@ -42,7 +45,7 @@ from solver.physics import Physics
 from ..errors import EhdError, PathError, StoreDamaged, StoreMismatch, UsageError
 from ..writes import write_error, writing
 from .config import physics_from_json, physics_json
-from .integrity import DIGEST_KEY, Damage, load_checked, metadata_digest
+from .integrity import DIGEST_KEY, Damage, load_checked, load_rest, metadata_digest
 from .journal import _journal_path, pending_journal, read_journal
 from .layout import (COUNTS, DIAGNOSTIC, FLAGS, FLOATS, SCALING, STORE_SCHEMA, VARIABLES, _encoding,
                      _fill, _now, _package_versions, empty_dataset, grid_copy, zarr_warnings)
@@ -51,6 +54,7 @@ __all__ = ["open_results", "SweepStore", "StoreMismatch", "StoreBusy", "seal"]
 
 RTOL_COORD = 1e-9  # grid values this close are the same scene (geomspace round-off is ~1e-16)
 FLUSH_SECONDS = 2.0  # journal -> store merge interval: the journal already makes results durable
+PLANNED = ("status", "model", "message")  # what a sweep reads to plan its work and count it
 
 
 class StoreBusy(EhdError, RuntimeError):
@@ -252,7 +256,10 @@ class SweepStore:
         self._dirty: set[tuple] = set()  # leading indices (all axes but the last) to write
         self._last_flush = 0.0
         self.ds = None
-        self.damage = Damage()  # cells found damaged when the store was opened (now not run)
+        # cells found damaged when the store was opened (now not run), indexed on the grid it
+        # had then
+        self.damage = Damage()
+        self._lazy = False  # variables beyond PLANNED not decoded yet (load_all)
         self._writable = False  # require_writable() passed
         self.damage_text = ""  # one line: how many cells, which variables, where
         self.journal_skipped = 0  # journal lines that were not records (skipped, scenes rerun)
@@ -391,9 +398,24 @@ class SweepStore:
         self._extend(sweep)
 
     def _load(self) -> None:
-        # every chunk read once; chunks that cannot be decoded and ok cells without data are
-        # reported in self.damage (pipeline/sweeps/integrity.py)
-        self.ds, self.damage = load_checked(self.path)
+        # every chunk checked once, the planned variables decoded; chunks that cannot be decoded
+        # and ok cells without data are reported in self.damage (pipeline/sweeps/integrity.py)
+        self.ds, self.damage = load_checked(self.path, read=PLANNED)
+        self._lazy = True
+
+    def load_all(self) -> int:
+        """Decode every variable not decoded yet (before the in-memory copy changes: a flush
+        writes whole chunks of every variable). Returns the number of cells found damaged only
+        now (a chunk whose checksum holds but which does not decode), turned into "not run"."""
+        if not self._lazy:
+            return 0
+        self._lazy = False
+        before = set(self.damage.where)
+        load_rest(self.ds, self.damage)
+        late = Damage(dims=self.damage.dims,
+                      where={c: w for c, w in self.damage.where.items() if c not in before})
+        self._forget(late)
+        return len(late)
 
     def require_writable(self) -> None:
         """PathError when a folder of the store cannot be written (every chunk is replaced by a
@@ -460,6 +482,7 @@ class SweepStore:
         are rewritten at the next flush: the sweep recomputes them, nobody reads them as data."""
         if not damage:
             return
+        self.load_all()
         for cell in damage.cells:
             for name in FLOATS:
                 self.ds[name].values[cell] = math.nan
@@ -529,6 +552,7 @@ class SweepStore:
         union = {a: _union(self.ds[a].values, sweep.axes[a]) for a in sweep.axis_names}
         if all(union[a].size == self.ds.sizes[a] for a in union):
             return
+        self.load_all()
         fills = {}
         for name, (dtype, _, _) in VARIABLES.items():
             fills[name] = math.nan if name in FLAGS else _fill(dtype)
@@ -538,7 +562,9 @@ class SweepStore:
         grown.attrs.update(updated=_now())
         self.require_writable()
         _write_new(grown, self.path)
+        found = self.damage  # what the store had when opened (the summary counts it)
         self._load()
+        self.damage = found
 
     # ---- work list ------------------------------------------------------------------------------
     @property
@@ -595,6 +621,7 @@ class SweepStore:
             self.flush()
 
     def _apply(self, cell, rec: dict) -> None:
+        self.load_all()
         cell = tuple(cell)
         status = rec.get("status")
         message = str(rec.get("message", ""))
