@@ -13,7 +13,7 @@ export OMP_NUM_THREADS := 1
 export OPENBLAS_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: install test test-install test-dem sweep quick figures bench bench-sweep bench-accuracy clean-cache clean
+.PHONY: install test test-install test-dem sweep quick figures bench bench-sweep bench-accuracy bench-experiments clean-cache clean
 
 # solver/result.py: the package version is its SOLVER_VERSION (pyproject: dynamic), so a new
 # solver version reinstalls and the installed metadata never goes stale
@@ -78,6 +78,12 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_cavitation.py
 	$(PY) benchmarks/bench_piezoviscous.py
 	$(PY) benchmarks/bench_versus.py
+	$(PY) benchmarks/bench_experiments.py
+
+# e(St) on the conditions of published sphere-wall experiments, per variant of the physics,
+# against their correlation (issue 17) -> benchmarks/experiments.md/.json/.png (~3-4 min)
+bench-experiments: $(STAMP)
+	$(PY) benchmarks/bench_experiments.py
 
 bench-sweep: $(STAMP)
 	$(PY) benchmarks/bench_sweep.py

@@ -495,6 +495,28 @@ def test_every_shipped_entry_has_a_source_and_sane_values(table):
         assert len(f.source) > 20 and 1e-6 < f.viscosity < 1e3
 
 
+def test_experiment_entries_load_with_the_experiments_values(table):
+    """The entries benchmarks/bench_experiments.py needs (issue 17) load, and the Gondret et al.
+    (2002) liquids give the runs' tabulated kinematic viscosities and density ratios (Biegert
+    et al. 2017, Table 1) with the steel of the table."""
+    assert {"nylon", "delrin", "pmma", "chrome_steel"} <= set(table.solids)
+    assert {"silicone_oil_104cst", "silicone_oil_11cst", "glycerol_water_70",
+            "glycerol_water_90"} <= set(table.fluids)
+    steel = table.solids["chrome_steel"].density
+    # nu to 0.1 %: the entries' viscosity is nu rho rounded to 4 digits; rho_p/rho_f to 0.5 %:
+    # the ratios are tabulated to 3 digits and the table's steel is 7810 kg/m^3, not 7800
+    for name, nu, ratio in (("silicone_oil_104cst", 1.036e-4, 8.08),
+                            ("silicone_oil_11cst", 1.07e-5, 8.34)):
+        f = table.fluids[name]
+        assert f.viscosity / f.density == pytest.approx(nu, rel=1e-3)
+        assert steel / f.density == pytest.approx(ratio, rel=5e-3)
+    # glycerol-water: viscosity and density rise with the glycerol fraction (a typo would break it)
+    mixtures = [table.fluids[f"glycerol_water_{w}"] for w in (50, 70, 80, 90)]
+    assert all(a.viscosity < b.viscosity and a.density < b.density
+               for a, b in zip(mixtures, mixtures[1:]))
+    assert all(a.vapour_pressure > b.vapour_pressure for a, b in zip(mixtures, mixtures[1:]))
+
+
 def test_user_materials_file_env_and_inline(tmp_path, monkeypatch, capsys):
     mine = write(tmp_path, """
 [materials.unobtainium]

@@ -1,0 +1,494 @@
+"""The model's wet restitution on the conditions of published sphere-wall experiments, per
+variant of the physics, against the experiments' correlation (issue 17, item 5).
+
+Every run is a real experiment's sphere, wall and liquid, each input a shipped, sourced material
+or fluid (pipeline/scenes/data/materials.toml); nothing is fitted to the experiments' curve. Each
+run is solved along its speed path (the impact speed varied at fixed sphere and liquid, so St and
+eps move together as in the experiments) for every entry of ``VARIANTS``, and its sticking
+threshold bisected along the same path. The experiments' curve is the correlation
+``e = e_dry exp(-35/St_L)``, ``St_L = (rho_p + rho_f/2) d v / (9 mu)`` (Legendre, Zenit, Daniel &
+Guiraud 2006, Chem. Eng. Sci. 61, 3543, the form Gondret et al. 2002 and Biegert et al. 2017
+compare with), with no rebound below St ~ 10 (Joseph et al. 2001; Gondret et al. 2002).
+
+A variant is one line of ``VARIANTS``: a name and the scene fields it sets (the flags of ``ehd
+scene``, as ``load_scene`` takes them; a value may be a function of the run, e.g.
+``lambda run: run.roughness``), plus solver overrides. When roughness, e_dry and the outer flow
+land (issue 17, items 1-3), their variants are a line each; ``MISSING`` lists them until then.
+
+    python benchmarks/bench_experiments.py            # ~2-4 min on one core of this machine
+    python benchmarks/bench_experiments.py --report   # rewrite .md/.png from the .json
+    python benchmarks/bench_experiments.py --quick    # smoke run (3 speeds), output in /tmp
+
+writes ``benchmarks/experiments.md``, ``experiments.json`` and ``experiments.png``. One process,
+one scene at a time, standard preset; deterministic (the .json's one timing is
+``wall_time_s``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
+
+LEGENDRE_C = 35.0  # exp(-35/St_L): Legendre et al. (2006)
+ACCURACY = "standard"
+# the speed path: St from 2 to 1000 (the experiments' range, rebound from ~10 and near dry above
+# ~500, with room below for thresholds that the cavitating film moves down)
+ST_PATH = tuple(float(s) for s in np.geomspace(2.0, 1000.0, 14))
+QUICK_PATH = (10.0, 30.0, 150.0)
+BISECT_RTOL = 2e-3  # the threshold's speed bracket, relative: St_c to 0.2 %, far below its spread
+
+
+@dataclass(frozen=True)
+class Run:
+    """One experiment: a sphere of ``material`` and ``diameter`` [m] onto a thick wall of
+    ``wall`` in ``fluid``, at the reported speed ``v`` [m/s] (for Joseph et al. a speed inside
+    their range: the path covers St 4-1000 anyway)."""
+
+    name: str
+    source: str
+    material: str
+    diameter: float
+    wall: str
+    fluid: str
+    v: float
+    pair: str  # key in dry_restitution.toml (e_dry of the pair), "" where none is sourced
+    roughness: float | None = None  # rms of the sphere [m] where the experiment reports one
+    note: str = ""
+
+
+GONDRET = "Gondret, Lance & Petit (2002), Phys. Fluids 14, 643; Biegert et al. (2017) Table 1"
+JOSEPH = "within the ranges of Joseph, Zenit, Hunt & Rosenwinkel (2001), J. Fluid Mech. 433, 329"
+RUNS = (
+    Run("Gondret d=6 mm, nu=1.036e-4", GONDRET, "chrome_steel", 6e-3, "glass",
+        "silicone_oil_104cst", 0.518, "gondret_steel_glass", roughness=1e-4 * 3e-3,
+        note="St 27 as reported; the wall taken as glass (not checked against the paper)"),
+    Run("Gondret d=3 mm, nu=1.07e-5", GONDRET, "chrome_steel", 3e-3, "glass",
+        "silicone_oil_11cst", 0.585, "gondret_steel_glass", roughness=1e-4 * 1.5e-3,
+        note="St 152 as reported; the wall taken as glass (not checked against the paper)"),
+    Run("steel 12.7 mm, glass wall, 90 % glycerol", JOSEPH, "chrome_steel", 12.7e-3, "glass",
+        "glycerol_water_90", 0.5, ""),
+    Run("steel 3 mm, glass wall, 70 % glycerol", JOSEPH, "chrome_steel", 3e-3, "glass",
+        "glycerol_water_70", 0.5, ""),
+    Run("glass 12.7 mm, glass wall, 80 % glycerol", JOSEPH, "glass", 12.7e-3, "glass",
+        "glycerol_water_80", 0.5, ""),
+    Run("delrin 12.7 mm, Lucite wall, 50 % glycerol", JOSEPH, "delrin", 12.7e-3, "pmma",
+        "glycerol_water_50", 0.3, "", note="rho_p/rho_f 1.26"),
+    Run("nylon 6.35 mm, Lucite wall, water", JOSEPH, "nylon", 6.35e-3, "pmma", "water", 0.3, "",
+        note="rho_p/rho_f 1.14, just below Joseph et al.'s 1.2"),
+)
+
+def _glycerol_bound(run: Run):
+    """Glycerol's alpha for a glycerol-water mixture, whose own alpha is not sourced: water's is
+    0 (materials table), so the mixture's lies below it; nothing for other liquids."""
+    return "5.9e-9 1/Pa" if run.fluid.startswith("glycerol_water") else None
+
+
+_CLASSIC = {"cavitation": "off", "viscosity_law": "constant", "density_law": "constant"}
+# name, scene fields (load_scene flags; a value may be a function of the run), solver overrides.
+# Adding a variant is one line here.
+VARIANTS = (
+    ("classic film", _CLASSIC, {}),
+    ("+ cavitation (vapour, the default p_cav)", {**_CLASSIC, "cavitation": "jfo"}, {}),
+    ("+ cavitation (gas-saturated, Pi = 0)",
+     {**_CLASSIC, "cavitation": "jfo", "cavitation_pressure": "gas-saturated"}, {}),
+    ("+ pressure-dependent viscosity (Barus, the liquid's alpha)",
+     {**_CLASSIC, "viscosity_law": "barus"}, {}),
+    ("+ Barus at glycerol's alpha (bound for glycerol-water)",
+     {**_CLASSIC, "viscosity_law": "barus", "pressure_viscosity": _glycerol_bound}, {}),
+    ("scene's own choice", {}, {}),
+    ("classic film read at 0.1 a (x_ref = 10 x0)", _CLASSIC, {"x_ref_x0": 10.0}),
+    # when they land (issue 17, items 1-3), e.g.:
+    # ("+ roughness and e_dry", {"roughness1": lambda run: run.roughness,
+    #                            "e_dry": lambda run: e_dry(run)}, {}),
+    # ("+ outer flow (e_far)", {...}, {"observable": "e_far"}),
+)
+# the cavitation pressure of the film (fluid.cavitation_pressure / tensile_strength), JFO model:
+# the vapour pressure (the scene's default), a liquid saturated with air at 1 atm (gas release as
+# soon as the pressure falls below ambient), and liquids that hold a tension before nucleating
+CAVITATION_CHOICES = (
+    ("none (classic film)", _CLASSIC, {}),
+    ("gas-saturated (p_cav = p_amb, Pi = 0)", VARIANTS[2][1], {}),
+    ("vapour pressure (default)", VARIANTS[1][1], {}),
+    ("tension 1 MPa", {**_CLASSIC, "cavitation": "jfo", "tensile_strength": "1 MPa"}, {}),
+    ("tension 10 MPa", {**_CLASSIC, "cavitation": "jfo", "tensile_strength": "10 MPa"}, {}),
+    ("tension 100 MPa", {**_CLASSIC, "cavitation": "jfo", "tensile_strength": "100 MPa"}, {}),
+)
+MISSING = ("roughness with asperity contact (issue 17 item 1): the runs' rms roughness is in "
+           "RUNS, ready for the `roughness1` field",
+           "e_dry, the losses in the solids (item 2): the pair values are in "
+           "benchmarks/dry_restitution.toml, ready for the `e_dry` field",
+           "the outer flow and `e_far` (item 3)")
+
+
+def dry_table() -> dict:
+    return tomllib.loads((HERE / "dry_restitution.toml").read_text())["pairs"]
+
+
+def e_dry(run: Run) -> float | None:
+    return dry_table()[run.pair]["e_dry"] if run.pair else None
+
+
+def base_flags(run: Run, v: float) -> dict:
+    return {"material1": run.material, "radius1": run.diameter / 2, "wall2": True,
+            "material2": run.wall, "fluid": run.fluid, "v0": v}
+
+
+def load(run: Run, v: float, fields: dict):
+    from pipeline.scenes.commands import load_scene
+
+    flags = base_flags(run, v)
+    flags.update({k: (f(run) if callable(f) else f) for k, f in fields.items()})
+    return load_scene(flags=flags, user_files=False)
+
+
+def solve(run: Run, v: float, variant) -> dict:
+    """One scene of ``variant`` at speed ``v``: e_wet and what was solved, or why not."""
+    from pipeline.scenes.run import run_scene
+
+    name, fields, solver = variant
+    try:
+        scene = load(run, v, fields)
+    except ValueError as exc:  # a variant the run's inputs cannot give (e.g. no alpha)
+        return {"e": None, "why": str(exc).splitlines()[0]}
+    r = run_scene(scene, accuracy=ACCURACY, **solver)
+    c = r.collision
+    if not c.ok:
+        return {"e": None, "why": f"{c.status}: {c.message}"}
+    return {"e": float(c.e_wet), "St": scene.stokes, "eps": scene.eps,
+            "closest_approach_m": float(c.h_m_x1 * scene.x1),
+            "Pi": None if math.isinf(c.physics.Pi) else c.physics.Pi,
+            "cavitation": c.physics.cavitation, "beta": c.physics.beta,
+            "viscosity_law": c.physics.viscosity_law,
+            "warnings": sorted({w.check for w in r.warnings})}
+
+
+def stokes_at(run: Run, v: float) -> float:
+    return load(run, v, _CLASSIC).stokes
+
+
+def threshold(run: Run, variant, v_stick: float, v_bounce: float) -> float:
+    """St at the change from sticking to rebounding, bisected in ln v."""
+    while v_bounce / v_stick > 1.0 + BISECT_RTOL:
+        v = math.sqrt(v_stick * v_bounce)
+        e = solve(run, v, variant)["e"]
+        if e is None:
+            return math.nan
+        if e > 0.0:
+            v_bounce = v
+        else:
+            v_stick = v
+    return stokes_at(run, math.sqrt(v_stick * v_bounce))
+
+
+def correlation(st, run_inputs) -> np.ndarray:
+    """e/e_dry of the correlation at our St (the experimenters' rho_p d v / (9 mu))."""
+    ratio = run_inputs["rho_f"] / run_inputs["rho_p"]
+    return np.exp(-LEGENDRE_C / (np.asarray(st, float) * (1.0 + 0.5 * ratio)))
+
+
+def measure(path=ST_PATH) -> dict:
+    out = {"accuracy": ACCURACY, "St_path": list(path), "runs": [],
+           "variants": [v[0] for v in VARIANTS], "missing": list(MISSING)}
+    for run in RUNS:
+        st_ref = stokes_at(run, run.v)
+        scene = load(run, run.v, _CLASSIC)
+        inputs = {"rho_p": scene.body1.solid.density, "rho_f": scene.fluid.density,
+                  "mu": scene.fluid.viscosity, "St_reported_speed": st_ref,
+                  "eps_reported_speed": scene.eps, "e_dry": e_dry(run)}
+        speeds = [run.v * s / st_ref for s in path]
+        rec = {"name": run.name, "source": run.source, "note": run.note,
+               "material": run.material, "diameter_m": run.diameter, "wall": run.wall,
+               "fluid": run.fluid, "v_m_per_s": run.v, "roughness_m": run.roughness,
+               "inputs": inputs, "speeds_m_per_s": speeds, "variants": {}}
+        for variant in VARIANTS:
+            rec["variants"][variant[0]] = along_path(run, variant, speeds)
+        out["runs"].append(rec)
+    # the cavitation pressure of a liquid open to air (docs/scenes.md, "The cavitation default"):
+    # each choice on the Gondret runs
+    out["cavitation_choices"] = [c[0] for c in CAVITATION_CHOICES]
+    out["cavitation_study"] = []
+    for run, rec in zip(RUNS[:2], out["runs"][:2]):
+        done = {json.dumps(v[1:], sort_keys=True, default=repr): rec["variants"][v[0]]
+                for v in VARIANTS}
+        choices = {c[0]: done.get(json.dumps(c[1:], sort_keys=True, default=repr))
+                   or along_path(run, c, rec["speeds_m_per_s"]) for c in CAVITATION_CHOICES}
+        out["cavitation_study"].append(
+            {"name": run.name, "St_reported_speed": rec["inputs"]["St_reported_speed"],
+             "choices": choices})
+    return out
+
+
+def along_path(run: Run, variant, speeds) -> dict:
+    """``variant`` at the run's reported speed and along ``speeds``, with its threshold."""
+    rows = [solve(run, v, variant) for v in speeds]
+    at_ref = solve(run, run.v, variant)
+    es = [r["e"] for r in rows]
+    st_c = math.nan
+    below = es[0] is not None and es[0] > 0.0  # rebounds already at the path's start
+    for i in range(1, len(es)):
+        if es[i - 1] is not None and es[i] is not None and es[i - 1] == 0.0 < es[i]:
+            st_c = threshold(run, variant, speeds[i - 1], speeds[i])
+            break
+    print(f"{run.name:45s} {variant[0][:45]:45s} e(ref) = {_f(at_ref['e'])}, St_c = {st_c:.3g}",
+          flush=True)
+    return {"path": rows, "at_reported_speed": at_ref,
+            "St_c": None if math.isnan(st_c) else st_c, "St_c_below_path": below}
+
+
+# ---- report ------------------------------------------------------------------------------------
+
+def _f(x, spec=".3f"):
+    return "-" if x is None or (isinstance(x, float) and math.isnan(x)) else format(x, spec)
+
+
+def _threshold_cell(v: dict, st_min: float) -> str:
+    if v["St_c"] is not None:
+        return f"{v['St_c']:.1f}"
+    return f"< {st_min:g}" if v.get("St_c_below_path") else "-"
+
+
+def report(data: dict, seconds: float | None) -> str:
+    path = np.array(data["St_path"])
+    names = data["variants"]
+    lines = ["# Experiments: the model's wet restitution on published sphere-wall conditions", "",
+             "`python benchmarks/bench_experiments.py` (`make bench-experiments`; "
+             + (f"{seconds / 60:.1f} min" if seconds else "a few minutes")
+             + f" on one core of the shared 2-core machine, `{data['accuracy']}` preset, "
+             "deterministic: the .json's only timing is `wall_time_s`). Inputs are the shipped, "
+             "sourced "
+             "materials and fluids (`ehd scene --list-materials`); nothing is fitted. The "
+             "experiments' curve is a correlation, `e = e_dry exp(-35/St_L)` with `St_L = "
+             "(rho_p + rho_f/2) d v/(9 mu)` (Legendre, Zenit, Daniel & Guiraud 2006, Chem. Eng. "
+             "Sci. 61, 3543; the form Gondret et al. 2002 and Biegert et al. 2017 compare with), "
+             "not the data points; no rebound is seen below St ~ 10 (Joseph et al. 2001; "
+             "Gondret et al. 2002). The model's solids are perfectly elastic, so its `e_wet` "
+             "(read at x0 = 0.01 a unless said) is compared with `e/e_dry`; `corr. e` is the "
+             "correlation's `e` with the pair's e_dry where one is sourced "
+             "(`benchmarks/dry_restitution.toml`).", "",
+             "## At the reported speeds", "",
+             "| run | St | eps | corr. e/e_dry | corr. e | " + " | ".join(names) + " |",
+             "|---|---|---|---|---|" + "---|" * len(names)]
+    for r in data["runs"]:
+        inp = r["inputs"]
+        st = inp["St_reported_speed"]
+        c = float(correlation([st], inp)[0])
+        ed = inp["e_dry"]
+        cells = [_f(r["variants"][n]["at_reported_speed"]["e"]) for n in names]
+        lines.append(f"| {r['name']} ({r['v_m_per_s']:g} m/s) | {st:.1f} | "
+                     f"{inp['eps_reported_speed']:.2g} | {c:.3f} | "
+                     f"{_f(c * ed) if ed else '-'} | " + " | ".join(cells) + " |")
+    lines += ["", "Cells `-`: the variant cannot be had from the run's sourced inputs (the "
+              "pressure-dependent viscosity needs the liquid's alpha, which no shipped silicone "
+              "oil or glycerol-water mixture has; glycerol's alpha bounds the mixtures' from "
+              "above, water's being 0), or the solve failed (the .json says why).", "",
+              "## Sticking threshold St_c along the speed paths", "",
+              "| run | rho_p/rho_f | " + " | ".join(names) + " |",
+              "|---|---|" + "---|" * len(names)]
+    for r in data["runs"]:
+        inp = r["inputs"]
+        lines.append(f"| {r['name']} | {inp['rho_p'] / inp['rho_f']:.2f} | "
+                     + " | ".join(_threshold_cell(r["variants"][n], data["St_path"][0])
+                                  for n in names) + " |")
+    lines += ["", "Experiments: St_c ~ 10. `-`: no change from sticking to rebounding on the "
+              "path (St 2-1000) or the variant is not available.", "",
+              "## Largest distance from the correlation's e/e_dry, St 15-500", "",
+              "| run | " + " | ".join(names) + " |", "|---|" + "---|" * len(names)]
+    band = (path >= 15.0) & (path <= 500.0)
+    for r in data["runs"]:
+        corr = correlation(path, r["inputs"])
+        cells = []
+        for n in names:
+            e = np.array([np.nan if p["e"] is None else p["e"] for p in r["variants"][n]["path"]])
+            d = (e - corr)[band]
+            cells.append("-" if np.all(np.isnan(d)) else
+                         f"{d[np.nanargmax(np.abs(d))]:+.3f}")
+        lines.append(f"| {r['name']} | " + " | ".join(cells) + " |")
+    lines += ["", "Signed: positive where the model rebounds faster than the correlation. "
+              "The issue's target for the scene's own choice: within 0.1 for St 15-500, "
+              "St_c between 7 and 14.", "",
+              "## e(St) along the paths", ""]
+    for r in data["runs"]:
+        lines += [f"**{r['name']}** ({r['source']}; {r['note'] or 'speed path'}): "
+                  f"{r['material']} d = {r['diameter_m'] * 1e3:g} mm onto {r['wall']} in "
+                  f"{r['fluid']}", "",
+                  "| St | v [m/s] | corr. e/e_dry | " + " | ".join(names) + " |",
+                  "|---|---|---|" + "---|" * len(names)]
+        corr = correlation(path, r["inputs"])
+        for i, st in enumerate(path):
+            lines.append(f"| {st:.3g} | {r['speeds_m_per_s'][i]:.3g} | {corr[i]:.3f} | "
+                         + " | ".join(_f(r["variants"][n]["path"][i]["e"]) for n in names)
+                         + " |")
+        lines.append("")
+    if data.get("cavitation_study"):
+        choices = data["cavitation_choices"]
+        lines += ["## The cavitation pressure on the Gondret runs", "",
+                  "e_wet at the reported speed (St_c along the speed path) for each cavitation "
+                  "pressure of the film (JFO); docs/scenes.md, \"The cavitation default for "
+                  "liquids open to air\", discusses which applies.", "",
+                  "| run | corr. e/e_dry | " + " | ".join(choices) + " |",
+                  "|---|---|" + "---|" * len(choices)]
+        for r in data["cavitation_study"]:
+            inp = next(x["inputs"] for x in data["runs"] if x["name"] == r["name"])
+            c = float(correlation([r["St_reported_speed"]], inp)[0])
+            cells = [f"{_f(r['choices'][k]['at_reported_speed']['e'])} "
+                     f"({_threshold_cell(r['choices'][k], data['St_path'][0])})" for k in choices]
+            lines.append(f"| {r['name']} (St {r['St_reported_speed']:.0f}) | {c:.3f} | "
+                         + " | ".join(cells) + " |")
+        lines.append("")
+    lines += findings(data, path) + ["## Still missing", ""]
+    lines += [f"- {m}" for m in data["missing"]] + [""]
+    return "\n".join(lines)
+
+
+def findings(data: dict, path) -> list[str]:
+    """What the tables say, in numbers taken from them."""
+    band = (np.asarray(path) >= 15.0) & (np.asarray(path) <= 500.0)
+
+    def worst(name):
+        ds, stc = [], []
+        for r in data["runs"]:
+            v = r["variants"].get(name)
+            if v is None:
+                continue
+            e = np.array([np.nan if p["e"] is None else p["e"] for p in v["path"]])
+            d = (e - correlation(path, r["inputs"]))[band]
+            if not np.all(np.isnan(d)):
+                ds.append(float(np.nanmax(np.abs(d))))
+            if v["St_c"] is not None:
+                stc.append(v["St_c"])
+        return ds, stc
+
+    out = ["## Findings", ""]
+    for name in data["variants"]:
+        ds, stc = worst(name)
+        if not ds:
+            out.append(f"- **{name}**: not available for any run (see the first table).")
+            continue
+        out.append(f"- **{name}**: largest distance from the correlation's e/e_dry over St "
+                   f"15-500 {min(ds):.2f}-{max(ds):.2f} across the runs; St_c "
+                   + (f"{min(stc):.1f}-{max(stc):.1f}" if stc else "-") + ".")
+    own = [r["variants"]["scene's own choice"]["at_reported_speed"] for r in data["runs"]]
+    own_d, own_stc = worst("scene's own choice")
+    n_far = sum(d > 0.1 for d in own_d)
+    n_cav = sum(o.get("cavitation") not in (None, "off") for o in own)
+    rough = [(r["roughness_m"], r["variants"]["classic film"]["at_reported_speed"])
+             for r in data["runs"] if r["roughness_m"]]
+    ratios = [sig / a["closest_approach_m"] for sig, a in rough]
+    shift = [r["variants"]["classic film"]["at_reported_speed"]["e"]
+             - r["variants"]["classic film read at 0.1 a (x_ref = 10 x0)"]["at_reported_speed"]["e"]
+             for r in data["runs"]]
+    out += ["", f"At the reported speeds the scene's own choice is the cavitating film for "
+            f"{n_cav} of {len(own)} runs (their classic tension crosses the vapour pressure). "
+            f"Against the issue's target (within 0.1 of the correlation for St 15-500, St_c "
+            f"7-14): St_c {min(own_stc):.1f}-{max(own_stc):.1f} "
+            + ("meets" if min(own_stc) >= 7 and max(own_stc) <= 14 else "misses")
+            + f" its part, but {n_far} of {len(own_d)} runs differ by more than 0.1 from "
+            "the correlation somewhere, the largest gaps at St ~ 15-50, where the "
+"correlation rises slowly and the smooth film steeply. Every cavitation floor moves e "
+            "further above the correlation, and no cavitation pressure between the vapour "
+            "pressure and gas saturation closes the gap (docs/scenes.md, \"The cavitation "
+            "default for liquids open to air\"). Reading the classic film further out (0.1 a, "
+            "with the rigid lubrication resistance a/x only, not the outer flow) lowers e by "
+            f"{min(shift):.2f}-{max(shift):.2f} at the reported speeds. "
+            "Gondret et al.'s reported roughness (rms 1e-4 R) is "
+            + " and ".join(f"{q:.1f}" for q in ratios)
+            + " times the classic film's closest approach at the reported speeds: the "
+            "asperities touch before the smooth film gets that thin, so roughness with e_dry is "
+            "the variant to add first.", ""]
+    return out
+
+
+def figure(data: dict, out: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from pipeline.plots.sweep_maps import _RC
+
+    runs = data["runs"]
+    path = np.array(data["St_path"])
+    names = data["variants"]
+    colors = plt.get_cmap("tab10").colors
+    with matplotlib.style.context("default"), matplotlib.rc_context(_RC):
+        ncol = 2
+        nrow = math.ceil(len(runs) / ncol)
+        fig, axes = plt.subplots(nrow, ncol, figsize=(8.0, 2.4 * nrow), sharex=True,
+                                 sharey=True, layout="constrained")
+        st = np.geomspace(1.0, 2000.0, 300)
+        for ax, r in zip(axes.flat, runs):
+            ax.plot(st, correlation(st, r["inputs"]), color="0.4", lw=3, alpha=0.5,
+                    label=r"correlation $e/e_{dry} = e^{-35/St_L}$")
+            ax.axvline(10.0, color="0.3", ls="--", lw=0.8, label="no rebound below St ~ 10")
+            for k, n in enumerate(names):
+                e = [np.nan if p["e"] is None else p["e"] for p in r["variants"][n]["path"]]
+                if np.all(np.isnan(e)):
+                    continue
+                if n == "scene's own choice":  # on top, open markers: it equals one variant
+                    ax.plot(path, e, "s--", ms=5, mfc="none", lw=1.0, color="k", label=n,
+                            zorder=5)
+                else:
+                    ax.plot(path, e, "o-", ms=2.5, lw=1.0, color=colors[k % 10], label=n)
+            ax.axvline(r["inputs"]["St_reported_speed"], color="k", lw=0.5, ls=":",
+                       label="the run's St at its reported speed")
+            ax.set_xscale("log")
+            ax.set_xlim(2.0, 2000.0)
+            ax.set_ylim(-0.02, 1.02)
+            ax.set_title(r["name"], fontsize=8)
+        for ax in axes[-1]:
+            ax.set_xlabel(r"St $= \rho_p d v/(9\mu)$")
+        for ax in axes[:, 0]:
+            ax.set_ylabel(r"$e_{wet}$, $e/e_{dry}$")
+        legend = {}
+        for ax in axes.flat[:len(runs)]:
+            for h, lab in zip(*ax.get_legend_handles_labels()):
+                legend.setdefault(lab, h)
+        spare = list(axes.flat[len(runs):])
+        for ax in spare:
+            ax.axis("off")
+        if spare:
+            spare[0].legend(legend.values(), legend.keys(), loc="center", fontsize=7)
+        else:
+            fig.legend(legend.values(), legend.keys(), loc="outside lower center", ncol=2,
+                       fontsize=7)
+        fig.savefig(out, metadata={"Software": None})
+        plt.close(fig)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--report", action="store_true", help="rewrite .md/.png from the .json")
+    p.add_argument("--quick", action="store_true", help="3 speeds, output in /tmp")
+    args = p.parse_args(argv)
+    out = Path("/tmp/ehd-bench-experiments") if args.quick else HERE
+    out.mkdir(parents=True, exist_ok=True)
+    seconds = None
+    if args.report:
+        data = json.loads((out / "experiments.json").read_text())
+        seconds = data.get("wall_time_s")
+    else:
+        t0 = time.perf_counter()
+        data = measure(QUICK_PATH if args.quick else ST_PATH)
+        seconds = time.perf_counter() - t0
+        data["wall_time_s"] = round(seconds)  # the one timing, for the report's first line
+        (out / "experiments.json").write_text(json.dumps(data, indent=1) + "\n")
+    (out / "experiments.md").write_text(report(data, seconds))
+    figure(data, out / "experiments.png")
+    print(f"wrote {out}/experiments.md, .json, .png"
+          + (f" in {seconds:.0f} s" if seconds else ""))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
