@@ -95,6 +95,9 @@ def _glycerol_bound(run: Run):
 
 
 _CLASSIC = {"cavitation": "off", "viscosity_law": "constant", "density_law": "constant"}
+# the runs' own surface and pair data (RUNS, dry_restitution.toml), None where none is sourced:
+# physical inputs of every scene that models the contact, the scene's own choice among them
+_INPUTS = {"roughness1": lambda run: run.roughness, "e_dry": lambda run: e_dry(run)}
 # name, scene fields (load_scene flags; a value may be a function of the run), solver overrides.
 # Adding a variant is one line here.
 VARIANTS = (
@@ -106,12 +109,14 @@ VARIANTS = (
      {**_CLASSIC, "viscosity_law": "barus"}, {}),
     ("+ Barus at glycerol's alpha (bound for glycerol-water)",
      {**_CLASSIC, "viscosity_law": "barus", "pressure_viscosity": _glycerol_bound}, {}),
-    ("scene's own choice", {}, {}),
+    ("scene's own choice", _INPUTS, {}),
     ("classic film read at 0.1 a (x_ref = 10 x0)", _CLASSIC, {"x_ref_x0": 10.0}),
-    # when they land (issue 17, items 1-3), e.g.:
-    # ("+ roughness and e_dry", {"roughness1": lambda run: run.roughness,
-    #                            "e_dry": lambda run: e_dry(run)}, {}),
-    # ("+ outer flow (e_far)", {...}, {"observable": "e_far"}),
+    ("+ roughness and e_dry (asperity contact on)",
+     {**_CLASSIC, **_INPUTS, "asperity_contact": "on"}, {}),
+    ("+ outer flow: e_far at 0.1 a", _CLASSIC, {"observable": "e_far"}),
+    ("+ roughness, e_dry and outer flow (e_far)",
+     {**_CLASSIC, **_INPUTS, "asperity_contact": "on"}, {"observable": "e_far"}),
+    ("scene's own choice, e_far", _INPUTS, {"observable": "e_far"}),
 )
 # the cavitation pressure of the film (fluid.cavitation_pressure / tensile_strength), JFO model:
 # the vapour pressure (the scene's default), a liquid saturated with air at 1 atm (gas release as
@@ -124,11 +129,10 @@ CAVITATION_CHOICES = (
     ("tension 10 MPa", {**_CLASSIC, "cavitation": "jfo", "tensile_strength": "10 MPa"}, {}),
     ("tension 100 MPa", {**_CLASSIC, "cavitation": "jfo", "tensile_strength": "100 MPa"}, {}),
 )
-MISSING = ("roughness with asperity contact (issue 17 item 1): the runs' rms roughness is in "
-           "RUNS, ready for the `roughness1` field",
-           "e_dry, the losses in the solids (item 2): the pair values are in "
-           "benchmarks/dry_restitution.toml, ready for the `e_dry` field",
-           "the outer flow and `e_far` (item 3)")
+MISSING = ("a sourced rms roughness for the Joseph et al. runs (their roughness variants are "
+           "the smooth film's)",
+           "a sourced e_dry for the Joseph et al. pairs (1 there: the e_dry variants compare with "
+           "e/e_dry for them, with corr. e for the Gondret runs)")
 
 
 def dry_table() -> dict:
@@ -161,11 +165,16 @@ def solve(run: Run, v: float, variant) -> dict:
         scene = load(run, v, fields)
     except ValueError as exc:  # a variant the run's inputs cannot give (e.g. no alpha)
         return {"e": None, "why": str(exc).splitlines()[0]}
-    r = run_scene(scene, accuracy=ACCURACY, **solver)
+    solver = dict(solver)
+    observable = solver.pop("observable", "e_wet")
+    try:
+        r = run_scene(scene, accuracy=ACCURACY, sensitivity_solves=False, **solver)
+    except ValueError as exc:  # e.g. asperity contact forced on a pair without a roughness
+        return {"e": None, "why": str(exc).splitlines()[0]}
     c = r.collision
     if not c.ok:
         return {"e": None, "why": f"{c.status}: {c.message}"}
-    return {"e": float(c.e_wet), "St": scene.stokes, "eps": scene.eps,
+    return {"e": float(getattr(c, observable)), "St": scene.stokes, "eps": scene.eps,
             "closest_approach_m": float(c.h_m_x1 * scene.x1),
             "Pi": None if math.isinf(c.physics.Pi) else c.physics.Pi,
             "cavitation": c.physics.cavitation, "beta": c.physics.beta,
