@@ -94,7 +94,8 @@ def _glycerol_bound(run: Run):
     return "5.9e-9 1/Pa" if run.fluid.startswith("glycerol_water") else None
 
 
-_CLASSIC = {"cavitation": "off", "viscosity_law": "constant", "density_law": "constant"}
+_CLASSIC = {"cavitation": "off", "viscosity_law": "constant", "density_law": "constant",
+            "asperity_contact": "off"}
 # the runs' own surface and pair data (RUNS, dry_restitution.toml), None where none is sourced:
 # physical inputs of every scene that models the contact, the scene's own choice among them
 _INPUTS = {"roughness1": lambda run: run.roughness, "e_dry": lambda run: e_dry(run)}

@@ -69,7 +69,7 @@ def plan(physics) -> Shortcuts:
     refill = physics.cavitation == "jfo" and not floor_ode  # a cavity with a memory
     return Shortcuts(
         approach="barus" if barus else "classic",
-        end_event=RELAXED_FULL if refill or not physics.smooth else RELAXED,
+        end_event=RELAXED_FULL if refill else RELAXED,
         departure="floor" if floor_ode else "classic",
         floor=physics.cavitation != "off",
         classic=rigid.exact_for(physics),

@@ -8,7 +8,7 @@ coupled phase: today the classic model's release (solver/model/rigid.py, ``relea
 
 from .._jit import jit
 
-__all__ = ["RELAXED", "RELAXED_FULL", "reached"]
+__all__ = ["RELAXED", "RELAXED_FULL", "ENDED", "HELD", "reached"]
 
 # The deformation has relaxed and the remaining motion can only relax it further: from here the
 # rigid departure is exact (docs/model.md, "Rigid solution"). params = (release, V_peak,
@@ -21,21 +21,27 @@ RELAXED = 1
 # The same, and no cavity left: for a film whose cavity has a memory (JFO), the rigid departure is
 # exact only once the film is full again.
 RELAXED_FULL = 2
+# what a film may answer instead of its active radius (model/step.py, ``record``): the motion has
+# ended (a rough film at rest on its asperities), or the phase must go on whatever the event
+# (a rough film near contact)
+ENDED, HELD = -1.0, -2.0
 
 
 @jit
 def reached(kind, params, steps, x, v, w_absmax, active_radius):
     """True when the event ``kind`` with ``params`` has happened at the accepted state
     (``steps`` accepted steps so far, separation ``x``, velocity ``v``, largest ``|W|``, radius out
-    to which the film's active set reaches, 0 without, negative when the film says the motion
-    has ended: model/step.py, ``record``)."""
+    to which the film's active set reaches, 0 without; or ``ENDED``, ``HELD``: model/step.py,
+    ``record``)."""
     relaxed = (steps > 0 and x > 0.0 and w_absmax < params[0] * x
                and (v < 0.0 or v < params[1]))
     slope = params[2] if v > 0.0 else params[3]
     if slope > 0.0:
         relaxed = relaxed and slope * 3.0 * abs(v) / (x * x) < params[4]
-    if active_radius < 0.0:  # the film says the motion has ended (at rest in contact)
+    if active_radius == ENDED:  # the film says the motion has ended (at rest in contact)
         return steps > 0
+    if active_radius == HELD:  # the film holds the phase (a rough film near contact)
+        return False
     if kind == RELAXED:
         return relaxed
     if kind == RELAXED_FULL:

@@ -30,6 +30,7 @@ Pressure-dependent viscosity and density).
 import numpy as np
 
 from .._jit import jit
+from ..integration.events import ENDED, HELD
 from ..observables import SERIES_INDEX
 from ..physics import CAVITATION, DENSITY, E_DRY, PI, ROUGHNESS, ST
 from .contact import HOLD, REST, asperity_work, contact_derivatives, contact_gap, contact_state
@@ -388,8 +389,8 @@ def record(row, s, area, weight, p, h, pmax, pmin, marks, cells, scalars, phys, 
     lost in the solids), and the error scale's update from the largest
     pressure seen (``floor_fraction`` of it, from the first cavity on). Returns the radius the
     terminal events see: the cavity's, tiny but positive for a JFO cavity of axis cells alone
-    (whose edge radius is zero), positive while a rough film holds its contact and -1 when
-    it rests on its asperities (contact.contact_state; events.reached ends the phase)."""
+    (whose edge radius is zero); ``events.HELD`` while a rough film holds its contact and
+    ``events.ENDED`` when it rests on its asperities (contact.contact_state)."""
     theta0 = cells[THETA0]
     row[_E_C] = compression_work(area, p, h, theta0, phys)
     row[_W_VOID] = scalars[WORKED]
@@ -404,12 +405,12 @@ def record(row, s, area, weight, p, h, pmax, pmin, marks, cells, scalars, phys, 
                                   phys)
         state = contact_state(h, row[_V], phys)
         if state == REST:
-            return -1.0
+            return ENDED
         held = state == HOLD
     if not has_active_set(phys):  # no cavity ever
         row[_R_CAV] = 0.0
         row[_V_VOID] = 0.0
-        return 1e-300 if held else 0.0
+        return HELD if held else 0.0
     active0, h_onset = marks[ACTIVE0], cells[H_ONSET]
     r_cav = cavity_edge(s, p, active0, phys)
     jfo = phys[CAVITATION] == JFO
@@ -426,12 +427,12 @@ def record(row, s, area, weight, p, h, pmax, pmin, marks, cells, scalars, phys, 
     scalars[P_SEEN] = max(scalars[P_SEEN], pmax, -pmin)
     if r_cav > 0.0:
         scalars[P_ABS] = max(scalars[P_ABS], floor_fraction * scalars[P_SEEN])
-    r_event = max(r_cav, 1e-300) if held else r_cav
+    r_event = r_cav
     if jfo:
         for i in range(active0.size):
             if active0[i]:
                 r_event = max(r_event, 1e-300)
-    return r_event
+    return HELD if held else r_event
 
 
 @jit
