@@ -351,6 +351,7 @@ def step_error(y, y_pred, err_fac, h, marks, scalars, phys, perr, dh, scale):
       Kirchhoff pressure ``Int rho/mu dP``, smooth where a glassy lens makes ``P`` itself spike
       (that spike moves the gap, X and V only through W and the force, both in the norm on their
       own).
+    - A rough film: the nodes within ``TOUCH_BAND`` of first touch (``first_touch``).
 
     Returns True when ``scale`` holds the Kirchhoff pressures, False when the errors are measured
     against the pressures themselves (``scale`` untouched)."""
@@ -378,6 +379,8 @@ def step_error(y, y_pred, err_fac, h, marks, scalars, phys, perr, dh, scale):
         for i in range(n):
             perr[i] = err_fac * kirchhoff_difference(y_pred[i], y[i], phys)[0]
             scale[i] = kirchhoff_difference(0.0, y[i], phys)[0]
+        if rough(phys):  # the first-touch band stays out in the Kirchhoff pressure too
+            first_touch(h, phys, perr, dh)
         return True
     return False
 
