@@ -116,11 +116,11 @@ def contact_gap(s, influence, x, p, c, t_set, h_set, phys, pa, w, h):
     ``H`` into ``h``; returns False when the contact Newton did not converge."""
     n = s.size
     sigma = phys[ROUGHNESS]
-    load = np.empty(n)
-    for i in range(n):
-        load[i] = c * p[i] + (1.0 - c) * t_set[i] if c != 1.0 else p[i]
     guess = h.copy()
-    matvec(influence, load, w)
+    if c == 1.0:
+        matvec(influence, p, w)
+    else:
+        matvec(influence, c * p + (1.0 - c) * t_set, w)
     m = 0
     for i in range(n):
         pa[i] = 0.0
@@ -204,9 +204,11 @@ def contact_derivatives(influence, weight, h, c, h_set, phys, k_eff, dh_dx, forc
     (weight_C D) z``; NaN where the contact's matrix is singular or ``h`` is not finite (the
     loop then sees a singular Newton matrix)."""
     n = h.size
+    slope = np.empty(n)
     m = 0
     for i in range(n):
-        if contact_pressure(h[i], h_set[i], c, phys)[1] != 0.0:
+        slope[i] = contact_pressure(h[i], h_set[i], c, phys)[1]
+        if slope[i] != 0.0:
             m += 1
     for i in range(n):
         dh_dx[i] = 1.0
@@ -219,10 +221,9 @@ def contact_derivatives(influence, weight, h, c, h_set, phys, k_eff, dh_dx, forc
     d = np.empty(m)
     k = 0
     for i in range(n):
-        di = contact_pressure(h[i], h_set[i], c, phys)[1]
-        if di != 0.0:
+        if slope[i] != 0.0:
             idx[k] = i
-            d[k] = di
+            d[k] = slope[i]
             k += 1
     mat = np.empty((m, m))
     rhs = np.empty((m, n + 1))

@@ -205,6 +205,15 @@ def start_attempt(y, marks, cells, phys):
 
 
 @jit
+def contact_motion(weight, phys, bh, scalars, res):
+    """The contact load's part of the motion row of ``film.residual``: ``bh F_a / (3 St)``, with
+    the contact pressure of the last ``surface_gap`` (nothing for a smooth film)."""
+    if rough(phys):
+        res[weight.size + 1] += bh * film_force(weight, node_block(scalars, PA)) \
+            / (3.0 * phys[ST])
+
+
+@jit
 def step_residual(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist, y,
                   marks, cells, scalars, decide, q, w, h, res):
     """The scaled residual of the step at the iterate ``y`` (``film.residual``) into ``res``;
@@ -217,8 +226,7 @@ def step_residual(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, 
     theta, active = cells[THETA], marks[ACTIVE]
     residual(s, s_face, area, weight, phys, bh, c_hist, x_hist, v_hist, y[n], y[n + 1], p, theta,
              h, q, res)
-    if rough(phys):  # the contact load moves the spheres too
-        res[n + 1] += bh * film_force(weight, node_block(scalars, PA)) / (3.0 * phys[ST])
+    contact_motion(weight, phys, bh, scalars, res)
     if not has_active_set(phys):
         return
     jfo = phys[CAVITATION] == JFO
@@ -228,9 +236,7 @@ def step_residual(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, 
                 surface_gap(s, influence, phys, y, scalars, w, h)
                 residual(s, s_face, area, weight, phys, bh, c_hist, x_hist, v_hist, y[n],
                          y[n + 1], p, theta, h, q, res)
-                if rough(phys):
-                    res[n + 1] += bh * film_force(weight, node_block(scalars, PA)) \
-                        / (3.0 * phys[ST])
+                contact_motion(weight, phys, bh, scalars, res)
         else:
             update_cavity(p, res, phys, active)
     if not jfo:
@@ -356,8 +362,6 @@ def step_error(y, y_pred, err_fac, h, marks, scalars, phys, perr, dh, scale):
     Returns True when ``scale`` holds the Kirchhoff pressures, False when the errors are measured
     against the pressures themselves (``scale`` untouched)."""
     n = perr.size
-    if rough(phys):
-        first_touch(h, phys, perr, dh)
     rough_in_time = False
     if has_active_set(phys):
         active, active0 = marks[ACTIVE], marks[ACTIVE0]
@@ -375,14 +379,14 @@ def step_error(y, y_pred, err_fac, h, marks, scalars, phys, perr, dh, scale):
         if refilled:
             for i in range(n):
                 dh[i] = 0.0
-    if not isoviscous(phys) and not rough_in_time:
+    kirchhoff = not isoviscous(phys) and not rough_in_time
+    if kirchhoff:
         for i in range(n):
             perr[i] = err_fac * kirchhoff_difference(y_pred[i], y[i], phys)[0]
             scale[i] = kirchhoff_difference(0.0, y[i], phys)[0]
-        if rough(phys):  # the first-touch band stays out in the Kirchhoff pressure too
-            first_touch(h, phys, perr, dh)
-        return True
-    return False
+    if rough(phys):
+        first_touch(h, phys, perr, dh)
+    return kirchhoff
 
 
 @jit
