@@ -257,7 +257,7 @@ def per_operation():
 
     def factorise(phys):
         jacobian(g.s, g.s_face, g.area, g.force_weight, g.influence, phys, bh, p, theta, h, active,
-                 jac, dres_dh, np.ones(g.s.size), g.force_weight, 0.0)
+                 jac, dres_dh, np.ones(g.s.size), g.force_weight, 0.0, np.empty(0))
         lu_factor(jac, piv)
 
     def newton(phys):

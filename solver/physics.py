@@ -181,12 +181,14 @@ GROUPS = (
           "Dowson-Higginson c2", 0.0, 100.0, closed_lo=True, default=0.85),
     # rough surfaces: asperities of the combined rms roughness sigma carry load where the gap
     # falls below it (docs/model.md, "Surface roughness"); 0: smooth surfaces, the classic film
+    # at most the start gap (checked with eps below); 1e8 x1 is that gap at eps 1e-20
     Group("roughness", "combined rms surface roughness sigma / x1 (asperity contact below it)",
-          "roughness", 0.0, 1.0e4, closed_lo=True, default=0.0, off=0.0,
+          "roughness", 0.0, 1.0e8, closed_lo=True, default=0.0, off=0.0,
           doc="Where the local gap ``H`` falls below it the asperities carry the pressure "
-              "``k (sigma - H)^1.5 sigma / H`` (model/contact.py)."),
-    Group("asperity_stiffness", "asperity stiffness k: the contact pressure (sigma - H)^1.5 "
-          "sigma / H times k, in mu a v0 / x1^2.5", "asperity stiffness", 0.0, 1.0e8,
+              "of Hertzian summits spread over heights 0 to sigma, ``(24/35) k (sigma - H)^3.5 "
+              "/ sigma^2`` near first touch (model/contact.py)."),
+    Group("asperity_stiffness", "asperity stiffness k: the Greenwood-Williamson pressure of "
+          "the summits, in mu a v0 / x1^2.5", "asperity stiffness", 0.0, 1.0e8,
           default=10.0, doc="Scenes derive it from the materials (Greenwood-Williamson, "
                             "docs/model.md); not used without roughness."),
     Group("e_dry", "dry coefficient of restitution of the solids (losses where they touch)",

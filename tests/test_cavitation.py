@@ -48,7 +48,8 @@ def rigid_separation(x, u, pi, n_inner=64, stretch=1.2, max_rel=0.3, bh=1.0):
         changed = update_cavity(p, res, phys, active)
         constrain(p, res, active, phys)
         jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, np.zeros((n, n)), phys, bh, p,
-                 np.ones(n - 1), h, active, jac, work, np.ones(n), grid.force_weight, 0.0)
+                 np.ones(n - 1), h, active, jac, work, np.ones(n), grid.force_weight, 0.0,
+                 np.empty(0))
         step = np.linalg.solve(jac[:n, :n], -res[:n])
         p += step
         if not changed and np.max(np.abs(step)) < 1e-13 * np.max(np.abs(p)):
@@ -205,7 +206,8 @@ def jfo_steps(xs, pi, dt=1.0, n_inner=64, stretch=1.2, max_rel=0.3):
                 residual(grid.s, grid.s_face, grid.area, grid.force_weight, phys, dt, c_hist, x, -u, x,
                  -u, p, theta, h, q, res)
             jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, zero_k, phys, dt, p,
-                     theta, h, active, jac, work, np.ones(n), grid.force_weight, 0.0)
+                     theta, h, active, jac, work, np.ones(n), grid.force_weight, 0.0,
+                     np.empty(0))
             step = np.linalg.solve(jac[:n, :n], -res[:n])
             theta[active] += step[:n - 1][active]
             step[:n - 1][active] = 0.0

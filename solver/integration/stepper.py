@@ -190,7 +190,7 @@ def _solve(fac, b):
 
 @jit
 def _newton(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist, rtol, y,
-            marks, cells, scalars, q, w, h, res, dh, fac, dres_dh, lu_valid, bh_lu, counters):
+            marks, cells, scalars, q, w, h, res, dh, dp, fac, dres_dh, lu_valid, bh_lu, counters):
     """Solve the step from the predictor in ``y`` by chord Newton (module docstring), reusing
     the LU while ``bh`` stays within 30 % of ``bh_lu``. The gap update of an iterate is the next
     iterate's gap minus this one's, so each iteration costs one K-product (in gap) and one LU
@@ -209,7 +209,7 @@ def _newton(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist
     m = n + 2
     fresh = False
     if (not lu_valid) or abs(bh / bh_lu - 1.0) > 0.3:
-        model.surface_gap(s, influence, phys, y, scalars, w, h)
+        model.surface_gap(s, influence, phys, y, marks, scalars, w, h)
         for i in range(n):
             if not (h[i] > 0.0):  # the predictor's gap is not admissible: a smaller step
                 return DIVERGED, lu_valid, bh_lu, True
@@ -226,7 +226,7 @@ def _newton(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist
     norm_prev = 0.0
     first = True
     set_changes = 0
-    model.surface_gap(s, influence, phys, y, scalars, w, h)
+    model.surface_gap(s, influence, phys, y, marks, scalars, w, h)
     it = 0
     while it < MAX_NEWTON or (pending and it == MAX_NEWTON):
         it += 1
@@ -267,10 +267,11 @@ def _newton(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist
         counters[NEWTON] += 1
         for i in range(n):
             dh[i] = h[i]
-        model.surface_gap(s, influence, phys, y, scalars, w, h)
+        model.surface_gap(s, influence, phys, y, marks, scalars, w, h)
         for i in range(n):
             dh[i] = h[i] - dh[i]
-        norm = _norm(res[:n], res[n], res[n + 1], dh, y[:n], y[n], y[n + 1], h, rtol, p_abs)
+        dp_film, p = model.film_change(res[:n], dh, y, h, marks, scalars, phys, dp)
+        norm = _norm(dp_film, res[n], res[n + 1], dh, p, y[n], y[n + 1], h, rtol, p_abs)
         norm = model.update_norm(norm, cells, phys, rtol)
         if not np.isfinite(norm):
             break
@@ -324,16 +325,17 @@ def _record(row, t, s, area, weight, y, w, h, strain, dissipated, marks, cells, 
     n = s.size
     x = y[n]
     v = y[n + 1]
+    p = model.film_pressure(y, scalars, phys)
     imin = 0
     wmax = 0.0
-    pmax = y[0]
-    pmin = y[0]
+    pmax = p[0]
+    pmin = p[0]
     for i in range(n):
         if h[i] < h[imin]:
             imin = i
         wmax = max(wmax, abs(w[i]))
-        pmax = max(pmax, y[i])
-        pmin = min(pmin, y[i])
+        pmax = max(pmax, p[i])
+        pmin = min(pmin, p[i])
     row[_T] = t
     row[_X] = x
     row[_V] = v
@@ -348,8 +350,8 @@ def _record(row, t, s, area, weight, y, w, h, strain, dissipated, marks, cells, 
     row[_W_ABSMAX] = wmax
     row[_P_MAX] = pmax
     row[_P_MIN] = pmin
-    r_event = model.record(row, s, area, weight, y[:n], h, pmax, pmin, marks, cells, scalars,
-                           phys, PRESSURE_SCALE)
+    r_event = model.record(row, s, area, weight, p, h, pmax, pmin, marks, cells, scalars, phys,
+                           PRESSURE_SCALE)
     return model.relaxing_deflection(w, wmax, scalars, phys), r_event
 
 
@@ -389,7 +391,7 @@ def _attempt(s, s_face, area, weight, influence, phys, rtol, dt, dt_min, max_ste
             break
         a1, a2, b = _bdf2(dt, t0, t1, n_hist)
         bh = b * dt
-        model.content_history(a1, a2, y0, y1, h0, h1, cells, phys, c_hist)
+        model.content_history(a1, a2, y0, y1, h0, h1, cells, scalars, phys, c_hist)
         x_hist = a1 * y0[n] + a2 * y1[n]
         v_hist = a1 * y0[n + 1] + a2 * y1[n + 1]
         err_fac = _predict(dt, t0, t1, t2, n_hist, y0, y1, y2, y_pred)
@@ -398,7 +400,7 @@ def _attempt(s, s_face, area, weight, influence, phys, rtol, dt, dt_min, max_ste
 
         outcome, lu_valid, bh_lu, fresh = _newton(
             s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist, rtol, y,
-            marks, cells, scalars, q, w, h, res, dh, fac, dres_dh, lu_valid, bh_lu, counters)
+            marks, cells, scalars, q, w, h, res, dh, kdp, fac, dres_dh, lu_valid, bh_lu, counters)
         if outcome == SINGULAR:
             status = NONFINITE
             break
@@ -496,7 +498,8 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
     # initial row
     face_fluxes(s, s_face, y0[:n], h, phys, q)
     marks, cells, scalars = model.new_state(q)
-    model.surface_gap(s, influence, phys, y0, scalars, w, h)  # with a contact load, if any
+    model.surface_gap(s, influence, phys, y0, marks, scalars, w, h)  # with a contact load, if any
+    model.begin(scalars, phys)
     h0[:] = h
     h1[:] = h
     strain, diss_rate = model.energies(s, s_face, weight, phys, y0, w, h, q, scalars)
@@ -517,7 +520,7 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
         wmax, r_event = _record(series[n_rows], t0, s, area, weight, y0, w, h, strain, dissipated,
                                 marks, cells, scalars, phys)
         if save_profiles:
-            p_hist[n_rows] = y0[:n]
+            p_hist[n_rows] = model.film_pressure(y0, scalars, phys)
             w_hist[n_rows] = w
             theta_hist[n_rows] = model.fluid_fraction(cells)
         n_rows += 1
@@ -536,7 +539,7 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
         if not accepted:
             # record the last accepted state with the failure status, then stop; w and h hold
             # the rejected trial, so recompute them
-            model.surface_gap(s, influence, phys, y0, scalars, w, h)
+            model.surface_gap(s, influence, phys, y0, marks, scalars, w, h)
             continue
 
         # ---- shift history -------------------------------------------------------------------
@@ -551,7 +554,7 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
         n_hist = min(n_hist + 1, 3)
         counters[STEPS] += 1
 
-        face_fluxes(s, s_face, y0[:n], h, phys, q)
+        face_fluxes(s, s_face, model.film_pressure(y0, scalars, phys), h, phys, q)
         model.accept(s, area, weight, y0, w, h0, h1, q, dt, marks, cells, scalars, phys)
         strain_new, diss_new = model.energies(s, s_face, weight, phys, y0, w, h, q, scalars)
         dissipated += 0.5 * (diss_rate + diss_new) * dt

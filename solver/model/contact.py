@@ -2,18 +2,25 @@
 touch (docs/model.md, "Surface roughness", "Losses in the solids").
 
 Dimensionless, scale ``x1``. Each surface carries asperities; where the local mean gap ``H``
-falls below the combined rms roughness ``sigma`` (``phys[ROUGHNESS]``) they touch and carry the
-contact pressure
+falls below the height of the tallest summits, the combined rms roughness ``sigma``
+(``phys[ROUGHNESS]``), they touch and carry the contact pressure of Greenwood & Williamson (1966),
+Hertzian summits whose heights ``z`` are spread over the band ``0 < z < sigma`` above the mean
+plane with the parabolic density ``phi(z) = (6 / sigma^3) z (sigma - z)``:
 
-    p_a(H) = k (sigma - H)^(3/2) sigma / H,      0 < H < sigma   (0 for H >= sigma),
+    p_a(H) = k (sigma / H) Int_H^sigma (z - H)^(3/2) phi(z) dz
+           = k (sigma / H) (2/105) w^(3/2) D^(7/2) (9 - 2 D),     D = (sigma - H) / w,  w = sigma/2,
 
-``k`` the asperity stiffness (``phys[ASPERITY_K]``). Near first touch it is the Greenwood &
-Williamson (1966) law of Hertzian asperities of one summit height, ``k (sigma - H)^(3/2)``; the
-factor ``sigma / H`` closes the asperity layer where the mean planes would meet (the flattened
-asperities fill the valleys), so the gap stays positive under any load. ``k -> inf`` is the
-hard cut-off: contact at ``H = sigma``. The film flows through the mean gap ``H`` (flow factors
-of the rough gap are 1 to within a few percent for ``H > 3 sigma``, Patir & Cheng 1978, and the
-load is carried by the asperities below it).
+for ``0 < H < sigma`` (0 for ``H >= sigma``), ``k`` the asperity stiffness (``phys[ASPERITY_K]``).
+The density vanishes linearly at the tallest summit, so the law starts as ``(24/35) k (sigma -
+H)^(7/2) / sigma^2``: three times continuously differentiable at first touch, which keeps the
+solution smooth in time as the contact's edge sweeps over the nodes (a single summit height,
+``k (sigma - H)^(3/2)``, has an infinite second derivative there, and every node it crossed cost
+the time stepping several rejected steps). The factor ``sigma / H`` closes the asperity layer
+where the mean planes would meet (the flattened summits fill the valleys), so the gap stays
+positive under any load. ``k -> inf`` is the hard cut-off: contact at ``H = sigma`` (the
+penetration falls like ``k^(-2/7)``). The film flows through the mean gap ``H`` (flow factors of
+the rough gap are 1 to within a few percent for ``H > 3 sigma``, Patir & Cheng 1978, and the load
+is carried by the asperities below it).
 
 The contact pressure deflects both solids through the same kernel as the film pressure: with
 ``T = P + p_a(H)`` the total surface load,
@@ -27,18 +34,24 @@ along a stiffer line, ``c = e_dry^2``, through the load ``T_set`` of that instan
 elastic energy the solids then return is ``c`` times what they stored, so a dry impact restitutes
 exactly ``e_dry`` of its speed; a collision that never touches is unchanged.
 
-Given ``P`` and ``X`` the gap is implicit in the contact nodes ``C`` (``H < sigma``); it is solved
-there by Newton (``contact_gap``), with ``(I - c K_CC D)`` its matrix, ``D = dp_a/dH <= 0``. The
-derivatives of the gap and of the force on the spheres follow by the implicit function theorem
-(``contact_derivatives``).
+The unknown of a cell whose film pressure is free is its total load ``T`` (``contact_gap``): the
+gap is then explicit, ``P = T - p_a(H)``, and the Jacobian couples ``P`` to the gap through the
+contact's slope (``contact_slopes``), as cheap as the smooth film's. Only a cell held at a floor
+(a JFO cavity) has ``P`` fixed and its load follows its gap; where it touches, its gap is
+implicit and solved by Newton,
+with ``(I - c K_CC D)`` its matrix, ``D = dp_a/dH <= 0``, and the derivatives follow by the
+implicit function theorem (``contact_derivatives``).
 """
 
 import numpy as np
 
 from .._jit import jit
 from ..integration.linalg import lu_factor, lu_solve, matvec
-from ..physics import ASPERITY_K, ROUGHNESS, ST
+from ..physics import ASPERITY_K, PI, ROUGHNESS, ST
 
+# Int_0^D (D - t)^1.5 (3/4) t (2 - t) dt = (2/105) D^3.5 (9 - 2 D): the summits' parabolic
+# height density in units of their spread w = sigma/2 (asperity_pressure)
+SUMMITS = 2.0 / 105.0
 # the rigid film holds where every gap is at least this many roughnesses: the coupled phase
 # starts before it on approach (rigid.contact_onset_separation) and ends after it on departure
 CONTACT_MARGIN = 2.0
@@ -57,9 +70,13 @@ def asperity_pressure(h, phys):
     if h <= 0.0:
         return np.inf, -np.inf
     k = phys[ASPERITY_K]
-    d = sigma - h
-    sd = np.sqrt(d)
-    return k * d * sd * sigma / h, -k * sigma * (1.5 * sd / h + d * sd / (h * h))
+    w = 0.5 * sigma
+    d = (sigma - h) / w
+    d25 = d * d * np.sqrt(d)
+    scale = k * sigma * SUMMITS * w * np.sqrt(w)  # k sigma (2/105) w^1.5
+    load = scale * d25 * d * (9.0 - 2.0 * d)  # sigma/H aside: k sigma Int (z - H)^1.5 phi dz
+    slope = -scale / w * d25 * (31.5 - 9.0 * d)
+    return load / h, (slope - load / h) / h
 
 
 @jit
@@ -77,72 +94,101 @@ def contact_pressure(h, h_set, c, phys):
 
 @jit
 def asperity_energy(h, phys):
-    """Energy stored in the asperities per unit area, ``Int_H^sigma p_a dh``: with ``U^2 = sigma
-    - H``, ``2 k sigma (sigma^1.5 atanh(U / sqrt(sigma)) - sigma U - U^3 / 3)``, its leading term
-    ``(2/5) k (sigma - H)^(5/2)`` (a Hertzian asperity). Summed as a series where the closed form
-    cancels (``U^2 < sigma / 4``)."""
+    """Energy stored in the asperities per unit area, ``Int_H^sigma p_a dh``. With ``D = (sigma -
+    H)/w`` and ``sigma / h = 2 / (2 - D)`` it is ``k sigma (2/105) w^1.5 ((4/9) D^4.5 + 5 J(D))``,
+    ``J(D) = Int_0^D t^3.5 / (2 - t) dt``: the series ``sum_j D^(4.5+j) / ((4.5 + j) 2^(j+1))``
+    for ``D <= 1``, else, with ``U^2 = D``, ``2 (8 sqrt(2) atanh(U / sqrt(2)) - 8 U - (4/3) U^3 -
+    (2/5) U^5 - U^7 / 7)`` (which cancels for small ``D``). Near first touch ``(16/105) k (sigma -
+    H)^4.5 / sigma^2``."""
     sigma = phys[ROUGHNESS]
     if h >= sigma:
         return 0.0
     if h <= 0.0:
         return np.inf
-    k = phys[ASPERITY_K]
-    u = np.sqrt(sigma - h)
-    rs = np.sqrt(sigma)
-    z = u / rs
-    if z < 0.5:
-        # sigma^1.5 (atanh z - z - z^3/3) = sigma^1.5 sum_{j>=2} z^(2j+1) / (2j+1)
-        total = 0.0
-        term = z ** 5
-        j = 2
+    w = 0.5 * sigma
+    d = (sigma - h) / w
+    if d <= 1.0:
+        j_d = 0.0
+        term = d ** 4.5 * 0.5  # D^(4.5+j) / 2^(j+1), j = 0
+        j = 0
         while True:
-            add = term / (2 * j + 1)
-            total += add
-            if add < 1e-17 * total:
+            add = term / (4.5 + j)
+            j_d += add
+            if add < 1e-17 * j_d:
                 break
-            term *= z * z
+            term *= 0.5 * d
             j += 1
-        bracket = sigma * rs * total
     else:
-        bracket = sigma * rs * np.arctanh(z) - sigma * u - u ** 3 / 3.0
-    return 2.0 * k * sigma * bracket
+        u = np.sqrt(d)
+        u2 = d
+        j_d = 2.0 * (8.0 * np.sqrt(2.0) * np.arctanh(u / np.sqrt(2.0))
+                     - u * (8.0 + u2 * (4.0 / 3.0 + u2 * (0.4 + u2 / 7.0))))
+    return phys[ASPERITY_K] * sigma * SUMMITS * w * np.sqrt(w) \
+        * ((4.0 / 9.0) * d ** 4.5 + 5.0 * j_d)
 
 
 @jit
-def contact_gap(s, influence, x, p, c, t_set, h_set, phys, pa, w, h):
-    """The gap of a rough film: ``H = X + s + K (c (P + p_a(H)) + (1 - c) T_set)``, solved in
-    the contact nodes by Newton from the gap ``h`` holds on entry (the previous iterate's; any
-    value, it is clipped into ``(0, sigma]``). Writes ``p_a`` into ``pa``, ``W`` into ``w``,
-    ``H`` into ``h``; returns False when the contact Newton did not converge."""
+def contact_gap(s, influence, x, y, c, t_set, h_set, held, phys, pa, p, w, h):
+    """The gap and the film pressure of a rough film (docs/solver.md, "Surface roughness").
+
+    The slot ``y_i`` of each node holds its total surface load ``T_i = P_i + p_a(H_i)``. Where
+    the film pressure is free, the gap follows explicitly, ``H = X + s + K (c y + (1 - c)
+    T_set)``, and the film pressure is ``P_i = y_i - p_a(H_i)``. A cell held at the floor
+    (``held``: a JFO cavity, whose unknown is its liquid fraction) has ``P_i = -Pi``; where its
+    asperities touch, its load ``-Pi + p_a(H_i)`` depends on the gap it makes, and those cells'
+    gaps are solved together by Newton from the gap ``h`` holds on entry (the previous iterate's;
+    any value, it is clipped into ``(0, sigma]``); their slots receive their loads. Writes
+    ``p_a`` into ``pa``, ``P`` into ``p``, ``W`` into ``w``, ``H`` into ``h``; returns False when
+    that Newton did not converge."""
     n = s.size
     sigma = phys[ROUGHNESS]
-    guess = h.copy()
+    load = np.empty(n)
+    for i in range(n):
+        load[i] = -phys[PI] if held[i] else y[i]
     if c == 1.0:
-        matvec(influence, p, w)
+        matvec(influence, load, w)
     else:
-        matvec(influence, c * p + (1.0 - c) * t_set, w)
+        matvec(influence, c * load + (1.0 - c) * t_set, w)
     m = 0
     for i in range(n):
         pa[i] = 0.0
-        h[i] = x + s[i] + w[i]
-        if h[i] < sigma:
+        if held[i] and x + s[i] + w[i] < sigma:
             m += 1
-    if m == 0:
-        return True
+    converged = True
+    if m > 0:
+        converged = _implicit_gap(s, influence, x, c, h_set, held, phys, m, pa, w, h)
+    for i in range(n):
+        h[i] = x + s[i] + w[i]
+        if held[i]:
+            p[i] = -phys[PI]
+            y[i] = p[i] + pa[i]
+        else:
+            pa[i] = contact_pressure(h[i], h_set[i], c, phys)[0]
+            p[i] = y[i] - pa[i]
+    return converged
+
+
+@jit
+def _implicit_gap(s, influence, x, c, h_set, held, phys, m, pa, w, h):
+    """``contact_gap``'s Newton for the gaps of the ``m`` touching cells held at a floor, ``H =
+    base + c K_CC p_a(H)`` (``base``: ``X + s + w`` without their contact), from the gaps ``h``
+    holds; adds their contact pressure to ``w`` and writes it into ``pa``."""
+    n = s.size
+    sigma = phys[ROUGHNESS]
     idx = np.empty(m, dtype=np.int64)
     k = 0
     for i in range(n):
-        if h[i] < sigma:
+        if held[i] and x + s[i] + w[i] < sigma:
             idx[k] = i
             k += 1
     kcc = np.empty((m, m))
     base = np.empty(m)
     hc = np.empty(m)
     for a in range(m):
-        base[a] = h[idx[a]]
+        base[a] = x + s[idx[a]] + w[idx[a]]
         for b in range(m):
             kcc[a, b] = c * influence[idx[a], idx[b]]
-        g = guess[idx[a]]
+        g = h[idx[a]]
         hc[a] = min(max(g, 0.5 * max(base[a], 0.0)), sigma) if np.isfinite(g) and g > 0.0 \
             else max(0.5 * base[a], 0.5 * sigma)
         if hc[a] <= 0.0:
@@ -190,41 +236,53 @@ def contact_gap(s, influence, x, p, c, t_set, h_set, phys, pa, w, h):
     for i in range(n):
         for a in range(m):
             w[i] += c * influence[i, idx[a]] * pa[idx[a]]
-        h[i] = x + s[i] + w[i]
     return converged
 
 
 @jit
-def contact_derivatives(influence, weight, h, c, h_set, phys, k_eff, dh_dx, force_dp):
-    """Derivatives of the rough film's gap and of the force ``weight @ (P + p_a)`` in ``P`` and
-    ``X`` at the gap ``h`` (``contact_gap``), by the implicit function theorem: with ``C`` the
-    contact nodes, ``D = dp_a/dH`` there, ``M = I - c K_CC D``, ``Z = M^-1 c K_C:`` and ``z =
-    M^-1 1_C``: ``dH/dP = c K + c K_:C D Z`` into ``k_eff``, ``dH/dX = 1 + c K_:C D z`` into
-    ``dh_dx``, ``dF/dP = weight + (weight_C D) Z`` into ``force_dp``; returns ``dF/dX =
-    (weight_C D) z``; NaN where the contact's matrix is singular or ``h`` is not finite (the
-    loop then sees a singular Newton matrix)."""
-    n = h.size
-    slope = np.empty(n)
+def contact_slopes(h, c, h_set, held, phys, dp_dh):
+    """``dP/dH`` of the film pressure of each cell whose slot holds its load (``contact_gap``:
+    ``P = y - p_a(H)``, so ``-dp_a/dH``) into ``dp_dh``, 0 in the cells held at a floor; returns
+    the number of those that touch (their load depends on the gap: ``contact_derivatives``)."""
     m = 0
-    for i in range(n):
-        slope[i] = contact_pressure(h[i], h_set[i], c, phys)[1]
-        if slope[i] != 0.0:
-            m += 1
+    for i in range(h.size):
+        slope = contact_pressure(h[i], h_set[i], c, phys)[1]
+        dp_dh[i] = 0.0
+        if held[i]:
+            if slope != 0.0:
+                m += 1
+        else:
+            dp_dh[i] = -slope
+    return m
+
+
+@jit
+def contact_derivatives(influence, weight, h, c, h_set, held, phys, m, k_eff, dh_dx,
+                        force_dp):
+    """Derivatives of the rough film's gap and of the force on the spheres in the slots ``y``
+    and ``X`` where ``m`` touching cells are held at a floor (``contact_slopes``), by the
+    implicit function theorem: with ``C`` those cells, ``D = dp_a/dH`` there, ``M = I - c K_CC
+    D``, ``Z = M^-1 c K_C:`` and ``z = M^-1 1_C``: ``dH/dy = c K + c K_:C D Z`` into ``k_eff``,
+    ``dH/dX = 1 + c K_:C D z`` into ``dh_dx``, ``dF/dy = weight + (weight_C D) Z`` into
+    ``force_dp``; returns ``dF/dX = (weight_C D) z``; NaN where the matrix is singular or ``h``
+    is not finite (the loop then sees a singular Newton matrix)."""
+    n = h.size
+    idx = np.empty(m, dtype=np.int64)
+    d = np.empty(m)
+    k = 0
     for i in range(n):
         dh_dx[i] = 1.0
         force_dp[i] = weight[i]
         for j in range(n):
             k_eff[i, j] = c * influence[i, j]
-    if m == 0:
+        if held[i]:
+            slope = contact_pressure(h[i], h_set[i], c, phys)[1]
+            if slope != 0.0:
+                idx[k] = i
+                d[k] = slope
+                k += 1
+    if m == 0:  # no implicit gap: dH/dy = c K
         return 0.0
-    idx = np.empty(m, dtype=np.int64)
-    d = np.empty(m)
-    k = 0
-    for i in range(n):
-        if slope[i] != 0.0:
-            idx[k] = i
-            d[k] = slope[i]
-            k += 1
     mat = np.empty((m, m))
     rhs = np.empty((m, n + 1))
     for a in range(m):

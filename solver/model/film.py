@@ -327,15 +327,17 @@ def constrain(p, res, active, phys):
 
 @jit
 def jacobian(s, s_face, area, weight, influence, phys, bh, p, theta, h, active, jac, dres_dh,
-             dh_dx, force_dp, force_dx):
-    """Jacobian of ``residual`` with respect to ``(P, X, V)`` into ``jac`` (N+2, N+2), from the
-    terms' partial derivatives.
+             dh_dx, force_dp, force_dx, dp_dh):
+    """Jacobian of ``residual`` with respect to the slots ``(y, X, V)`` into ``jac`` (N+2, N+2),
+    from the terms' partial derivatives.
 
-    The cell rows depend on the gap at three nodes, and the gap on every pressure through ``K``:
+    The cell rows depend on the gap at three nodes, and the gap on every slot through ``K``:
     ``J = (dres/dH) K + dres/dP``, with ``dres_i/dH_i`` the content's ``theta_i``. ``influence``
-    is ``dH/dP`` (``K``, or a rough film's, model/contact.py), ``dh_dx`` is ``dH/dX`` (ones
+    is ``dH/dy`` (``K``, or a rough film's, model/contact.py), ``dh_dx`` is ``dH/dX`` (ones
     without contact), ``force_dp`` and ``force_dx`` the force's derivatives (``weight`` and 0
-    without contact). Cavitated cells
+    without contact); ``dp_dh`` (empty: ``y = P``) is ``dP/dH`` of a film whose pressure is not
+    its slot (a rough film's slot holds the total load, ``P = y - p_a(H)``: ``J = (dres/dH +
+    dres/dP dP/dH) dH/dy + dres/dP``). Cavitated cells
     (``active``, N-1 entries): under the Reynolds condition their rows are their constraint's;
     under JFO their rows stay the content rows and their slot is ``theta_i`` (``P_i = -Pi``
     fixed), so the slot's column is ``d row_i / d theta_i = H_i e_i``. ``dres_dh`` (N, 3) is work
@@ -390,6 +392,10 @@ def jacobian(s, s_face, area, weight, influence, phys, bh, p, theta, h, active, 
                 jac[i, :] = 0.0
                 dres_dh[i, :] = 0.0
                 jac[i, i] = cell_constraint(p[i], phys)[1]
+    if dp_dh.size:  # P = y - p_a(H): the pressure partials reach the gap too
+        for i in range(n):
+            for k in range(max(i - 1, 0), min(i + 2, n)):
+                dres_dh[i, k - i + 1] += jac[i, k] * dp_dh[k]
     # chain rule through H = X + s + K P
     for i in range(n):
         lo = i - 1 if i > 0 else 0
