@@ -118,7 +118,21 @@ VARIANTS = (
     ("+ roughness, e_dry and outer flow (e_far)",
      {**_CLASSIC, **_INPUTS, "asperity_contact": "on"}, {"observable": "e_far"}),
     ("scene's own choice, e_far", _INPUTS, {"observable": "e_far"}),
+    # the history force (solver/far_field.py: history_restitution, Basset's kernel): a bound on
+    # what it takes off e_far, not a prediction (docs/model.md, "Outer flow: the history force")
+    ("+ roughness, e_dry, outer flow and history force (bound)",
+     {**_CLASSIC, **_INPUTS, "asperity_contact": "on"}, {"observable": "e_far_history"}),
+    ("scene's own choice, e_far with history force (bound)", _INPUTS,
+     {"observable": "e_far_history"}),
 )
+# observables computed from a solved scene rather than read off it
+COMPUTED = {"e_far_history": lambda collision: _with_history(collision)}
+
+
+def _with_history(collision):
+    from solver.far_field import history_restitution
+
+    return history_restitution(collision)
 # the cavitation pressure of the film (fluid.cavitation_pressure / tensile_strength), JFO model:
 # the vapour pressure (the scene's default), a liquid saturated with air at 1 atm (gas release as
 # soon as the pressure falls below ambient), and liquids that hold a tension before nucleating
@@ -175,7 +189,8 @@ def solve(run: Run, v: float, variant) -> dict:
     c = r.collision
     if not c.ok:
         return {"e": None, "why": f"{c.status}: {c.message}"}
-    return {"e": float(getattr(c, observable)), "St": scene.stokes, "eps": scene.eps,
+    value = COMPUTED[observable](c) if observable in COMPUTED else getattr(c, observable)
+    return {"e": float(value), "St": scene.stokes, "eps": scene.eps,
             "closest_approach_m": float(c.h_m_x1 * scene.x1),
             "Pi": None if math.isinf(c.physics.Pi) else c.physics.Pi,
             "cavitation": c.physics.cavitation, "beta": c.physics.beta,

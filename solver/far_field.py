@@ -28,10 +28,12 @@ import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
+from scipy import optimize
 
 from .model import outer_flow
 
-__all__ = ["OuterFlow", "DEFAULT", "resistance_integral", "handover_defect", "far_restitution"]
+__all__ = ["OuterFlow", "DEFAULT", "resistance_integral", "handover_defect", "far_restitution",
+           "history_coefficient", "history_restitution"]
 
 X0_OVER_A = 0.01  # the scene layer's default near-field start (docs/scenes.md)
 X_REF_OVER_A = 0.1  # where e_far reads the speeds by default (docs/model.md says why)
@@ -183,3 +185,159 @@ class OuterFlow:
 
 
 DEFAULT = OuterFlow()
+
+
+# ---- the history force: a bound on what unsteady viscous diffusion adds (docs/model.md) ----------
+HISTORY_FIRST_STEP = 1e-6  # a/v0: the first step after a kink of the velocity (graded from there)
+HISTORY_GROWTH = 1.02  # each step at most this much longer than the last
+HISTORY_MAX_STEP = 2e-3  # a/v0
+GAP_STEP = 0.01  # a step moves the gap by at most this fraction of itself
+
+
+def history_coefficient(stokes: float, density_ratio: float) -> float:
+    """``B = (3 / sqrt(2 pi)) sqrt(phi / St)``: the Basset history force
+    ``6 a_s^2 sqrt(pi rho mu) Int (du/dtau) / sqrt(t - tau) dtau`` of each sphere in units of
+    ``m v0^2 / a`` with time in ``a / v0`` (a sphere and a wall, or two equal spheres with
+    ``phi`` and ``St`` as ``OuterFlow`` and ``Physics`` define them)."""
+    return 3.0 / math.sqrt(2.0 * math.pi) * math.sqrt(density_ratio / stokes)
+
+
+class _Tables:
+    """``R(x)``, ``C(x)`` and ``C'(x)`` on a log grid of the gap (``x/a`` from 1e-3 to 100),
+    interpolated in ``ln x`` (``x R``, ``C`` smooth there; 400 points a decade: 1e-7 relative)."""
+
+    def __init__(self, geometry: str):
+        self.u = np.linspace(math.log(1e-3), math.log(MAX_OVER_A), 2001)
+        gaps = np.exp(self.u)
+        self.xr = np.array([g * outer_flow.resistance(geometry, g) for g in gaps])
+        self.c = np.array([outer_flow.added_mass(geometry, g) for g in gaps])
+        self.dc = np.gradient(self.c, self.u) / gaps
+
+    def __call__(self, gap):
+        u = math.log(gap)
+        return (np.interp(u, self.u, self.xr) / gap, np.interp(u, self.u, self.c),
+                np.interp(u, self.u, self.dc))
+
+
+@functools.lru_cache(maxsize=4)
+def _tables(geometry: str) -> _Tables:
+    return _Tables(geometry)
+
+
+def _history_step(times, speeds, t_new):
+    """``Int_(t_0)^(t_new) (dU/dtau) / sqrt(t_new - tau) dtau`` over the piecewise-linear
+    ``speeds`` at ``times`` (exact for that interpolant)."""
+    if len(times) < 2:
+        return 0.0
+    t = np.asarray(times)
+    u = np.asarray(speeds)
+    slope = np.diff(u) / np.diff(t)
+    return float(np.sum(slope * 2.0 * (np.sqrt(t_new - t[:-1]) - np.sqrt(t_new - t[1:]))))
+
+
+def _advance(times, speeds, gap, gap_stop, phi, stokes, b, tables, moving_out):
+    """March the outer phase from the last of ``times``/``speeds`` (``speeds`` the gap's rate,
+    ``dx/dt``) at ``gap`` until the gap passes ``gap_stop`` (or the motion stops):
+    ``M dU/dT = -R U / St - (1/2) M' U^2 - B H``, ``M = 1 + phi C``, ``H`` the history integral,
+    implicit in ``U`` (the last interval of ``H`` included) with ``R``, ``M`` at the step's start;
+    steps graded from ``HISTORY_FIRST_STEP`` after the start. Returns the gaps reached."""
+    gaps = [gap]
+    dt = HISTORY_FIRST_STEP
+    while (gap < gap_stop if moving_out else gap > gap_stop):
+        u_old = speeds[-1]
+        if moving_out and u_old <= 0.0:
+            break
+        r, c, dc = tables(gap)
+        mass = 1.0 + phi * c
+        # H(t_new): the known intervals', and the last one's 2 (U_new - U_old) / sqrt(dt)
+        earlier = _history_step(times, speeds, times[-1] + dt)
+        coeff = mass / dt + r / stokes + 2.0 * b / math.sqrt(dt)
+        rhs = mass * u_old / dt - 0.5 * phi * dc * u_old * u_old - b * earlier \
+            + 2.0 * b * u_old / math.sqrt(dt)
+        u_new = rhs / coeff
+        gap = gap + 0.5 * dt * (u_old + u_new)
+        times.append(times[-1] + dt)
+        speeds.append(u_new)
+        gaps.append(gap)
+        # steps graded from the start, and short against the time to cross the gap
+        dt = min(dt * HISTORY_GROWTH, HISTORY_MAX_STEP,
+                 GAP_STEP * gap / max(abs(u_new), 1e-3))
+    return gaps
+
+
+def near_field_history(result, x0_over_a):
+    """The near field's speed history in the outer units: times ``t v0 / a`` from the arrival
+    at ``x0`` (0) to the departure's return to ``x0``, and the gap's rate ``dx/dt`` over ``v0``
+    (``-V``), from the result's series (``tau = v0 t / x0``; ``X`` over ``x1``); None when the
+    spheres do not come back to ``x0``."""
+    s = result.series
+    x_start = result.physics.x_start
+    tau, x, v = np.asarray(s["tau"]), np.asarray(s["X"]), np.asarray(s["V"])
+    out = np.nonzero((v < 0.0) & (x >= x_start))[0]
+    if out.size == 0:
+        return None
+    k = int(out[0])
+    # the crossing of x0 on the way out, between rows k-1 and k
+    w = (x_start - x[k - 1]) / (x[k] - x[k - 1])
+    tau_end = tau[k - 1] + w * (tau[k] - tau[k - 1])
+    v_end = v[k - 1] + w * (v[k] - v[k - 1])
+    return np.append(tau[:k], tau_end) * x0_over_a, -np.append(v[:k], v_end)
+
+
+def history_restitution(result, outer=None, coefficient=None):
+    """``e_far`` with the Basset history force added to the outer phase (docs/model.md, "Outer
+    flow: the history force"): the approach from the outer start, where the spheres moved
+    steadily before (shot so that they arrive at ``x0`` with ``v0``), the near field's own speed
+    history (``near_field_history``), and the departure until ``x_ref``, all with
+    ``M dU/dT = -R U / St - (1/2) M' U^2 - B Int (dU/dtau) / sqrt(T - tau) dtau``
+    (``history_coefficient``). The kernel is an isolated sphere's in unsteady Stokes flow, which
+    over-estimates the history of a sphere near a wall (whose gap flow is quasi-steady) and at a
+    finite Reynolds number (whose kernel decays faster): a bound on what the history force takes
+    off, not a prediction. NaN for a failed result, 0 where the spheres stick or stop before
+    ``x_ref``; ``e_far`` itself without a fluid density (no history force without it).
+    ``coefficient`` replaces ``B`` (0: the same integration without the history force, which
+    reproduces ``e_far``: tests/test_far_field.py)."""
+    outer = result.outer if outer is None else outer
+    if not result.ok:
+        return math.nan
+    if outer.density_ratio == 0.0:
+        return outer.restitution(result.e_x0, result.physics.St)
+    if result.e_x0 <= 0.0:
+        return 0.0
+    stokes, phi = result.physics.St, outer.density_ratio
+    b = history_coefficient(stokes, phi) if coefficient is None else coefficient
+    tables = _tables(outer.geometry)
+    near = near_field_history(result, outer.x0_over_a)
+    if near is None:
+        return 0.0
+
+    def approach(speed):
+        times, speeds = [0.0], [-speed]
+        gaps = _advance(times, speeds, outer.start_over_a, outer.x0_over_a, phi, stokes, b,
+                        tables, moving_out=False)
+        return times, speeds, gaps
+
+    def arrival(speed):  # the speed at x0, interpolated in the gap, less v0
+        _, speeds, gaps = approach(speed)
+        return -np.interp(outer.x0_over_a, gaps[::-1], speeds[::-1]) - 1.0
+
+    guess = outer.approach_speed(stokes)  # without the history force
+    hi = guess
+    while arrival(hi) < 0.0:
+        hi *= 1.5
+    lo = hi
+    while arrival(lo) > 0.0:
+        lo /= 1.5
+    speed = optimize.brentq(arrival, lo, hi, xtol=1e-10 * guess, rtol=1e-10)
+    times, speeds, gaps = approach(speed)
+    v_in = -float(np.interp(outer.x_ref_over_a, gaps[::-1], speeds[::-1]))
+    # the near field from the arrival at x0 (the approach's last step ends just past x0)
+    t0 = times[-1]
+    times += list(t0 + near[0][1:])
+    speeds += list(near[1][1:])
+    gaps_out = _advance(times, speeds, outer.x0_over_a, outer.x_ref_over_a, phi, stokes, b,
+                        tables, moving_out=True)
+    if gaps_out[-1] < outer.x_ref_over_a:
+        return 0.0
+    u_out = float(np.interp(outer.x_ref_over_a, gaps_out, speeds[-len(gaps_out):]))
+    return max(u_out, 0.0) / v_in
