@@ -28,7 +28,6 @@ import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from scipy import optimize
 
 from .model import outer_flow
 
@@ -297,6 +296,8 @@ def history_restitution(result, outer=None, coefficient=None):
     ``x_ref``; ``e_far`` itself without a fluid density (no history force without it).
     ``coefficient`` replaces ``B`` (0: the same integration without the history force, which
     reproduces ``e_far``: tests/test_far_field.py)."""
+    from scipy import optimize  # here: startup paths import this module, not scipy (0.3 s)
+
     outer = result.outer if outer is None else outer
     if not result.ok:
         return math.nan

@@ -551,3 +551,46 @@ def test_list_materials(capsys):
     assert main(["scene", "--list-materials"]) == 0
     out = capsys.readouterr().out
     assert "sandstone" in out and "source:" in out and "water" in out
+
+
+def _pair_scene(m1, m2, **top):
+    data = {"v0": "0.5 m/s", "body1": {"material": m1, "radius": "3 mm"},
+            "body2": {"material": m2, "wall": True}, "fluid": {"name": "silicone_oil_104cst"}}
+    data.update(top)
+    return data
+
+
+def test_the_pairs_table_gives_a_scenes_e_dry(table):
+    """A pair both of whose materials one group of the shipped table holds takes its e_dry,
+    also with a property of a body given in the scene (its surfaces are still that material's);
+    the scene's own e_dry wins, and a pair no group holds is elastic (1)."""
+    scene = scene_from_dict(_pair_scene("chrome_steel", "glass"), table)
+    assert scene.e_dry == table.pairs["glass_and_hard_metals"].e_dry == 0.97
+    assert "glass_and_hard_metals" in scene.e_dry_source
+    rough = _pair_scene("chrome_steel", "glass")
+    rough["body1"]["roughness"] = "0.3 um"
+    assert scene_from_dict(rough, table).e_dry == 0.97
+    assert scene_from_dict(_pair_scene("chrome_steel", "glass", e_dry=0.8), table).e_dry == 0.8
+    plastic = scene_from_dict(_pair_scene("nylon", "pmma"), table)
+    assert plastic.e_dry == 1.0 and "no pair group" in plastic.e_dry_source
+    for pair in table.pairs.values():
+        assert len(pair.source) > 20 and pair.materials <= set(table.solids)
+
+
+def test_a_user_pair_group_replaces_the_shipped_one_and_bad_groups_are_refused(tmp_path):
+    mine = write(tmp_path, """
+[pairs.glass_and_hard_metals]
+materials = ["glass", "chrome_steel"]
+e_dry = 0.9
+source = "own measurement"
+""", "pairs.toml")
+    table = load_table([mine], user_files=False)
+    assert table.dry_restitution("chrome_steel", "glass").e_dry == 0.9
+    assert table.dry_restitution("steel", "glass") is None  # the replaced group held it
+    for body, message in (('materials = "glass"\ne_dry = 0.9\nsource = "x"',
+                           "materials must be a list"),
+                          ('materials = ["glass"]\ne_dry = 1.5\nsource = "x"', r"e_dry = 1.5"),
+                          ('materials = ["glass"]\ne_dry = 0.9', "needs a 'source'")):
+        bad = write(tmp_path, f"[pairs.odd]\n{body}\n", "bad_pairs.toml")
+        with pytest.raises(MaterialError, match=message):
+            load_table([bad], user_files=False)

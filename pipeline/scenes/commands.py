@@ -327,6 +327,10 @@ def _list_materials(args) -> int:
         print(f"  {'':<20} source: {f.source} [{table.origins[('fluids', name)]}]")
         if f.pressure_source:
             print(f"  {'':<20} pressure dependence: {f.pressure_source}")
+    print("pairs (dry restitution e_dry of any two of the materials):")
+    for name, pair in table.pairs.items():
+        print(f"  {name:<20} e_dry = {pair.e_dry:g}: {', '.join(sorted(pair.materials))}")
+        print(f"  {'':<20} source: {pair.source} [{table.origins[('pairs', name)]}]")
     return 0
 
 

@@ -1,8 +1,9 @@
 """Named solids and fluids for scenes: the shipped table plus the user's own.
 
 The shipped table is ``pipeline/scenes/data/materials.toml``; every entry has a ``source``. Users add or
-replace entries without editing code, with TOML files of the same form (``[materials.NAME]`` and
-``[fluids.NAME]`` tables), found in this order (later files override earlier ones):
+replace entries without editing code, with TOML files of the same form (``[materials.NAME]``,
+``[fluids.NAME]`` and ``[pairs.NAME]`` tables), found in this order (later files override earlier
+ones):
 
 1. ``~/.config/ehd/materials.toml`` (``$XDG_CONFIG_HOME/ehd/materials.toml`` if that is set),
 2. the files listed in ``$EHD_MATERIALS`` (separated by ``os.pathsep``),
@@ -16,7 +17,9 @@ pressure dependence (docs/scenes.md, "Pressure-dependent viscosity and density")
 ``pressure_viscosity`` alpha [1/Pa] (``d ln mu / dp`` at ambient pressure), the Roelands
 ``roelands_index`` Z [-] and ``roelands_pressure`` p_R [Pa] (given together), the
 Dowson-Higginson ``dowson_higginson_c1``, ``dowson_higginson_c2`` [1/Pa] (given together), with
-their ``pressure_source``.
+their ``pressure_source``. A pair group ``[pairs.NAME]`` gives the dry coefficient of restitution
+``e_dry`` of any two of its ``materials`` (a property of the pair, not of one solid): the scene's
+``e_dry`` where it gives none (``MaterialTable.dry_restitution``).
 """
 
 from __future__ import annotations
@@ -31,7 +34,7 @@ from pathlib import Path
 from ..errors import UsageError
 from .units import FieldSpec, UnitError, to_si
 
-__all__ = ["Solid", "FluidProps", "MaterialTable", "SOLID_FIELDS", "FLUID_FIELDS",
+__all__ = ["Solid", "FluidProps", "DryPair", "MaterialTable", "SOLID_FIELDS", "FLUID_FIELDS",
            "PRESSURE_FIELDS", "PRESSURE_PAIRS", "load_table", "user_table_paths", "MaterialError",
            "check_pairs"]
 
@@ -87,6 +90,7 @@ class Solid:
     roughness: float | None = None  # m, rms surface roughness; None = not known
     source: str = ""
     description: str = ""
+    material: str = ""  # the named entry it comes from ("" for a solid given in full)
 
     @property
     def compliance(self) -> float:
@@ -133,6 +137,39 @@ class FluidProps:
         return self.dowson_higginson_c1 is not None and self.dowson_higginson_c2 is not None
 
 
+@dataclass(frozen=True)
+class DryPair:
+    """The dry coefficient of restitution of any two of ``materials`` (in air or vacuum, at
+    speeds where the solids stay elastic)."""
+
+    name: str
+    materials: frozenset
+    e_dry: float
+    source: str
+
+
+def _parse_pair(name, raw, where):
+    label = f"{where}: [pairs.{name}]"
+    if not isinstance(raw, dict):
+        raise MaterialError(f"{label} must be a table of values")
+    unknown = sorted(set(raw) - {"materials", "e_dry", "source", "description"})
+    if unknown:
+        raise MaterialError(f"{label} has unknown field(s) {unknown}; valid fields: "
+                            "['description', 'e_dry', 'materials', 'source']")
+    names = raw.get("materials")
+    if not (isinstance(names, list) and names and all(isinstance(n, str) for n in names)):
+        raise MaterialError(f"{label}: materials must be a list of material names, e.g. "
+                            "materials = ['glass', 'chrome_steel']")
+    e_dry = raw.get("e_dry")
+    if isinstance(e_dry, bool) or not isinstance(e_dry, (int, float)) \
+            or not 0.0 < e_dry <= 1.0:
+        raise MaterialError(f"{label}: e_dry = {e_dry!r} must be a number in (0, 1] (the pair's "
+                            "dry coefficient of restitution)")
+    if not str(raw.get("source", "")).strip():
+        raise MaterialError(f"{label} needs a 'source' saying where its e_dry comes from")
+    return DryPair(name, frozenset(names), float(e_dry), str(raw["source"]))
+
+
 def check_pairs(values: dict, where: str, error=None) -> None:
     """Raise ``error`` (MaterialError) when only one field of a ``PRESSURE_PAIRS`` pair is
     given: the Roelands law needs Z and p_R, the Dowson-Higginson law c1 and c2."""
@@ -171,8 +208,9 @@ def _parse_entry(kind, name, raw, where):
     if kind == "fluids":
         check_pairs(values, f"{where}: [{kind}.{name}]")
     text = {k: str(raw.get(k, "")) for k in texts}
-    cls = Solid if kind == "materials" else FluidProps
-    return cls(name=name, **values, **text)
+    if kind == "fluids":
+        return FluidProps(name=name, **values, **text)
+    return Solid(name=name, material=name, **values, **text)
 
 
 class MaterialTable:
@@ -181,10 +219,18 @@ class MaterialTable:
     def __init__(self):
         self.solids: dict[str, Solid] = {}
         self.fluids: dict[str, FluidProps] = {}
+        self.pairs: dict[str, DryPair] = {}  # in the order added: the last group matching wins
         self.origins: dict[tuple[str, str], str] = {}  # (kind, name) -> file it came from
 
     def add(self, data: dict, where: str) -> None:
-        """Add the ``materials`` and ``fluids`` tables of one parsed TOML document."""
+        """Add the ``materials``, ``fluids`` and ``pairs`` tables of one parsed TOML document."""
+        pairs = data.get("pairs", {})
+        if not isinstance(pairs, dict):
+            raise MaterialError(f"{where}: 'pairs' must be a table of named entries")
+        for name, raw in pairs.items():
+            self.pairs.pop(name, None)  # a replaced group moves to the end: it wins
+            self.pairs[name] = _parse_pair(name, raw, where)
+            self.origins[("pairs", name)] = where
         for kind in ("materials", "fluids"):
             section = data.get(kind, {})
             if not isinstance(section, dict):
@@ -205,6 +251,13 @@ class MaterialTable:
             raise MaterialError(f"{where}: unknown fluid {name!r}; known fluids: "
                                 f"{sorted(self.fluids)} (add your own with --materials FILE)")
         return self.fluids[name]
+
+    def dry_restitution(self, name1: str, name2: str) -> DryPair | None:
+        """The pair group that holds both materials (the one added last), or None."""
+        for pair in reversed(self.pairs.values()):
+            if name1 in pair.materials and name2 in pair.materials:
+                return pair
+        return None
 
 
 def read_toml(path, what: str = "materials file", error=MaterialError) -> dict:

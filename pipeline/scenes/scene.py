@@ -278,8 +278,9 @@ class Scene:
 
         ``asperity_contact`` "on" passes the bodies' combined rms roughness over ``x1`` with its
         asperity stiffness (``asperity_stiffness``); "off" and "auto" the smooth surfaces
-        (``run.run_scene`` decides "auto"). ``e_dry`` is always passed (it acts only where the
-        asperities touch).
+        (``run.run_scene`` decides "auto"), and ``e_dry`` with the contact only (it acts only
+        where the asperities touch: smooth surfaces keep the solver's 1, as the other groups of
+        physics that is off keep their defaults).
 
         Raises SceneError when a group is outside what the solver accepts (the Physics' own
         range check; for a group above its range the message says what to change in the
@@ -307,7 +308,6 @@ class Scene:
         if dens != "constant":
             values["dh_c1"] = f.dowson_higginson_c1 * p_star
             values["dh_c2"] = f.dowson_higginson_c2 * p_star
-        values["e_dry"] = self.e_dry
         rough = self.asperity_contact if asperity_contact is None else asperity_contact
         if rough not in ROUGHNESS_CHOICES:
             raise SceneError(f"asperity_contact must be one of {list(ROUGHNESS_CHOICES)}, got "
@@ -323,6 +323,7 @@ class Scene:
                                  ": start farther out (a larger x0 or x0_over_a)")
             values["roughness"] = sigma / self.x1
             values["asperity_stiffness"] = self.asperity_stiffness
+            values["e_dry"] = self.e_dry
         try:
             return Physics(**values)
         except ValueError as exc:

@@ -73,7 +73,8 @@ def _body(data, label, table: MaterialTable) -> Body:
     # a plane wall needs no density (its mass is infinite)
     optional = {"density"} if math.isinf(radius) else set()
     values, name, source = _properties(raw, SOLID_FIELDS, base, label, "material", optional)
-    solid = Solid(name=name, source=source, description=base.description if base else "", **values)
+    solid = Solid(name=name, source=source, description=base.description if base else "",
+                  material=base.material if base else "", **values)
     return Body(label=label, radius=radius, solid=solid)
 
 
@@ -266,7 +267,14 @@ def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
     if contact not in ROUGHNESS_CHOICES:
         raise SceneError(f"asperity_contact must be one of {list(ROUGHNESS_CHOICES)}, got "
                          f"{contact!r}")
-    e_dry, e_dry_source = 1.0, "not given: elastic solids (1)"
+    e_dry, e_dry_source = 1.0, "not given, and no pair group of the materials table holds both " \
+        "solids: elastic solids (1)"
+    materials = body1.solid.material, body2.solid.material
+    pair = table.dry_restitution(*materials) if all(materials) else None
+    if pair is not None:
+        e_dry = pair.e_dry
+        e_dry_source = f"the pair {materials[0]}/{materials[1]}: [pairs.{pair.name}] of the " \
+            "materials table, whose source ehd scene --list-materials shows"
     if "e_dry" in data:
         e_dry = to_si(data["e_dry"], _RATIO, "e_dry")
         if not 0.0 < e_dry <= 1.0:
