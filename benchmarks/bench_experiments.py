@@ -299,8 +299,8 @@ def report(data: dict, seconds: float | None) -> str:
              "`e/e_dry`. The variants with roughness and e_dry (the pair's from the "
              "materials table's `[pairs]`: 0.97 for the steel and glass pairs, none for the "
              "plastics; the scene's own choice takes it too) compare with `corr. e`, the "
-             "correlation's `e` with that e_dry; `e_far` is the restitution read at x_ref = 0.1 a on the exact Stokes "
-             "resistance with the added mass (docs/model.md, \"Outer flow\"). The Joseph et al. "
+             "correlation's `e` with that e_dry; `e_far` is the restitution read at x_ref = "
+             "0.1 a on the exact Stokes resistance with the added mass (docs/model.md, \"Outer flow\"). The Joseph et al. "
              "runs have no sourced roughness: their rough variants use the materials table's "
              "(chrome steel 25 nm, glass 1 nm; none for delrin, nylon, Lucite), which never "
              "touches there.", "",

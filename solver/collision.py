@@ -86,9 +86,9 @@ def scene_grid(stokes, x_switch, numerics: Numerics, pi=math.inf, roughness=0.0)
     The inner region covers the Hertz contact radius ``sqrt(delta_H)`` (at least 2, the film's
     width at small St), and the film's width ``sqrt(2 sigma)`` where rough surfaces touch
     (``roughness``: at a roughness of several x1 the asperities stop the spheres before the
-    solids deform, and the film that does the work lives there; measured on the rigid limit of
-    tests/test_contact.py, whose roughness is 5400 x1, this took the outer cells' error of
-    3.9e-4 in e_wet at St 20 to 7e-5). The grid must also reach well beyond the widest film the coupled phase
+    solids deform, and the film that does the work lives there; on the rigid limit of
+    tests/test_contact.py at roughness 5400 x1 this took the outer cells' error in e_wet at St 20
+    from 3.9e-4 to 7e-5). The grid must also reach well beyond the widest film the coupled phase
     sees, ``sqrt(2 X)`` at the hand-over and at the release (where ``W(0)/X = release`` on the
     rigid path with ``V <= 1``), and beyond the widest cavity of a film with the floor ``-pi``
     (rigid separation at speed ``V``: radius ``sqrt(2 s_c) ~ sqrt(2) (V/Pi)^(1/4)``,

@@ -54,8 +54,8 @@ def rigid_squeeze(x, v, physics, n_inner, stretch, max_rel, bh=1.0):
         residual(grid.s, grid.s_face, grid.area, grid.force_weight, phys, bh, h_hist, x, v, x, v,
                  p, theta, h, q, res)
         jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, np.zeros((n, n)), phys, bh, p,
-                 theta, h, np.zeros(n - 1, dtype=bool), jac, work, np.ones(n), grid.force_weight, 0.0,
-                 np.empty(0))
+                 theta, h, np.zeros(n - 1, dtype=bool), jac, work, np.ones(n), grid.force_weight,
+                 0.0, np.empty(0))
         step = np.linalg.solve(jac[:n, :n], -res[:n])
         # damped where the Barus film is near its glass gap (the pressure grows like -ln(X - k))
         p += step / max(1.0, np.max(np.abs(step)) / 2.0)

@@ -297,8 +297,9 @@ def draw_experiments(ax, stokes, curves: dict, colors=None):
     st = np.geomspace(1.0, 3000.0, 400)
     lo, hi = (legendre(st, r) for r in DENSITY_RATIOS)
     ax.fill_between(st, lo, hi, color="0.8", lw=0,
-                    label=r"experiments: $e/e_{dry} = e^{-35/St_L}$ (Legendre et al. 2006), "
-                          r"$\rho_f/\rho_p$ = " + f"{DENSITY_RATIOS[0]:g}-{DENSITY_RATIOS[1]:g}")
+                    label=r"experiments' correlation (not data): $e/e_{dry} = e^{-35/St_L}$ "
+                          r"(Legendre et al. 2006), $\rho_f/\rho_p$ = "
+                          + f"{DENSITY_RATIOS[0]:g}-{DENSITY_RATIOS[1]:g}")
     ax.axvline(10.0, color="0.3", ls="--", lw=0.9,
                label="no rebound below St ~ 10 (Joseph et al. 2001; Gondret et al. 2002)")
     ax.axvspan(500.0, 3000.0, color="0.93", lw=0, label="e near e_dry (St > 500, Joseph et al.)")

@@ -18,7 +18,7 @@ solution smooth in time as the contact's edge sweeps over the nodes (a single su
 the time stepping several rejected steps). The factor ``sigma / H`` closes the asperity layer
 where the mean planes would meet (the flattened summits fill the valleys), so the gap stays
 positive under any load. ``k -> inf`` is the hard cut-off: contact at ``H = sigma`` (the
-penetration falls like ``k^(-2/7)``). The film flows through the mean gap ``H`` (flow factors of
+penetration falls like ``k^(-2/9)`` to ``k^(-2/7)``, tests/test_contact.py). The film flows through the mean gap ``H`` (flow factors of
 the rough gap are 1 to within a few percent for ``H > 3 sigma``, Patir & Cheng 1978, and the load
 is carried by the asperities below it).
 

@@ -385,13 +385,14 @@ def film_change(dy, dh, y, h, marks, scalars, phys, dp):
     gap and the film pressure). Measured on the load alone, the film pressure inside a stiff
     contact, the small difference of two large loads, was left with the Newton's noise: its
     dissipation broke the energy closure (1.6e-2 at asperity stiffness 1e4, 9e-2 at 1e8, against
-    7e-5 and 1.1e-3 so; tests/test_contact.py)."""
+    7e-5 and 1.1e-3 so; tests/test_contact.py checks 1e4)."""
     n = h.size
     if not rough(phys):
         return dy, y[:n]
     c, h_set = scalars[LOAD_SCALE], node_block(scalars, H_SET)
     held = held_cells(marks, phys, n)
-    p, pa, scale = node_block(scalars, P_FILM), node_block(scalars, PA), node_block(scalars, P_SCALE)
+    p, pa = node_block(scalars, P_FILM), node_block(scalars, PA)
+    scale = node_block(scalars, P_SCALE)
     for i in range(n):
         dp[i] = dy[i]
         if not held[i]:
@@ -429,11 +430,12 @@ def step_error(y, y_pred, err_fac, h, marks, scalars, phys, perr, dh, scale):
       Kirchhoff pressure ``Int rho/mu dP``, smooth where a glassy lens makes ``P`` itself spike
       (that spike moves the gap, X and V only through W and the force, both in the norm on their
       own).
-    - A rough film: the error of its film pressure, from the load's and the gap's.
+    - A rough film: its slots hold the load, which the gap sees, and the error is measured
+      there, for a pressure-dependent liquid too (the Kirchhoff pressure needs ``P``, which the
+      extrapolated loads do not give without the gap's contact).
 
-    Returns True when ``scale`` holds what the errors are measured against (the Kirchhoff
-    pressures, a rough film's film pressure), False when it is the slots themselves (``scale``
-    untouched)."""
+    Returns True when ``scale`` holds the Kirchhoff pressures, False when the errors are measured
+    against the slots themselves (``scale`` untouched)."""
     n = perr.size
     rough_in_time = False
     if has_active_set(phys):
