@@ -206,10 +206,14 @@ def rigid_head(physics, numerics) -> RigidHead:
     """The rigid approach of ``physics``: the classic closed form (rigid.py) up to
     ``handover_separation``, or for the Barus liquid at constant density its own rigid film
     (model/piezoviscous.py, a scalar ODE with a closed-form force), up to the hand-over on the
-    Barus ``W(0)/X`` or near the glass gap."""
+    Barus ``W(0)/X``, near the glass gap, or before rough surfaces touch
+    (rigid.contact_onset_separation)."""
     stokes, x_start, tau_per_t = physics.St, physics.x_start, physics.tau_per_t
     if plan(physics).approach == "barus":
-        path = piezoviscous.approach(x_start, 1.0, 0.0, stokes, physics.beta, numerics.switch)
+        # rough surfaces: the coupled phase takes over before the asperities touch
+        contact_onset = rigid.contact_onset_separation(x_start, stokes, physics.roughness)
+        path = piezoviscous.approach(x_start, 1.0, 0.0, stokes, physics.beta, numerics.switch,
+                                     x_stop=contact_onset or 0.0)
         rests = path.event == "rest"
         # the path without its end when a coupled phase follows (the phase starts there), and
         # without the rest (reached after infinite time)

@@ -189,7 +189,7 @@ DEFAULT = OuterFlow()
 # ---- the history force: a bound on what unsteady viscous diffusion adds (docs/model.md) ----------
 HISTORY_FIRST_STEP = 1e-6  # a/v0: the first step after a kink of the velocity (graded from there)
 HISTORY_GROWTH = 1.02  # each step at most this much longer than the last
-HISTORY_MAX_STEP = 2e-3  # a/v0
+HISTORY_MAX_STEP = 2e-3  # a/v0, and this many gaps' worth beyond a gap of a
 GAP_STEP = 0.01  # a step moves the gap by at most this fraction of itself
 
 
@@ -236,7 +236,7 @@ def _history_step(times, speeds, t_new):
 
 def _advance(times, speeds, gap, gap_stop, phi, stokes, b, tables, moving_out):
     """March the outer phase from the last of ``times``/``speeds`` (``speeds`` the gap's rate,
-    ``dx/dt``) at ``gap`` until the gap passes ``gap_stop`` (or the motion stops):
+    ``dx/dt``) at ``gap`` until the gap passes ``gap_stop`` or the motion stops short of it:
     ``M dU/dT = -R U / St - (1/2) M' U^2 - B H``, ``M = 1 + phi C``, ``H`` the history integral,
     implicit in ``U`` (the last interval of ``H`` included) with ``R``, ``M`` at the step's start;
     steps graded from ``HISTORY_FIRST_STEP`` after the start. Returns the gaps reached."""
@@ -244,7 +244,7 @@ def _advance(times, speeds, gap, gap_stop, phi, stokes, b, tables, moving_out):
     dt = HISTORY_FIRST_STEP
     while (gap < gap_stop if moving_out else gap > gap_stop):
         u_old = speeds[-1]
-        if moving_out and u_old <= 0.0:
+        if (u_old <= 0.0) if moving_out else (u_old >= 0.0):  # the motion stopped short of it
             break
         r, c, dc = tables(gap)
         mass = 1.0 + phi * c
@@ -259,7 +259,7 @@ def _advance(times, speeds, gap, gap_stop, phi, stokes, b, tables, moving_out):
         speeds.append(u_new)
         gaps.append(gap)
         # steps graded from the start, and short against the time to cross the gap
-        dt = min(dt * HISTORY_GROWTH, HISTORY_MAX_STEP,
+        dt = min(dt * HISTORY_GROWTH, HISTORY_MAX_STEP * max(gap, 1.0),
                  GAP_STEP * gap / max(abs(u_new), 1e-3))
     return gaps
 
@@ -318,8 +318,10 @@ def history_restitution(result, outer=None, coefficient=None):
                         tables, moving_out=False)
         return times, speeds, gaps
 
-    def arrival(speed):  # the speed at x0, interpolated in the gap, less v0
+    def arrival(speed):  # the speed at x0, interpolated in the gap, less v0 (-1: stopped short)
         _, speeds, gaps = approach(speed)
+        if gaps[-1] > outer.x0_over_a:
+            return -1.0
         return -np.interp(outer.x0_over_a, gaps[::-1], speeds[::-1]) - 1.0
 
     guess = outer.approach_speed(stokes)  # without the history force

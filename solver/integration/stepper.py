@@ -537,8 +537,9 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
             dh, kdp, scale, fac, dres_dh, lu_valid, bh_lu, counters)
 
         if not accepted:
-            # record the last accepted state with the failure status, then stop; w and h hold
-            # the rejected trial, so recompute them
+            # record the last accepted state with the failure status, then stop; w and h (and
+            # the active set) hold the rejected trial's, so restore the state's and recompute
+            model.start_attempt(y0, marks, cells, phys)
             model.surface_gap(s, influence, phys, y0, marks, scalars, w, h)
             continue
 

@@ -191,8 +191,11 @@ def _implicit_gap(s, influence, x, c, h_set, held, phys, m, pa, w, h):
         g = h[idx[a]]
         hc[a] = min(max(g, 0.5 * max(base[a], 0.0)), sigma) if np.isfinite(g) and g > 0.0 \
             else max(0.5 * base[a], 0.5 * sigma)
-        if hc[a] <= 0.0:
-            hc[a] = 0.5 * sigma
+        # inside the law's open layer: above where it closes (0, or a loaded node's unloading
+        # law's closing gap, contact_pressure), where a guess below gave p_a = inf
+        closed = h_set[idx[a]] * (1.0 - c) if c != 1.0 and h_set[idx[a]] < sigma else 0.0
+        if hc[a] <= closed:
+            hc[a] = closed + 0.5 * (sigma - closed)
     pc = np.empty(m)
     dc = np.empty(m)
     mat = np.empty((m, m))

@@ -352,7 +352,7 @@ class RigidApproach:
 
 
 def approach(x_from, v_from, t_from, stokes, beta, switch, glass_margin=GLASS_MARGIN,
-             samples=60):
+             samples=60, x_stop=0.0):
     """Rigid approach through the Barus film from ``(X, V, T) = (x_from, v_from, t_from)``.
 
     ``dX/dT = -V``, ``dV/dT = -rigid_force/(3 St)``, integrated in ``u = ln(x_from/X)`` as
@@ -364,7 +364,9 @@ def approach(x_from, v_from, t_from, stokes, beta, switch, glass_margin=GLASS_MA
       criterion of rigid.handover_separation;
     - ``"glass"``: ``X <= glass_margin k`` (``glass_gap``), i.e. ``beta P(0) >=
       -ln(1 - 1/glass_margin^2)``; the default ``GLASS_MARGIN`` ends at ``beta P(0) = 1``;
-    - ``"rest"``: ``V = 0``, reached at a finite ``X`` after infinite time.
+    - ``"rest"``: ``V = 0``, reached at a finite ``X`` after infinite time;
+    - ``"contact"``: ``X = x_stop``, where rough surfaces are about to touch (the coupled phase
+      must take over before them: rigid.contact_onset_separation; 0: none).
 
     Both of the first two are thresholds on functions that rise and then fall along the path; each
     function's maxima are located too (events on its derivative), so a crossing that starts and
@@ -385,6 +387,8 @@ def approach(x_from, v_from, t_from, stokes, beta, switch, glass_margin=GLASS_MA
         ``> 1``: how far outside the glass gap the path ends (module constant ``GLASS_MARGIN``).
     samples : int
         Number of points on the returned path (``>= 2``; one when it ends at its start).
+    x_stop : float
+        The path ends at ``X = x_stop`` at the latest (``"contact"``); 0: no such end.
 
     Returns
     -------
@@ -402,21 +406,25 @@ def approach(x_from, v_from, t_from, stokes, beta, switch, glass_margin=GLASS_MA
     f = _path_functions(x_from, stokes, beta, switch, glass_margin)
     y0 = [float(v_from)]
     started = [name for name, (g, _) in f.thresholds.items() if g(0.0, y0) >= 0.0]
+    u_stop = math.log(x_from / x_stop) if x_stop > 0.0 else math.inf
+    if u_stop <= 0.0:
+        started.append("contact")
     if started:
         return _single(x_from, v_from, t_from, beta, started[0])
 
     # S >= 1 while approaching: V reaches 0 by u = St v_from
-    u_max = stokes * v_from * 1.01 + 1.0
+    u_max = min(stokes * v_from * 1.01 + 1.0, u_stop)
     events = [f.handover, f.glass if beta > 0.0 else None, f.rest, f.d_handover, f.d_pressure,
               f.d_force, f.d_deflection]
     active = [ev for ev in events if ev is not None]
     sol = integrate.solve_ivp(f.rhs, (0.0, u_max), y0, method="DOP853", rtol=1e-12, atol=1e-15,
                               dense_output=True, events=active,
                               max_step=0.5 if beta > 0.0 else math.inf)
-    if sol.status != 1:
+    reached_stop = sol.status == 0 and u_max == u_stop
+    if sol.status != 1 and not reached_stop:
         raise RuntimeError(f"the rigid Barus approach did not reach an end: {sol.message}")
     t_events = dict(zip((ev.__name__ for ev in active), sol.t_events))
-    u_end, event = _path_end(sol, t_events, f.thresholds)
+    u_end, event = _path_end(sol, t_events, f.thresholds, u_stop if reached_stop else None)
     v_end = 0.0 if event == "rest" else float(sol.sol(u_end)[0])
     u_s, x_s, v_s, t_s = _sampled_path(sol, x_from, v_from, t_from, u_end, v_end, event, samples)
     peaks = _path_peaks(sol, t_events, f, x_from, v_from, beta, u_end, v_end, u_s, t_s)
@@ -512,14 +520,15 @@ def _path_functions(x_from, stokes, beta, switch, glass_margin):
                            d_handover=d_handover, thresholds=thresholds)
 
 
-def _path_end(sol, t_events, thresholds):
-    """``(u_end, event)``: the terminal event, or an earlier crossing hidden inside one step (its
-    function's maximum lies above the threshold)."""
+def _path_end(sol, t_events, thresholds, u_stop=None):
+    """``(u_end, event)``: the terminal event (or ``"contact"`` at ``u_stop`` where the
+    integration stopped there), or an earlier crossing hidden inside one step (its function's
+    maximum lies above the threshold)."""
     def v_at(u):
         return float(sol.sol(u)[0])
 
     u_term = float(sol.t[-1])
-    ends = []
+    ends = [] if u_stop is None else [(float(u_stop), "contact")]
     for name in ("handover", "glass", "rest"):
         if name in t_events and t_events[name].size:
             ends.append((float(t_events[name][0]), name))
