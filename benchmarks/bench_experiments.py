@@ -389,10 +389,9 @@ def findings(data: dict, path) -> list[str]:
             v = r["variants"].get(name)
             if v is None:
                 continue
-            e = np.array([np.nan if p["e"] is None else p["e"] for p in v["path"]])
-            d = (e - correlation(path, r["inputs"]))[band]
-            if not np.all(np.isnan(d)):
-                ds.append(float(np.nanmax(np.abs(d))))
+            d = _signed(name, r, path, band)
+            if d is not None:
+                ds.append(abs(d))
             if v["St_c"] is not None:
                 stc.append(v["St_c"])
         return ds, stc

@@ -18,9 +18,9 @@ solution smooth in time as the contact's edge sweeps over the nodes (a single su
 the time stepping several rejected steps). The factor ``sigma / H`` closes the asperity layer
 where the mean planes would meet (the flattened summits fill the valleys), so the gap stays
 positive under any load. ``k -> inf`` is the hard cut-off: contact at ``H = sigma`` (the
-penetration falls like ``k^(-2/9)`` to ``k^(-2/7)``, tests/test_contact.py). The film flows through the mean gap ``H`` (flow factors of
-the rough gap are 1 to within a few percent for ``H > 3 sigma``, Patir & Cheng 1978, and the load
-is carried by the asperities below it).
+penetration falls like ``k^(-2/9)`` to ``k^(-2/7)``, tests/test_contact.py). The film flows
+through the mean gap ``H`` (flow factors of the rough gap are 1 to within a few percent for
+``H > 3 sigma``, Patir & Cheng 1978, and the load is carried by the asperities below it).
 
 The contact pressure deflects both solids through the same kernel as the film pressure: with
 ``T = P + p_a(H)`` the total surface load,
@@ -36,11 +36,11 @@ exactly ``e_dry`` of its speed; a collision that never touches is unchanged.
 
 The unknown of a cell whose film pressure is free is its total load ``T`` (``contact_gap``): the
 gap is then explicit, ``P = T - p_a(H)``, and the Jacobian couples ``P`` to the gap through the
-contact's slope (``contact_slopes``), as cheap as the smooth film's. Only a cell held at a floor
-(a JFO cavity) has ``P`` fixed and its load follows its gap; where it touches, its gap is
-implicit and solved by Newton,
-with ``(I - c K_CC D)`` its matrix, ``D = dp_a/dH <= 0``, and the derivatives follow by the
-implicit function theorem (``contact_derivatives``).
+contact's slope (``contact_gap`` computes it with the gap; ``contact_slopes``), as cheap as the
+smooth film's. Only a cell held at a floor (a JFO cavity) has ``P`` fixed and its load follows
+its gap; where it touches, its gap is implicit and solved by Newton, with ``(I - c K_CC D)`` its
+matrix, ``D = dp_a/dH <= 0``, and the derivatives follow by the implicit function theorem
+(``contact_derivatives``).
 """
 
 import numpy as np
@@ -128,7 +128,7 @@ def asperity_energy(h, phys):
 
 
 @jit
-def contact_gap(s, influence, x, y, c, t_set, h_set, held, phys, pa, p, w, h):
+def contact_gap(s, influence, x, y, c, t_set, h_set, held, phys, pa, slope, p, w, h):
     """The gap and the film pressure of a rough film (docs/solver.md, "Surface roughness").
 
     The slot ``y_i`` of each node holds its total surface load ``T_i = P_i + p_a(H_i)``. Where
@@ -138,7 +138,8 @@ def contact_gap(s, influence, x, y, c, t_set, h_set, held, phys, pa, p, w, h):
     asperities touch, its load ``-Pi + p_a(H_i)`` depends on the gap it makes, and those cells'
     gaps are solved together by Newton from the gap ``h`` holds on entry (the previous iterate's;
     any value, it is clipped into ``(0, sigma]``); their slots receive their loads. Writes
-    ``p_a`` into ``pa``, ``P`` into ``p``, ``W`` into ``w``, ``H`` into ``h``; returns False when
+    ``p_a`` into ``pa``, ``dp_a/dH`` into ``slope`` (what the Jacobian and the Newton's norm
+    read at this gap), ``P`` into ``p``, ``W`` into ``w``, ``H`` into ``h``; returns False when
     that Newton did not converge."""
     n = s.size
     sigma = phys[ROUGHNESS]
@@ -149,38 +150,36 @@ def contact_gap(s, influence, x, y, c, t_set, h_set, held, phys, pa, p, w, h):
         matvec(influence, load, w)
     else:
         matvec(influence, c * load + (1.0 - c) * t_set, w)
+    idx = np.empty(n, dtype=np.int64)  # the held cells that touch (their gap is implicit)
     m = 0
     for i in range(n):
         pa[i] = 0.0
         if held[i] and x + s[i] + w[i] < sigma:
+            idx[m] = i
             m += 1
     converged = True
     if m > 0:
-        converged = _implicit_gap(s, influence, x, c, h_set, held, phys, m, pa, w, h)
+        converged = _implicit_gap(s, influence, x, c, h_set, phys, idx[:m], pa, w, h)
     for i in range(n):
         h[i] = x + s[i] + w[i]
+        law, slope[i] = contact_pressure(h[i], h_set[i], c, phys)
         if held[i]:
             p[i] = -phys[PI]
             y[i] = p[i] + pa[i]
         else:
-            pa[i] = contact_pressure(h[i], h_set[i], c, phys)[0]
+            pa[i] = law
             p[i] = y[i] - pa[i]
     return converged
 
 
 @jit
-def _implicit_gap(s, influence, x, c, h_set, held, phys, m, pa, w, h):
-    """``contact_gap``'s Newton for the gaps of the ``m`` touching cells held at a floor, ``H =
-    base + c K_CC p_a(H)`` (``base``: ``X + s + w`` without their contact), from the gaps ``h``
-    holds; adds their contact pressure to ``w`` and writes it into ``pa``."""
+def _implicit_gap(s, influence, x, c, h_set, phys, idx, pa, w, h):
+    """``contact_gap``'s Newton for the gaps of the touching cells held at a floor (nodes
+    ``idx``), ``H = base + c K_CC p_a(H)`` (``base``: ``X + s + w`` without their contact), from
+    the gaps ``h`` holds; adds their contact pressure to ``w`` and writes it into ``pa``."""
     n = s.size
+    m = idx.size
     sigma = phys[ROUGHNESS]
-    idx = np.empty(m, dtype=np.int64)
-    k = 0
-    for i in range(n):
-        if held[i] and x + s[i] + w[i] < sigma:
-            idx[k] = i
-            k += 1
     kcc = np.empty((m, m))
     base = np.empty(m)
     hc = np.empty(m)
@@ -243,33 +242,33 @@ def _implicit_gap(s, influence, x, c, h_set, held, phys, m, pa, w, h):
 
 
 @jit
-def contact_slopes(h, c, h_set, held, phys, dp_dh):
+def contact_slopes(slope, held, dp_dh):
     """``dP/dH`` of the film pressure of each cell whose slot holds its load (``contact_gap``:
-    ``P = y - p_a(H)``, so ``-dp_a/dH``) into ``dp_dh``, 0 in the cells held at a floor; returns
-    the number of those that touch (their load depends on the gap: ``contact_derivatives``)."""
+    ``P = y - p_a(H)``, so ``-dp_a/dH``, from the ``slope`` it computed) into ``dp_dh``, 0 in the
+    cells held at a floor; returns the number of those that touch (their load depends on the
+    gap: ``contact_derivatives``)."""
     m = 0
-    for i in range(h.size):
-        slope = contact_pressure(h[i], h_set[i], c, phys)[1]
+    for i in range(slope.size):
         dp_dh[i] = 0.0
         if held[i]:
-            if slope != 0.0:
+            if slope[i] != 0.0:
                 m += 1
         else:
-            dp_dh[i] = -slope
+            dp_dh[i] = -slope[i]
     return m
 
 
 @jit
-def contact_derivatives(influence, weight, h, c, h_set, held, phys, m, k_eff, dh_dx,
-                        force_dp):
+def contact_derivatives(influence, weight, slope, c, held, m, k_eff, dh_dx, force_dp):
     """Derivatives of the rough film's gap and of the force on the spheres in the slots ``y``
     and ``X`` where ``m`` touching cells are held at a floor (``contact_slopes``), by the
-    implicit function theorem: with ``C`` those cells, ``D = dp_a/dH`` there, ``M = I - c K_CC
+    implicit function theorem: with ``C`` those cells, ``D = dp_a/dH`` there (``slope``,
+    ``contact_gap``'s), ``M = I - c K_CC
     D``, ``Z = M^-1 c K_C:`` and ``z = M^-1 1_C``: ``dH/dy = c K + c K_:C D Z`` into ``k_eff``,
     ``dH/dX = 1 + c K_:C D z`` into ``dh_dx``, ``dF/dy = weight + (weight_C D) Z`` into
-    ``force_dp``; returns ``dF/dX = (weight_C D) z``; NaN where the matrix is singular or ``h``
-    is not finite (the loop then sees a singular Newton matrix)."""
-    n = h.size
+    ``force_dp``; returns ``dF/dX = (weight_C D) z``; NaN where the matrix is singular or the
+    slopes are not finite (the loop then sees a singular Newton matrix)."""
+    n = slope.size
     idx = np.empty(m, dtype=np.int64)
     d = np.empty(m)
     k = 0
@@ -278,12 +277,10 @@ def contact_derivatives(influence, weight, h, c, h_set, held, phys, m, k_eff, dh
         force_dp[i] = weight[i]
         for j in range(n):
             k_eff[i, j] = c * influence[i, j]
-        if held[i]:
-            slope = contact_pressure(h[i], h_set[i], c, phys)[1]
-            if slope != 0.0:
-                idx[k] = i
-                d[k] = slope
-                k += 1
+        if held[i] and slope[i] != 0.0:
+            idx[k] = i
+            d[k] = slope[i]
+            k += 1
     if m == 0:  # no implicit gap: dH/dy = c K
         return 0.0
     mat = np.empty((m, m))

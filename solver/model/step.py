@@ -41,8 +41,8 @@ from .._jit import jit
 from ..integration.events import ENDED, HELD
 from ..observables import SERIES_INDEX
 from ..physics import CAVITATION, DENSITY, E_DRY, PI, ROUGHNESS, ST
-from .contact import (HOLD, REST, asperity_work, contact_derivatives, contact_gap, contact_pressure,
-                      contact_slopes, contact_state)
+from .contact import (HOLD, REST, asperity_work, contact_derivatives, contact_gap, contact_slopes,
+                      contact_state)
 from .film import (JFO, NO_FLOOR, cavity_edge, cell_content, compression_work, constrain,
                    energy_rates, film_force, gap, jacobian, jfo_void, residual, strain_energy,
                    update_cavity, update_cavity_jfo, void_work)
@@ -63,11 +63,12 @@ THETA, THETA0, THETA1, DTHETA, H_ONSET, Q_PREV = 0, 1, 2, 3, 4, 5
 # they touched on approach, the energy lost in the solids; then blocks of one entry per node:
 # the contact pressure p_a and the film pressure P of the last gap computed, the load T_set,
 # the permanent set (1 - c) K T_set and the gap H_set where the solids began to unload, the
-# film pressure of the last two accepted states, and the scale film_change measures it by
+# film pressure of the last two accepted states, the scale film_change measures it by, and
+# the contact law's slope dp_a/dH at the last gap computed
 WORKED, P_ABS, P_SEEN, R_EDGE, LOAD_SCALE, TOUCHED, SOLID_LOST = 0, 1, 2, 3, 4, 5, 6
 NODE_BLOCKS = 7
-PA, P_FILM, T_SET, W_SET, H_SET, P_ACC0, P_ACC1, P_SCALE = 0, 1, 2, 3, 4, 5, 6, 7
-N_BLOCKS = 8
+PA, P_FILM, T_SET, W_SET, H_SET, P_ACC0, P_ACC1, P_SCALE, SLOPE = 0, 1, 2, 3, 4, 5, 6, 7, 8
+N_BLOCKS = 9
 # a rough film's Newton measures the change of its film pressure against its own size or this
 # fraction of the asperities' pressure, whichever is larger (film_change)
 CONTACT_SHARE = 0.01
@@ -135,7 +136,8 @@ def surface_gap(s, influence, phys, y, marks, scalars, w, h):
         return
     if not contact_gap(s, influence, y[n], y, scalars[LOAD_SCALE], node_block(scalars, T_SET),
                        node_block(scalars, H_SET), held_cells(marks, phys, n), phys,
-                       node_block(scalars, PA), node_block(scalars, P_FILM), w, h):
+                       node_block(scalars, PA), node_block(scalars, SLOPE),
+                       node_block(scalars, P_FILM), w, h):
         h[:] = np.nan
 
 
@@ -318,10 +320,10 @@ def step_jacobian(s, s_face, area, weight, influence, phys, bh, y, h, marks, cel
     (contact.contact_derivatives)."""
     n = s.size
     if rough(phys):
-        c, h_set = scalars[LOAD_SCALE], node_block(scalars, H_SET)
+        c, slope = scalars[LOAD_SCALE], node_block(scalars, SLOPE)
         held = held_cells(marks, phys, n)
         dp_dh = np.empty(n)
-        m = contact_slopes(h, c, h_set, held, phys, dp_dh)
+        m = contact_slopes(slope, held, dp_dh)
         p = node_block(scalars, P_FILM)
         if m == 0 and c == 1.0:
             jacobian(s, s_face, area, weight, influence, phys, bh, p, cells[THETA], h,
@@ -330,8 +332,8 @@ def step_jacobian(s, s_face, area, weight, influence, phys, bh, y, h, marks, cel
             k_eff = np.empty((n, n))
             dh_dx = np.empty(n)
             force_dp = np.empty(n)
-            force_dx = contact_derivatives(influence, weight, h, c, h_set, held, phys, m, k_eff,
-                                           dh_dx, force_dp)
+            force_dx = contact_derivatives(influence, weight, slope, c, held, m, k_eff, dh_dx,
+                                           force_dp)
             jacobian(s, s_face, area, weight, k_eff, phys, bh, p, cells[THETA], h,
                      marks[ACTIVE], jac, dres_dh, dh_dx, force_dp, force_dx, dp_dh)
     else:
@@ -389,14 +391,13 @@ def film_change(dy, dh, y, h, marks, scalars, phys, dp):
     n = h.size
     if not rough(phys):
         return dy, y[:n]
-    c, h_set = scalars[LOAD_SCALE], node_block(scalars, H_SET)
     held = held_cells(marks, phys, n)
     p, pa = node_block(scalars, P_FILM), node_block(scalars, PA)
-    scale = node_block(scalars, P_SCALE)
+    scale, slope = node_block(scalars, P_SCALE), node_block(scalars, SLOPE)
     for i in range(n):
         dp[i] = dy[i]
         if not held[i]:
-            dp[i] -= contact_pressure(h[i], h_set[i], c, phys)[1] * dh[i]
+            dp[i] -= slope[i] * dh[i]
         scale[i] = abs(p[i]) + CONTACT_SHARE * pa[i]
     return dp, scale
 
