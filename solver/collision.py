@@ -156,14 +156,15 @@ def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 
         raise ValueError(f"x_ref_x0 = {x_ref_x0!r}: the reference separation must be finite and "
                          "at least the start x0 (x_ref_x0 >= 1)")
     wall = time.perf_counter()
-    head = rigid_head(physics, numerics)
-    if head.rests:
-        result = _rigid_only(physics, accuracy, numerics, head)
-    else:
-        result = _coupled(physics, accuracy, numerics, head, x_ref_x0)
-    result.x_ref_x0 = x_ref_x0
-    read_far(result, outer)
-    check_energy(result)
+    with deferred_interrupt():  # Ctrl-C or SIGTERM inside compiled code: taken on return
+        head = rigid_head(physics, numerics)
+        if head.rests:
+            result = _rigid_only(physics, accuracy, numerics, head)
+        else:
+            result = _coupled(physics, accuracy, numerics, head, x_ref_x0)
+        result.x_ref_x0 = x_ref_x0
+        read_far(result, outer)
+        check_energy(result)
     result.wall_s = time.perf_counter() - wall
     return result
 
@@ -404,12 +405,11 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
     time_scale = x_switch / max(v_switch, 1e-3) * min(1.0, stokes)
     _, stop_params = rigid.release_event(numerics.release, stokes, physics)
     stop_kind = shortcuts.end_event  # a JFO cavity has a memory: rigid once the film is full
-    with deferred_interrupt():
-        code, counters, rows, p_hist, w_hist, theta_hist = stepper.integrate(
-            grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, physics.as_array(),
-            x_switch, v_switch, p_init, t_switch, 1.0 - v_switch**2, numerics.rtol,
-            1e-3 * time_scale, 1e-12 * time_scale, numerics.max_steps, stop_kind, stop_params,
-            numerics.save_profiles)
+    code, counters, rows, p_hist, w_hist, theta_hist = stepper.integrate(
+        grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, physics.as_array(),
+        x_switch, v_switch, p_init, t_switch, 1.0 - v_switch**2, numerics.rtol,
+        1e-3 * time_scale, 1e-12 * time_scale, numerics.max_steps, stop_kind, stop_params,
+        numerics.save_profiles)
     name = next(k for k, (c, _) in STATUS.items() if c == code)
     message = STATUS[name][1]
     cols = {c.name: rows[:, k] for k, c in enumerate(SERIES)}
