@@ -261,10 +261,13 @@ class MaterialTable:
 
 
 def read_toml(path, what: str = "materials file", error=MaterialError) -> dict:
-    """Parse a TOML file; a missing, unreadable or invalid file raises ``error`` naming it."""
-    try:
-        with open(path, "rb") as fh:  # a UTF-8 byte-order mark (some editors write one) is read
-            return tomllib.loads(fh.read().decode("utf-8-sig"))
+    """Parse a TOML file; a missing, unreadable or invalid file raises ``error`` naming it, and
+    so does a FIFO, a device or a file larger than ``reads.MAX_INPUT_BYTES``
+    (``pipeline.reads.read_input``)."""
+    from ..reads import read_input
+
+    try:  # a UTF-8 byte-order mark (some editors write one) is read
+        return tomllib.loads(read_input(path, f"{what} {str(path)!r}", error).decode("utf-8-sig"))
     except FileNotFoundError:
         raise error(f"{what} {str(path)!r} not found") from None
     except IsADirectoryError:

@@ -166,12 +166,15 @@ def load_sweep(path) -> Sweep:
     Raises
     ------
     ConfigError
-        Unreadable file, unknown keys, bad grid values (naming the parameter and its valid
+        Unreadable file (also a FIFO, a device or one larger than ``reads.MAX_INPUT_BYTES``),
+        unknown keys, bad grid values (naming the parameter and its valid
         range) or unknown numerical settings.
     """
+    from ..reads import read_input
+
     path = Path(path)
-    try:
-        text = path.read_bytes().decode("utf-8-sig")  # a UTF-8 byte-order mark is no TOML
+    try:  # a UTF-8 byte-order mark is no TOML
+        text = read_input(path, f"sweep file {str(path)!r}", ConfigError).decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise ConfigError(f"sweep file {str(path)!r} is not a text file (byte {exc.start} is not "
                           "UTF-8): give a TOML sweep file such as sweeps/quick.toml") from None
