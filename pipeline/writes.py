@@ -22,7 +22,7 @@ from pathlib import Path
 
 from .errors import WriteError, describe_os_error
 
-__all__ = ["writing", "atomic_path", "guarded_dir", "write_error"]
+__all__ = ["writing", "atomic_path", "temporary_paths", "guarded_dir", "write_error"]
 
 
 def write_error(exc: OSError, what: str, path=None) -> WriteError:
@@ -101,18 +101,25 @@ def writing(cleanup, what: str, path=None):
         raise
 
 
+def temporary_paths(path) -> tuple[Path, Path]:
+    """The names :func:`atomic_path` uses next to ``path``: the temporary it writes, and where
+    an old directory waits while the new one moves in."""
+    path = Path(path)
+    return (path.with_name(f".{path.name}.tmp-{os.getpid()}"),
+            path.with_name(f".{path.name}.old-{os.getpid()}"))
+
+
 @contextmanager
 def atomic_path(path, what: str):
     """Yield a temporary path next to ``path``; once the block completes it replaces ``path``
     (a file by ``os.replace``; a directory by two renames). On any failure the temporary is
     removed and ``path`` is left as it was."""
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    tmp, old = temporary_paths(path)
     _remove(tmp)
     with writing(tmp, what, path):
         yield tmp
         if tmp.is_dir() and path.is_dir():
-            old = path.with_name(f".{path.name}.old-{os.getpid()}")
             path.rename(old)
             tmp.rename(path)
             shutil.rmtree(old, ignore_errors=True)
