@@ -246,3 +246,124 @@ def test_ascii_spellings():
         "25 um, 1 mPa*s, 3x10^6 um^3, 2 m^-2"
     assert ascii_spelling("Glas ö") == "Glas ?"  # anything else: replaced, never a crash
     assert ascii_spelling("25 µm", "latin-1") == "25 um"
+
+
+# ---- 3. ehd examples: only inside DIR, never through a link, no folder deleted, all or none -------
+def _shipped(kind, name):
+    return (REPO / kind / name).read_bytes()
+
+
+def test_examples_force_replaces_a_link_never_what_it_points_to(tmp_path, capsys):
+    outside = tmp_path / "outside.toml"
+    outside.write_text("my own scene\n")
+    target = tmp_path / "dir"
+    (target / "examples").mkdir(parents=True)
+    link = target / "examples" / "sandstone_water.toml"
+    link.symlink_to(outside)
+    code, _, err = ehd(capsys, "examples", target)
+    assert code == EXIT_USAGE
+    one_error_line(err, str(link), "--force")
+    code, _, err = ehd(capsys, "examples", target, "--force")
+    assert code == 0, err
+    assert outside.read_text() == "my own scene\n"  # nothing written outside DIR
+    assert not link.is_symlink() and link.read_bytes() == _shipped("examples", link.name)
+
+
+def test_examples_never_writes_through_a_linked_folder(tmp_path, capsys):
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    target = tmp_path / "dir"
+    target.mkdir()
+    (target / "sweeps").symlink_to(outside)
+    for force in ([], ["--force"]):
+        code, _, err = ehd(capsys, "examples", target, *force)
+        assert code == EXIT_USAGE
+        one_error_line(err, str(target / "sweeps"), "symbolic link")
+    assert list(outside.iterdir()) == [] and sorted(p.name for p in target.iterdir()) == ["sweeps"]
+
+
+def test_examples_never_deletes_a_folder_where_a_file_goes(tmp_path, capsys):
+    target = tmp_path / "dir"
+    mine = target / "sweeps" / "quick.toml"
+    mine.mkdir(parents=True)
+    (mine / "results.txt").write_text("a week of work")
+    code, _, err = ehd(capsys, "examples", target, "--force")
+    assert code == EXIT_USAGE
+    one_error_line(err, str(mine), "never deletes a folder")
+    assert (mine / "results.txt").read_text() == "a week of work"
+    assert sorted(p.relative_to(target) for p in target.rglob("*")) == \
+        [Path("sweeps"), Path("sweeps/quick.toml"), Path("sweeps/quick.toml/results.txt")]
+
+
+def test_examples_on_a_full_disk_names_the_destination_and_changes_nothing(tmp_path, capsys,
+                                                                            monkeypatch):
+    """The third file meets a full disk half-way: no file of DIR changed (the user's edited
+    one kept, with --force), no temporary or new folder left, and the line names the file in
+    DIR, not the installed source."""
+    import builtins
+    import errno
+
+    import pipeline.writes as writes
+
+    target = tmp_path / "dir"
+    mine = target / "examples" / "glass_beads_water.toml"
+    mine.parent.mkdir(parents=True)
+    mine.write_text("# my edits\n")
+    before = {p: p.read_bytes() if p.is_file() else None for p in target.rglob("*")}
+    opened = []
+
+    class HalfFull:
+        def __init__(self, f):
+            self.f = f
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            self.f.close()
+
+        def write(self, data):
+            self.f.write(data[: len(data) // 2])
+            self.f.flush()
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+    def full_open(path, mode="r", *a, **k):
+        f = builtins.open(path, mode, *a, **k)
+        opened.append(path)
+        return HalfFull(f) if "w" in mode and len(opened) == 3 else f
+
+    monkeypatch.setattr(writes, "open", full_open, raising=False)
+    code, _, err = ehd(capsys, "examples", target, "--force")
+    assert code == EXIT_WRITE
+    line = one_error_line(err, "No space left on device", "nothing partial")
+    named = Path(opened[2]).name.split(".tmp-")[0].lstrip(".")
+    assert str(target / "examples" / named) in line or str(target / "sweeps" / named) in line
+    assert str(REPO) not in line and "site-packages" not in line
+    after = {p: p.read_bytes() if p.is_file() else None for p in target.rglob("*")}
+    assert after == before  # the edited file kept, nothing new (no temporary, no sweeps/)
+
+
+def _mount_tmpfs(path, size) -> bool:
+    import shutil
+
+    if os.geteuid() != 0 or shutil.which("mount") is None:
+        return False
+    return subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(path)],
+                          capture_output=True, timeout=10).returncode == 0
+
+
+def test_examples_on_a_real_full_disk(tmp_path):
+    """The issue's reproduction on a 12 KiB tmpfs (root only; the simulated case above holds
+    everywhere)."""
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    if not _mount_tmpfs(disk, "12k"):
+        pytest.skip("needs root and mount to make a small tmpfs")
+    try:
+        proc = ehd_subprocess("examples", disk / "dir", cwd=tmp_path)
+        assert proc.returncode == EXIT_WRITE, proc.stderr
+        line = one_error_line(proc.stderr, str(disk / "dir"), "No space left on device")
+        assert str(REPO) not in line.replace(str(disk), "")  # the destination, not the source
+        assert list(disk.iterdir()) == []  # no partial copy, no folder made
+    finally:
+        subprocess.run(["umount", str(disk)], capture_output=True, timeout=10)
