@@ -65,13 +65,24 @@ def _print_scene(d: dict) -> None:
 
 
 def physics_from_args(args):
-    """The ``Physics`` of the ``--St``, ``--eps``... flags (``_add_physics_flags``)."""
+    """The ``Physics`` of the ``--St``, ``--eps``... flags (``_add_physics_flags``); a contact
+    group given without a roughness (it would do nothing) is refused."""
     from solver.physics import Physics
 
+    from .cli_shared import unused_contact_groups
+
     try:
-        return Physics.from_mapping({name: getattr(args, name) for name in Physics.names()})
+        physics = Physics.from_mapping({name: getattr(args, name) for name in Physics.names()})
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+    unused = unused_contact_groups(physics.as_dict())
+    if unused:
+        given = " and ".join(f"{Physics.group(n).option} {getattr(physics, n):g}" for n in unused)
+        raise UsageError(f"{given}: {'they act' if len(unused) > 1 else 'it acts'} only where "
+                         "rough surfaces touch, and --roughness is 0 "
+                         "(smooth surfaces): give --roughness > 0, or leave "
+                         f"{' and '.join(Physics.group(n).option for n in unused)} out")
+    return physics
 
 
 def outer_from_args(args):

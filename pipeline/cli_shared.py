@@ -13,7 +13,7 @@ from .errors import PathError
 
 __all__ = ["add_numerics_flags", "numerics_overrides", "format_value", "check_output_dir",
            "check_output_paths", "check_name_length", "accuracy_help", "saved_by_run",
-           "SAVED_BY_KEY", "SAVED_BY"]
+           "SAVED_BY_KEY", "SAVED_BY", "CONTACT_GROUPS", "unused_contact_groups"]
 
 
 def accuracy_help(what: str = "preset") -> str:
@@ -51,6 +51,26 @@ def add_numerics_flags(p) -> None:
 def numerics_overrides(args) -> dict:
     return {"switch": args.switch, "release": args.release, "n_inner": args.n_inner,
             "rtol": args.rtol, "max_steps": args.max_steps}
+
+
+# the groups that act only where rough surfaces touch (solver/physics.py: the asperity
+# stiffness is "not used without roughness", e_dry "acts only where the asperities touch")
+CONTACT_GROUPS = ("asperity_stiffness", "e_dry")
+
+
+def unused_contact_groups(values: dict) -> list[str]:
+    """The ``CONTACT_GROUPS`` that ``values`` (``{group: value}`` of one run, or of a sweep
+    with a tuple of values per axis) set away from their default while every roughness is 0:
+    smooth surfaces never touch, so those values would silently do nothing."""
+    from solver.physics import Physics
+
+    def each(name):
+        v = values.get(name, Physics.group(name).default)
+        return v if isinstance(v, (tuple, list)) else (v,)
+
+    if any(r != 0.0 for r in each("roughness")):
+        return []
+    return [n for n in CONTACT_GROUPS if any(v != Physics.group(n).default for v in each(n))]
 
 
 def format_value(v, spec=".6g"):

@@ -367,3 +367,230 @@ def test_examples_on_a_real_full_disk(tmp_path):
         assert list(disk.iterdir()) == []  # no partial copy, no folder made
     finally:
         subprocess.run(["umount", str(disk)], capture_output=True, timeout=10)
+
+
+# ---- 7. accepted errors: a typo in [pairs], a grid point the solver refuses, unused groups ------
+PAIR = """[pairs.wet_rock]
+materials = [{names}]
+e_dry = 0.058
+source = "test"
+"""
+
+
+def test_a_typo_in_a_pair_group_is_refused_with_the_near_name(tmp_path, capsys, monkeypatch):
+    from pipeline.scenes.commands import load_scene
+
+    typo = tmp_path / "typo.toml"
+    typo.write_text(PAIR.format(names='"sandston", "quartz"'))
+    no_solve(monkeypatch)
+    for args in (["scene", SANDSTONE, "--materials", typo],
+                 ["scene", "--list-materials", "--materials", typo]):
+        code, out, err = ehd(capsys, *args)
+        assert code == EXIT_USAGE and out == ""
+        one_error_line(err, str(typo), "[pairs.wet_rock]", "'sandston'",
+                       "did you mean 'sandstone'?")
+    right = tmp_path / "right.toml"  # spelled right, the group gives the pair's e_dry
+    right.write_text(PAIR.format(names='"sandstone", "quartz"'))
+    scene = load_scene(str(SANDSTONE), materials=[str(right)], user_files=False)
+    assert scene.e_dry == 0.058 and "wet_rock" in scene.e_dry_source
+
+
+def test_an_unknown_material_or_fluid_suggests_the_near_name(capsys, monkeypatch):
+    no_solve(monkeypatch)
+    code, _, err = ehd(capsys, "scene", SANDSTONE, "--material1", "sandston")
+    assert code == EXIT_USAGE
+    one_error_line(err, "body1.material", "did you mean 'sandstone'?")
+    code, _, err = ehd(capsys, "scene", SANDSTONE, "--fluid", "watr")
+    assert code == EXIT_USAGE
+    one_error_line(err, "fluid.name", "did you mean 'water'?")
+
+
+def _rough_sweep(roughness, eps="[1e-4, 1e-2]", extra=""):
+    return (f'name = "rough"\nstore = "rough.zarr"\n[grid]\nSt = [5.0, 20.0]\neps = {eps}\n'
+            f"roughness = {roughness}\n{extra}\n[numerics]\naccuracy = \"fast\"\n")
+
+
+def test_a_grid_point_the_solver_refuses_is_exit_2_before_any_solve(ws, capsys):
+    """roughness >= x0/x1 = eps^-0.4 at some grid point (here roughness 10 at eps 1e-2, where
+    x0/x1 = 6.31): refused with the solver's own message, nothing solved, no store made."""
+    from tests.test_hostile import CALLS
+
+    (ws / "rough.toml").write_text(_rough_sweep("[1.0, 10.0]"))
+    code, _, err = ehd(capsys, "sweep", "rough.toml", "--executor", "serial")
+    assert code == EXIT_USAGE
+    one_error_line(err, "roughness=10", "eps=0.01", "must be smaller than the start gap")
+    assert CALLS == [] and not (ws / "rough.zarr").exists()
+
+
+@pytest.mark.parametrize("top, ok", [(6.3, True), (6.31, False)])
+def test_the_grid_check_is_the_solvers_own(top, ok):
+    """The edge is where Physics puts it: x0/x1 = 0.01^-0.4 = 6.3096 at the largest eps."""
+    from pipeline.sweeps.config import ConfigError, parse_sweep
+    from solver.physics import Physics
+
+    text = _rough_sweep(f"[0.5, {top}]")
+    try:
+        Physics(St=5.0, eps=1e-2, roughness=top)
+        solver_ok = True
+    except ValueError:
+        solver_ok = False
+    assert solver_ok is ok
+    if ok:
+        assert parse_sweep(text).shape == (2, 2, 2)
+    else:
+        with pytest.raises(ConfigError, match="must be smaller than the start gap"):
+            parse_sweep(text)
+
+
+@pytest.mark.parametrize("args, flags", [
+    (["--e-dry", "0.5"], ["--e-dry 0.5"]),
+    (["--asperity-stiffness", "3"], ["--asperity-stiffness 3"]),
+    (["--e-dry", "0.5", "--asperity-stiffness", "3"], ["--asperity-stiffness 3", "--e-dry 0.5"]),
+], ids=["e-dry", "asperity-stiffness", "both"])
+def test_run_contact_flags_without_roughness_are_exit_2(capsys, monkeypatch, args, flags):
+    no_solve(monkeypatch)
+    code, out, err = ehd(capsys, "run", "--St", "5", "--eps", "0.01", *args)
+    assert code == EXIT_USAGE and out == ""
+    one_error_line(err, *flags, "--roughness")
+
+
+def test_contact_flags_with_roughness_are_accepted(monkeypatch):
+    """The same flags with a roughness reach the solver (the check stops only the useless)."""
+    import solver
+    from pipeline.cli import main
+
+    seen = []
+
+    def stop(physics, **kwargs):
+        seen.append(physics)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(solver, "collide", stop)
+    main(["run", "--St", "5", "--eps", "0.01", "--roughness", "1", "--e-dry", "0.5"])
+    assert seen and seen[0].e_dry == 0.5 and seen[0].roughness == 1.0
+
+
+@pytest.mark.parametrize("extra, ok", [
+    ("[physics]\ne_dry = 0.5", False),
+    ("[physics]\nasperity_stiffness = 3.0", False),
+    ("e_dry = [0.5, 0.9]", False),  # an axis
+    ("[physics]\ne_dry = 1.0", True),  # the default: nothing to refuse
+], ids=["e_dry", "asperity_stiffness", "e_dry-axis", "default"])
+def test_sweep_contact_groups_without_roughness_are_exit_2(tmp_path, extra, ok):
+    from pipeline.sweeps.config import ConfigError, parse_sweep
+    from tests.test_pipeline import sweep_text
+
+    text = sweep_text([5.0], [0.01])
+    if extra.startswith("e_dry ="):  # into [grid]
+        text = text.replace("eps = [0.01]", f"eps = [0.01]\n{extra}")
+    else:
+        text = text.replace("[numerics]", f"{extra}\n[numerics]")
+    if ok:
+        parse_sweep(text)
+    else:
+        with pytest.raises(ConfigError, match="roughness is 0 at every grid point"):
+            parse_sweep(text)
+
+
+def test_a_sweep_with_smooth_and_rough_points_keeps_its_e_dry():
+    from pipeline.sweeps.config import parse_sweep
+
+    sweep = parse_sweep(_rough_sweep("[0.0, 1.0]", extra="[physics]\ne_dry = 0.5"))
+    assert sweep.fixed["e_dry"] == 0.5 and sweep.axes["roughness"] == (0.0, 1.0)
+
+
+def test_scene_e_dry_without_roughness_is_exit_2(capsys, monkeypatch):
+    from pipeline.scenes.commands import load_scene
+
+    no_solve(monkeypatch)
+    smooth = ["--material1", "pmma", "--radius1", "50 um", "--wall", "--material2", "pmma",
+              "--fluid", "water", "--v0", "1 m/s"]
+    code, _, err = ehd(capsys, "scene", *smooth, "--e-dry", "0.5")
+    assert code == EXIT_USAGE
+    one_error_line(err, "e_dry", "neither body has a roughness")
+    flags = {"material1": "pmma", "radius1": "50 um", "wall2": True, "material2": "pmma",
+             "fluid": "water", "v0": "1 m/s", "e_dry": "0.5", "roughness1": "0.3 um"}
+    assert load_scene(None, flags, user_files=False).e_dry == 0.5  # with a roughness: taken
+
+
+# ---- 8. user input that ended as a bug (exit 70) -------------------------------------------------
+@pytest.mark.parametrize("make, keyword", [
+    (lambda tmp: [str(tmp)], "no sweep store"),  # a folder that is no store
+    (lambda tmp: [""], "empty path"),
+    (lambda tmp: [str(EXAMPLE), "--n", "-1"], "--n -1"),
+    (lambda tmp: [str(EXAMPLE), "--n", "0"], "--n 0"),
+    (lambda tmp: ["s.zarr", "--density-ratio", "1e300"], "--density-ratio"),
+    (lambda tmp: ["s.zarr", "--density-ratio", "nan"], "--density-ratio"),
+    (lambda tmp: ["s.zarr", "--density-ratio", "-1"], "--density-ratio"),
+], ids=["folder", "empty", "n-negative", "n-zero", "density-ratio-huge", "density-ratio-nan",
+        "density-ratio-negative"])
+def test_export_dem_user_errors_are_exit_2(ws, tmp_path, capsys, make, keyword):
+    folder = tmp_path / "plain"
+    folder.mkdir()
+    code, _, err = ehd(capsys, "export-dem", *make(folder), "--out", "dem")
+    assert code == EXIT_USAGE
+    one_error_line(err, keyword)
+    assert not (ws / "dem").exists()
+
+
+@pytest.mark.parametrize("spec, keyword", [
+    ("roughness = {start = 0.0, stop = 1.0, num = 3}", "cannot reach 0"),
+    ("roughness = {start = 0.1, stop = 0.0, num = 3}", "cannot reach 0"),
+], ids=["start-0", "stop-0"])
+def test_a_log_range_from_zero_is_exit_2(ws, capsys, spec, keyword):
+    (ws / "z.toml").write_text(f'store = "z.zarr"\n[grid]\nSt = [5.0]\n{spec}\n'
+                               "[physics]\neps = 0.01\n")
+    code, _, err = ehd(capsys, "sweep", "z.toml", "--executor", "serial")
+    assert code == EXIT_USAGE
+    one_error_line(err, "grid.roughness", keyword, "as a list")
+
+
+@pytest.mark.parametrize("numerics, keyword", [
+    ('accuracy = ["fast"]', "accuracy must be the name of a preset"),
+    ("accuracy = 3", "accuracy must be the name of a preset"),
+], ids=["list", "number"])
+def test_a_bad_accuracy_type_is_exit_2(ws, capsys, numerics, keyword):
+    (ws / "a.toml").write_text(f'store = "a.zarr"\n[grid]\nSt = [5.0]\n[physics]\neps = 0.01\n'
+                               f"[numerics]\n{numerics}\n")
+    code, _, err = ehd(capsys, "sweep", "a.toml", "--executor", "serial")
+    assert code == EXIT_USAGE
+    one_error_line(err, keyword)
+    (ws / "n.toml").write_text('store = "a.zarr"\nnumerics = 3\n[grid]\nSt = [5.0]\n'
+                               "[physics]\neps = 0.01\n")
+    code, _, err = ehd(capsys, "sweep", "n.toml", "--executor", "serial")
+    assert code == EXIT_USAGE
+    one_error_line(err, "[numerics] must be a table")
+
+
+def test_restitution_threshold_with_a_failed_solve_is_exit_1(tmp_path, capsys, monkeypatch):
+    """The path is solved; the bisection's first solve fails: the table, --out and the line
+    saying which solve failed (exit 1, the documented code of a failed scene), no traceback."""
+    import types
+
+    import pipeline.scenes.run as run
+
+    real, calls = run.run_scene, []
+
+    def first_bisection_fails(scene, **kwargs):
+        calls.append(scene.v0)
+        if len(calls) <= 5:  # the path's 5 speeds
+            return real(scene, **kwargs)
+        return types.SimpleNamespace(collision=types.SimpleNamespace(
+            ok=False, status="max_steps", message="step budget exhausted (stand-in)"))
+
+    monkeypatch.setattr(run, "run_scene", first_bisection_fails)
+    monkeypatch.chdir(tmp_path)
+    code, out, err = ehd(capsys, "restitution", EXAMPLE, "--accuracy", "fast", "--n", "5",
+                         "--threshold", "--out", "dem")
+    assert code == 1, err
+    one_error_line(err, "no sticking threshold", "failed (max_steps)", "step budget exhausted")
+    assert "sticking threshold: not found" in out and "sticks" in out
+    assert (tmp_path / "dem" / "restitution.csv").exists()  # the rest was written
+
+
+@pytest.mark.parametrize("args", [["--from", "inf"], ["--to", "nan"], ["--from", "0"]])
+def test_restitution_path_factors_must_be_finite_and_positive(capsys, monkeypatch, args):
+    no_solve(monkeypatch)
+    code, _, err = ehd(capsys, "restitution", EXAMPLE, *args)
+    assert code == EXIT_USAGE
+    one_error_line(err, "--from and --to")
