@@ -486,9 +486,11 @@ def _main(argv=None) -> int:
     # a closed stdout takes nothing: what --help would print is dropped, then one line says so
     sys.stdout = _Stdout(io.StringIO() if stdout_closed else sys.stdout)
     try:
+        chosen = _chosen_command(argv)
+        name = f"ehd {chosen}" if chosen else "ehd"  # for --help into a full stdout, too
         args = _parse(argv, stdout_closed)
         if stdout_closed:
-            return _stdout_closed_line(name if args is None else f"ehd {args.command}")
+            return _stdout_closed_line(name)
         name = f"ehd {args.command}"
         code = args.func(args)
         sys.stdout.flush()  # a closed pipe or a full stdout shows here, not at interpreter exit

@@ -114,7 +114,8 @@ def cmd_export_dem(args) -> int:
         from pipeline import open_results
         from pipeline.sweeps.commands import opening_store
 
-        ds = opening_store(str(path), open_results)
+        ds = opening_store(str(path), open_results, "export-dem takes a sweep store or a "
+                           "scene file")
         if "St" not in ds.dims or "eps" not in ds.dims:
             raise UsageError(f"{args.path}: export-dem needs a store with St and eps axes")
         if "e_wet" not in ds:

@@ -112,10 +112,11 @@ def _open_checked(store: str):
     return ds, damage, skipped
 
 
-def opening_store(store: str, open_fn):
+def opening_store(store: str, open_fn,
+                  fix: str = "give the store a sweep wrote (its sweep file's store)"):
     """``open_fn(store)`` with its failures as one line (exit 2): a missing store or a folder
-    that is none says so, any other unreadable one ("cannot be opened as an ehd sweep store");
-    an ``EhdError`` (a damaged store: exit 5) passes unchanged."""
+    that is none says so, with ``fix``; any other unreadable one "cannot be opened as an ehd
+    sweep store"; an ``EhdError`` (a damaged store: exit 5) passes unchanged."""
     from ..errors import EhdError, UsageError
 
     try:
@@ -123,7 +124,7 @@ def opening_store(store: str, open_fn):
     except EhdError:
         raise
     except FileNotFoundError as exc:
-        raise UsageError(str(exc)) from None
+        raise UsageError(f"{exc}; {fix}") from None
     except (ValueError, KeyError, OSError) as exc:
         raise UsageError(f"{store!r} cannot be opened as an ehd sweep store "
                          f"({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
