@@ -31,6 +31,11 @@ install: $(STAMP)
 test: $(STAMP)
 	$(PY) -m pytest -q -m "not install"
 
+# The inner loop: the suite without the tests marked slow (tests/conftest.py SLOW), under 2 minutes
+.PHONY: test-fast
+test-fast: $(STAMP)
+	$(PY) -m pytest -q -m "not install and not slow"
+
 # pip install of the clone into a fresh venv, then the README's first commands from an empty
 # folder (tests/install_from_pip.py), and the install tests of the compile cache's folder (a few
 # minutes: each fresh install compiles the solver)
