@@ -3,9 +3,10 @@ Wet restitution against the Stokes number
 ==========================================
 
 The wet coefficient of restitution ``e_wet`` of a few collisions at one elasticity parameter,
-``fast`` preset (a few milliseconds each), next to the experiments' correlation
-``exp(-35/St)`` (benchmarks/experiments.md, for perfectly elastic solids). Below the sticking
-threshold the spheres do not rebound (``e_wet = 0``).
+``fast`` preset (a few milliseconds each), next to the form of the experiments' correlation,
+``e/e_dry = exp(-35/St_L)``, drawn with ``St_L = St`` (the correlation's Stokes number counts
+the fluid's added mass; benchmarks/experiments.md compares on the experiments' own conditions).
+Below the sticking threshold the spheres do not rebound (``e_wet = 0``).
 """
 
 import matplotlib.pyplot as plt
