@@ -31,7 +31,7 @@ from .cli_shared import (add_numerics_flags, check_output_dir, check_output_path
                          numerics_overrides)
 from .errors import (BUG_REPORT, EXIT_BROKEN_PIPE, EXIT_INTERNAL, EXIT_INTERRUPTED,
                      EXIT_SCENE_FAILED, EXIT_TERMINATED, EXIT_WRITE, EhdError, PathError,
-                     Terminated, UsageError)
+                     Terminated, UsageError, interrupt_cause)
 
 __all__ = ["main", "COMMANDS", "UsageError", "check_output_paths", "check_output_dir"]
 
@@ -340,19 +340,6 @@ def _interrupted(name: str, terminated: bool = False) -> int:
     return EXIT_TERMINATED if terminated else EXIT_INTERRUPTED
 
 
-def _caused_by_interrupt(exc: BaseException):
-    """Ctrl-C (or SIGTERM) that arrived inside compiled code comes back wrapped: numba re-raises
-    it as a ``SystemError`` ("returned a result with an exception set") whose cause is the
-    ``KeyboardInterrupt``. Returns the interrupt found, or None."""
-    seen = set()
-    while exc is not None and id(exc) not in seen:
-        if isinstance(exc, (KeyboardInterrupt, Terminated)):
-            return exc
-        seen.add(id(exc))
-        exc = exc.__cause__ or exc.__context__
-    return None
-
-
 def _on_sigterm(signum, frame):
     raise Terminated()
 
@@ -423,8 +410,8 @@ def main(argv=None) -> int:
     except SystemExit:
         raise
     except BaseException as exc:  # noqa: BLE001 - the boundary of the boundary
-        if _caused_by_interrupt(exc) is not None:
-            return EXIT_TERMINATED if isinstance(_caused_by_interrupt(exc), Terminated) \
+        if interrupt_cause(exc) is not None:
+            return EXIT_TERMINATED if isinstance(interrupt_cause(exc), Terminated) \
                 else EXIT_INTERRUPTED
         try:
             what = f"{type(exc).__name__}: {exc}"
@@ -557,7 +544,7 @@ def _stdout_ok() -> bool:
 def _bug(name: str, exc: BaseException) -> int:
     import traceback
 
-    interrupt = _caused_by_interrupt(exc)
+    interrupt = interrupt_cause(exc)
     if interrupt is not None:
         return _interrupted(name, terminated=isinstance(interrupt, Terminated))
     if isinstance(exc, OSError) and not _stdout_ok():

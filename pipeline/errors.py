@@ -29,7 +29,7 @@ from __future__ import annotations
 __all__ = ["EhdError", "UsageError", "PathError", "SchedulerError", "SchedulerLost",
            "StoreDamaged", "StoreMismatch", "WriteError", "Terminated", "EXIT_OK", "EXIT_SCENE_FAILED", "EXIT_USAGE", "EXIT_SWEEP_FAILED",
            "EXIT_SCHEDULER_LOST", "EXIT_DAMAGED", "EXIT_INTERNAL", "EXIT_INTERRUPTED",
-           "EXIT_BROKEN_PIPE", "EXIT_WRITE", "EXIT_TERMINATED", "BUG_REPORT"]
+           "EXIT_BROKEN_PIPE", "EXIT_WRITE", "EXIT_TERMINATED", "BUG_REPORT", "interrupt_cause"]
 
 EXIT_OK = 0
 EXIT_SCENE_FAILED = 1
@@ -103,6 +103,19 @@ class Terminated(BaseException):
     """SIGTERM arrived (raised by the handler ``pipeline.cli.main`` installs): unwinds like
     Ctrl-C, so every scene finished so far is kept; exit 143. A ``BaseException``, like
     ``KeyboardInterrupt``, so no ``except Exception`` swallows it."""
+
+
+def interrupt_cause(exc: BaseException | None):
+    """The Ctrl-C (``KeyboardInterrupt``) or SIGTERM (``Terminated``) behind ``exc``, or None.
+    One that arrived inside compiled code can come back wrapped: numba re-raises it as a
+    ``SystemError`` ("returned a result with an exception set") whose cause is the interrupt."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, (KeyboardInterrupt, Terminated)):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return None
 
 
 def describe_os_error(exc: OSError, path) -> str:

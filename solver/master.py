@@ -25,7 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from .collision import DIMPLE_DEPTH, Collision, collide, include_rigid_peaks, read_far
+from .collision import (DIMPLE_DEPTH, Collision, check_energy, collide, include_rigid_peaks,
+                        read_far)
 from .model import rigid
 from .observables import OBSERVABLES
 from .physics import Physics
@@ -153,5 +154,6 @@ class MasterCurve:
         # not carried by the curve: the approach's pressure peak lies in its coupled phase
         result.p_max_approach = result.h_axis_at_peak_pressure_x1 = math.nan
         result.viscosity_ratio_max_approach = 1.0  # the classic film
+        check_energy(result)
         result.wall_s = time.perf_counter() - wall
         return result

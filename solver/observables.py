@@ -163,6 +163,10 @@ STATUS = {
     # Not a numerical failure: the model's premise fails (collision.START_STRAIN_LIMIT).
     "start_deformed": (6, "eps is not small for this St: the assumed starting deformation "
                           "already stores {ratio:.3g} of the kinetic energy (limit {limit:g})"),
+    # Not a result: the solve finished but what it computed breaks the energy balance
+    # (collision.ENERGY_CLOSURE_LIMIT); its observables are withheld (NaN) like a failure's.
+    "unphysical": (7, "the result breaks the energy balance ({why}): the numerics did not "
+                      "resolve this scene; a finer accuracy may"),
 }
 STATUS_CODES = {name: code for name, (code, _) in STATUS.items()}
 # Which model answered a scene

@@ -14,6 +14,8 @@ from pathlib import Path
 
 from solver.observables import OBSERVABLES
 
+from ..errors import interrupt_cause
+
 __all__ = ["solve_scene", "warm", "collision_record", "error_record", "MasterSolve",
            "RECORD_FIELDS", "DIAGNOSTIC_FIELDS"]
 
@@ -58,7 +60,13 @@ def solve_scene(physics: dict, accuracy: str, overrides: dict) -> dict:
 
 
 def error_record(exc: BaseException) -> dict:
-    """The record of a scene whose solve raised: status "error" and where it happened."""
+    """The record of a scene whose solve raised: status "error" and where it happened. An
+    interrupt that came back wrapped (numba's ``SystemError`` around a Ctrl-C or SIGTERM) is
+    not the scene's failure: it is raised again, so the scene is not stored and a resume
+    recomputes it."""
+    interrupt = interrupt_cause(exc)
+    if interrupt is not None:
+        raise interrupt from None
     tb = traceback.extract_tb(exc.__traceback__)
     where = f" at {Path(tb[-1].filename).name}:{tb[-1].lineno}" if tb else ""
     return {"status": "error", "model": "unknown", "wall_s": math.nan,

@@ -74,8 +74,16 @@ _P_MAX, _P_MIN = SERIES_INDEX["P_max"], SERIES_INDEX["P_min"]
 
 
 @jit
+def _rows(rows, cols):
+    """Rows of the series or the profiles, NaN until written: a column a row never wrote reads
+    NaN, never uninitialised memory (it had stored a rough film's cavity radius as 6e-314 and
+    619, different from run to run)."""
+    return np.full((rows, cols), np.nan)
+
+
+@jit
 def _grow(a, rows):
-    out = np.empty((rows, a.shape[1]))
+    out = _rows(rows, a.shape[1])
     out[: a.shape[0]] = a
     return out
 
@@ -488,11 +496,11 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
     bh_lu = 1.0
 
     rows = 256
-    series = np.empty((rows, N_SERIES))
+    series = _rows(rows, N_SERIES)
     n_prof = rows if save_profiles else 0
-    p_hist = np.empty((n_prof, n))
-    w_hist = np.empty((n_prof, n))
-    theta_hist = np.empty((n_prof, n - 1))
+    p_hist = _rows(n_prof, n)
+    w_hist = _rows(n_prof, n)
+    theta_hist = _rows(n_prof, n - 1)
     counters = np.zeros(len(COUNTERS), dtype=np.int64)
 
     # initial row

@@ -41,8 +41,8 @@ from .._jit import jit
 from ..integration.events import ENDED, HELD
 from ..observables import SERIES_INDEX
 from ..physics import CAVITATION, DENSITY, E_DRY, PI, ROUGHNESS, ST
-from .contact import (HOLD, REST, asperity_work, contact_derivatives, contact_gap, contact_slopes,
-                      contact_state)
+from .contact import (FREE, HOLD, REST, asperity_work, contact_derivatives, contact_gap,
+                      contact_slopes, contact_state)
 from .film import (JFO, NO_FLOOR, cavity_edge, cell_content, compression_work, constrain,
                    energy_rates, film_force, gap, jacobian, jfo_void, residual, strain_energy,
                    update_cavity, update_cavity_jfo, void_work)
@@ -467,7 +467,7 @@ def step_error(y, y_pred, err_fac, h, marks, scalars, phys, perr, dh, scale):
 def record(row, s, area, weight, p, h, pmax, pmin, marks, cells, scalars, phys, floor_fraction):
     """The model's columns of the series row of an accepted state (cavity radius and void volume,
     work against the floor, compression energy; contact force, asperity energy and the energy
-    lost in the solids), and the error scale's update from the largest
+    lost in the solids), every one on every row, and the error scale's update from the largest
     pressure seen (``floor_fraction`` of it, from the first cavity on). Returns the radius the
     terminal events see: the cavity's, tiny but positive for a JFO cavity of axis cells alone
     (whose edge radius is zero); ``events.HELD`` while a rough film holds its contact and
@@ -479,25 +479,36 @@ def record(row, s, area, weight, p, h, pmax, pmin, marks, cells, scalars, phys, 
     row[_E_A] = 0.0
     row[_LOST] = scalars[SOLID_LOST]
     # a rough film near contact holds the coupled phase as a cavity does, and ends it at rest
-    held = False
+    state = FREE
     if rough(phys):
         row[_F_A] = film_force(weight, node_block(scalars, PA))
         row[_E_A] = asperity_work(weight, h, scalars[LOAD_SCALE], node_block(scalars, H_SET),
                                   phys)
         state = contact_state(h, row[_V], phys)
-        if state == REST:
-            return ENDED
-        held = state == HOLD
+    r_event = cavity_columns(row, s, area, p, h, pmax, pmin, marks, cells, scalars, phys,
+                             floor_fraction)
+    if state == REST:
+        return ENDED
+    if state == HOLD:
+        return HELD
+    return r_event
+
+
+@jit
+def cavity_columns(row, s, area, p, h, pmax, pmin, marks, cells, scalars, phys, floor_fraction):
+    """The cavity's columns of the series row (radius and void volume; 0 for a film without a
+    floor) and the error scale's update (``record``); returns the radius the terminal events
+    see."""
     if not has_active_set(phys):  # no cavity ever
         row[_R_CAV] = 0.0
         row[_V_VOID] = 0.0
-        return HELD if held else 0.0
+        return 0.0
     active0, h_onset = marks[ACTIVE0], cells[H_ONSET]
     r_cav = cavity_edge(s, p, active0, phys)
     jfo = phys[CAVITATION] == JFO
     v_void = 0.0
     if jfo:
-        v_void = jfo_void(area, theta0, h, active0)
+        v_void = jfo_void(area, cells[THETA0], h, active0)
     else:
         for i in range(active0.size):
             if active0[i]:
@@ -513,7 +524,7 @@ def record(row, s, area, weight, p, h, pmax, pmin, marks, cells, scalars, phys, 
         for i in range(active0.size):
             if active0[i]:
                 r_event = max(r_event, 1e-300)
-    return HELD if held else r_event
+    return r_event
 
 
 @jit
