@@ -348,10 +348,6 @@ def test_preset_tables_quote_benchmarks_accuracy_json():
     assert not bad, "\n".join(bad)
 
 
-def _startup(key: str, field: str, section: str = "results") -> float:
-    return _bench("startup")[section][key][field]
-
-
 def _piezoviscous_cost(preset: str, variants: tuple) -> list[float]:
     """Median per-scene time ratio to the classic film (benchmarks/piezoviscous.json), by the
     benchmark's own definition (bench_piezoviscous.ratios)."""
@@ -374,21 +370,6 @@ QUOTES = [
     ("the standard preset's largest errors (docs/scenes.md, viscosity switch)",
      r"standard: largest errors (\S+) on `v_r`, (\S+) on `h_m`, (\S+) on `h_m` on approach",
      lambda: [_accuracy_maxima("standard")[k] for k in ("v_r", "h_m_x1", "h_m_approach_x1")]),
-    ("the reference's own uncertainty in ln x_e (benchmarks/accuracy.json, reference_error)",
-     r"The reference itself is uncertain by up to (\S+) in `ln x_e`",
-     lambda: [max(r["ln_x_e_x1"] for r in _bench("accuracy")["reference_error"])]),
-    ("the no-op make sweep's CPU time, now and before (benchmarks/startup.json)",
-     r"With nothing new, `make sweep` takes (\S+) s of CPU \(`benchmarks/startup.md`, `make bench`; "
-     r"(\S+) s before",
-     lambda: [_startup("no-op make sweep (both)", "cpu_s"),
-              _startup("no-op make sweep (both)", "cpu_s", "before")]),
-    ("the no-op sweep's and figures' CPU time (benchmarks/startup.json)",
-     r"starts no cluster \((\S+) s\), then the figures' up-to-date check reads nothing \((\S+) s\)",
-     lambda: [_startup("ehd sweep (nothing to do)", "cpu_s"),
-              _startup("ehd figures (up to date)", "cpu_s")]),
-    ("the no-op make sweep's wall time on the shared machine (benchmarks/startup.json)",
-     r"the wall time is longer \((\S+) s at a load of",
-     lambda: [_startup("no-op make sweep (both)", "wall_s")]),
     ("the pressure-dependent liquid's cost against the classic film, standard preset "
      "(benchmarks/piezoviscous.json)",
      r"(\d+\.\d)x at beta = 1, (\d+\.\d)x at 2, (\d+\.\d)x at 5, (\d+\.\d)x at 10[;( ]+"
