@@ -25,19 +25,20 @@ def _close_figures():
 
 
 # The tests that took 1.5 s or more (all their parameters together) in
-# ``pytest --durations=0`` of the whole suite (2026-12-02, 2 shared cores: 376 s in all, these
-# 51 functions 311 s of it): marked ``slow``, so ``make test-fast`` (``-m "not slow"``) leaves
-# them out. Listed here rather than decorated in each file, so the tiers are one list; a slow test
-# you add belongs here (tests/test_tiers.py checks that every entry still names a test).
+# ``pytest --durations=0`` of the whole suite (2026-12-02, 2 shared cores: 366 s of test time
+# in all, these 61 functions 309 s of it): marked ``slow``, so ``make test-fast``
+# (``-m "not slow"``) leaves them out. Listed here rather than decorated in each file, so the
+# tiers are one list; a slow test you add belongs here (tests/test_tiers.py checks that every
+# entry still names a test).
 SLOW = {
     "test_cavitation.py": (
-        "test_no_floor_limit_is_the_classic_model",
         "test_rigid_separation_force_and_cavity_converge_to_the_closed_form",
         "test_whole_collisions_converge_under_refinement",
     ),
     "test_dem.py": (
         "test_export_dem_from_a_sweep_store",
         "test_fit_range_fits_only_there_and_reports_every_row",
+        "test_store_with_a_further_axis_groups_by_it",
     ),
     "test_docs.py": (
         "test_python_example_runs_from_a_copy_of_the_examples",
@@ -46,17 +47,21 @@ SLOW = {
         "test_cli_outer_bad_input_exits_2_with_one_line",
         "test_cli_run_json_has_e_far",
         "test_e_far_solves_the_equation_of_motion_with_added_mass",
+        "test_history_force_lowers_e_far_more_in_a_lighter_sphere",
         "test_history_restitution_from_far_outer_starts",
+        "test_history_restitution_without_the_history_force_is_e_far",
         "test_resistance_integral_against_adaptive_quadrature",
     ),
     "test_hostile.py": (
         "test_a_chunk_that_only_decoding_finds_is_found_before_a_sweep_writes",
         "test_a_damaged_coordinate_is_listed_refused_and_rewritten",
+        "test_a_full_disk_at_the_journal_cuts_it_back_to_whole_records",
         "test_a_full_disk_while_merging_keeps_every_finished_scene",
         "test_a_full_stdout_is_one_line",
         "test_a_peer_that_is_no_scheduler_is_refused_within_the_timeout",
         "test_a_real_ctrl_c_during_the_compiled_solve_is_exit_130_one_line",
         "test_a_scheduler_killed_mid_sweep_is_one_line_and_keeps_finished_scenes",
+        "test_a_scheduler_without_workers_is_reported_after_the_wait",
         "test_a_sweep_on_a_real_full_disk",
         "test_a_sweep_recomputes_damaged_cells_and_nothing_else",
         "test_another_sweep_file_needs_add_sweep_and_is_recorded",
@@ -66,12 +71,22 @@ SLOW = {
         "test_metadata_of_the_wrong_shape_is_one_line_for_every_reader",
         "test_sigterm_is_exit_143_one_line_and_keeps_every_finished_scene",
     ),
+    "test_initialised.py": (
+        "test_a_rough_film_at_rest_has_no_cavity_and_repeats_exactly_in_another_process",
+    ),
     "test_inputs.py": (
         "test_cli_bad_input_exits_2_without_traceback",
+        "test_cli_failed_scene_exits_1_with_reason",
         "test_cli_output_into_a_closed_pipe_has_no_traceback",
+        "test_cli_run_json_contract",
+    ),
+    "test_master.py": (
+        "test_master_curve_matches_direct_solves",
     ),
     "test_piezoviscous_film.py": (
+        "test_compression_energy_is_part_of_the_balance",
         "test_energy_closure_falls_with_the_tolerance",
+        "test_rigid_barus_approach_agrees_with_a_coupled_phase_from_the_start",
         "test_whole_collisions_converge_under_refinement",
     ),
     "test_pipeline.py": (
@@ -82,7 +97,6 @@ SLOW = {
         "test_critical_stokes_is_interpolated_between_grid_points",
         "test_existing_scheduler_runner_matches_serial",
         "test_extending_the_grid_computes_only_new_scenes",
-        "test_failed_scene_is_stored_and_the_sweep_goes_on",
         "test_figures_are_redrawn_only_when_the_store_changes",
         "test_figures_render_from_a_synthetic_store_with_reproducible_bytes",
         "test_kill_9_loses_nothing_and_recomputes_nothing",
@@ -93,6 +107,9 @@ SLOW = {
         "test_cli_scene_plot_and_paper_figures_bad_accuracy",
         "test_paper_figures_writes_figures_2_to_11",
         "test_plot_scene_writes_reproducible_files",
+    ),
+    "test_signals.py": (
+        "test_sigterm_inside_the_compiled_solve_of_a_serial_sweep_stores_nothing",
     ),
     "test_startup.py": (
         "test_a_sweep_with_nothing_to_do_loads_neither_dask_nor_the_solver",
