@@ -937,6 +937,8 @@ def test_run_save_replaces_an_old_file_only_when_complete(ws, capsys, monkeypatc
     (["run", "--St", "5", "--eps", "0.01", "--accuracy", "fast", "--plot", "figs/run"],
      "pipeline.plots.scene_plots.plot_scene"),
     (["figures", "s.zarr", "--out", "figs/sweep"], "pipeline.plots.sweep_maps.update_figures"),
+    (["restitution", str(REPO / "examples" / "glass_beads_water.toml"), "--n", "2", "--accuracy",
+      "fast", "--plot", "figs/restitution"], "pipeline.plots.restitution_plot.plot_restitution"),
 ])
 def test_figures_on_a_full_disk_leave_nothing_new(ws, capsys, monkeypatch, argv, target):
     import importlib

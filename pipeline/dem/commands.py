@@ -176,9 +176,11 @@ def cmd_restitution(args) -> int:
         print(format_threshold(threshold))
     if args.plot:
         from pipeline.plots.restitution_plot import plot_restitution
+        from pipeline.writes import guarded_dir
 
-        paths = plot_restitution(results, args.vary, args.plot, threshold=threshold,
-                                 title=scene.title)
+        with guarded_dir(args.plot, f"--plot {args.plot}"):  # both files or neither
+            paths = plot_restitution(results, args.vary, args.plot, threshold=threshold,
+                                     title=scene.title)
         print("figure: " + ", ".join(str(p) for p in paths))
     if args.out:
         paths = write_export(rows, args.out, args.scene, progress=_progress)
