@@ -886,15 +886,10 @@ def test_a_full_disk_at_the_journal_cuts_it_back_to_whole_records(ws, capsys, mo
         def __getattr__(self, name):
             return getattr(self.f, name)
 
-    import pathlib
+    import pipeline.sweeps.store as store
 
-    real_path_open = pathlib.Path.open
-
-    def path_open(self, mode="r", *a, **k):
-        f = real_path_open(self, mode, *a, **k)
-        return Full(f) if self.name.endswith(".journal") and "a" in mode else f
-
-    monkeypatch.setattr(pathlib.Path, "open", path_open)
+    real_open_append = store.open_append  # the journal's one opening (pipeline/sweeps/files.py)
+    monkeypatch.setattr(store, "open_append", lambda path: Full(real_open_append(path)))
     monkeypatch.setattr("pipeline.sweeps.store.FLUSH_SECONDS", 1e9)
     code, _, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
     _assert_full_disk_line(code, err)
