@@ -72,7 +72,7 @@ from .config import format_physics
 from .files import BadFile, foreign_entries, read_regular
 from .layout import CODECS, STORE_SCHEMA, VARIABLES, zarr_warnings
 from .manifest import (MANIFEST_LIMIT, MANIFEST_NAME, ManifestError, chunk_keys, digest,
-                       parse_manifest, read_manifest, writer_gone)
+                       parse_manifest, read_manifest, reading, same_state, writer_gone)
 
 __all__ = ["Damage", "load_checked", "load_rest", "read_root", "metadata_digest",
            "chunk_damage", "REQUIRED", "CHECKED", "DIGEST_KEY"]
@@ -425,9 +425,11 @@ def load_checked(path, read=None):
     path = Path(path)
     deadline = time.monotonic() + WRITING_WAIT
     for attempt in range(READ_TRIES):
-        before = _manifest_raw(path)
         try:
-            result = _load_once(path, read, before, force=time.monotonic() > deadline)
+            with reading(path, WRITING_WAIT):  # a merge waits for this read, or it for the merge
+                before = _manifest_raw(path)
+                result = _load_once(path, read, before, force=time.monotonic() > deadline)
+                after = _manifest_raw(path)
         except _Writing:
             while _manifest_raw(path) == before and time.monotonic() <= deadline:
                 time.sleep(POLL_SECONDS)
@@ -438,7 +440,7 @@ def load_checked(path, read=None):
                 time.sleep(POLL_SECONDS)
                 continue  # read while a sweep changed it: read again
             raise
-        if _manifest_raw(path) == before:
+        if same_state(before, after):
             return result
         time.sleep(POLL_SECONDS)
     raise UsageError(f"store {str(path)!r} changed while it was read, {READ_TRIES} times in a "
@@ -496,7 +498,7 @@ def _load_once(path: Path, read, raw: bytes | None, force: bool = False):
         lazy = xr.open_zarr(path, consolidated=True, chunks=None, drop_variables=list(dims))
     ds = lazy.assign_coords(coords)
     for name in (n for n in names if n not in lazy_names):
-        _load_variable(ds, name, damage)
+        _load_variable(ds, name, damage, skip={idx[:-1] for idx in bad.get(name, ())})
     _check_cells(ds, damage)
     for name, chunks in bad.items():
         if name in dims:
@@ -568,17 +570,22 @@ def load_rest(ds, damage: Damage) -> None:
         _load_variable(ds, name, damage)  # a decoded variable: nothing to do
 
 
-def _load_variable(ds, name, damage: Damage) -> None:
+def _load_variable(ds, name, damage: Damage, skip=frozenset()) -> None:
+    """Decode ``name`` in place; the chunks whose rows are in ``skip`` (known damaged from their
+    bytes: never handed to zarr, which would read a file of any size) keep the fill value."""
     variable = ds.variables[name]
+    if skip:
+        variable.data = _read_by_chunk(name, ds[name], damage, skip)
+        return
     try:
         variable.load()  # in place: the dataset keeps the values
     except Exception:  # noqa: BLE001 - any decode failure of any codec: find the chunks
         variable.data = _read_by_chunk(name, ds[name], damage)
 
 
-def _read_by_chunk(name, var, damage: Damage) -> np.ndarray:
-    """Read ``var`` chunk by chunk (chunks are 1 along every axis but the last): damaged chunks
-    keep the fill value and add their cells to ``damage``."""
+def _read_by_chunk(name, var, damage: Damage, skip=frozenset()) -> np.ndarray:
+    """Read ``var`` chunk by chunk (chunks are 1 along every axis but the last), but the rows in
+    ``skip``: damaged chunks keep the fill value and add their cells to ``damage``."""
     dtype = var.dtype
     if dtype.kind == "f":
         out = np.full(var.shape, np.nan, dtype=dtype)
@@ -589,6 +596,8 @@ def _read_by_chunk(name, var, damage: Damage) -> np.ndarray:
     dims = var.dims
     lead = var.shape[:-1]
     for idx in np.ndindex(*lead):
+        if idx in skip:
+            continue
         sel = dict(zip(dims[:-1], idx))
         try:
             out[idx] = var.isel(sel).values

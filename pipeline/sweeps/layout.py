@@ -100,8 +100,8 @@ def zarr_warnings():
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message="Consolidated metadata is currently not part",
                                 category=UserWarning)
-        # the store's manifest (pipeline/sweeps/manifest.py) is a file of ours, not a zarr node
-        warnings.filterwarnings("ignore", message=r"Object at ehd_manifest\.json is not",
+        # the store's manifest and readers' lock (pipeline/sweeps/manifest.py): files of ours
+        warnings.filterwarnings("ignore", message=r"Object at ehd_\w+\.\w+ is not",
                                 category=UserWarning)
         yield
 

@@ -9,15 +9,18 @@ names the metadata it belongs with (``metadata_sha256``, the root attribute that
 attribute and array's metadata) and carries the sha256 of its own canonical JSON, so neither it
 nor the metadata can be swapped alone.
 
-It is also the store's generation: the writer publishes ``writing`` (which chunk keys it is
-about to replace, whether the metadata changes, its pid and host) *before* it touches any of
-them, and a new manifest (the new digests, ``generation`` + 1, ``writing`` null) after; each by
-a write to a temporary file and a rename, so a reader sees one manifest or the other, whole.
-A reader that found the manifest the same before and after its read, and not ``writing``, read
-one consistent state (pipeline/sweeps/integrity.py: ``load_checked``). A writer killed between
-the two leaves ``writing`` behind; the next sweep (holding the lock) digests those chunks as
-they are and publishes the manifest again (:func:`settle`), their CRC-32C still checked by every
-reader.
+It is also the store's generation. A merge (pipeline/sweeps/store.py) publishes ``writing``
+(which chunk keys it is about to replace, whether the metadata changes, its pid and host; phase
+"waiting") *before* it touches any of them; new readers then wait for it. It waits for the reads
+under way to end (they hold a shared flock on ``ehd_readers.lock``; it takes it exclusively, at
+most ``MERGE_WAIT`` seconds, after which it publishes phase "writing" and goes on), writes, and
+publishes the new manifest (the new digests, ``generation`` + 1, ``writing`` null). Each
+manifest is written to a temporary file and renamed, so a reader sees one or the other, whole.
+A reader that found the manifest the same before and after its read (or only a "waiting" marker
+added: :func:`same_state`) read one consistent state (pipeline/sweeps/integrity.py:
+``load_checked``); otherwise it reads again. A writer killed between its manifests leaves
+``writing`` behind; the next sweep (holding the store's lock) digests those chunks as they are
+and publishes the manifest again, their CRC-32C still checked by every reader.
 
 No zarr here: plain files (pipeline/sweeps/files.py reads them).
 """
@@ -28,15 +31,22 @@ import hashlib
 import json
 import os
 import socket
+import time
+from contextlib import contextmanager
 from pathlib import Path
 
 from .files import read_regular
 
 __all__ = ["MANIFEST_NAME", "MANIFEST_LIMIT", "ManifestError", "digest", "chunk_keys", "build",
            "redigest", "read_manifest", "parse_manifest", "write_manifest", "writing_marker",
-           "sealed", "writer_gone", "WRITING_HERE"]
+           "sealed", "writer_gone", "WRITING_HERE", "READERS_LOCK", "reading", "merging",
+           "same_state"]
 
 MANIFEST_NAME = "ehd_manifest.json"
+# readers hold a shared flock on it while they read, the writer an exclusive one while it merges:
+# a merge waits for the reads under way (at most MERGE_WAIT) and a read for the merge
+READERS_LOCK = "ehd_readers.lock"
+MERGE_WAIT = 10.0  # seconds a merge waits for readers before it goes on (they then read again)
 FORMAT = 1
 # ~100 bytes a chunk: 5 million chunks (10^7 scenes with rows of 90 over 45 variables)
 MANIFEST_LIMIT = 512 * 2**20
@@ -166,10 +176,31 @@ def read_manifest(path) -> tuple[dict, bytes]:
     return parse_manifest(raw), raw
 
 
-def writing_marker(keys, metadata: bool = False) -> dict:
-    """What ``writing`` holds while a writer replaces the chunks ``keys`` (and the metadata)."""
-    return {"keys": sorted(keys), "metadata": bool(metadata), "pid": os.getpid(),
-            "host": socket.gethostname()}
+def writing_marker(keys, metadata: bool = False, phase: str = "waiting") -> dict:
+    """What ``writing`` holds while a writer replaces the chunks ``keys`` (and the metadata):
+    ``phase`` "waiting" (for the reads under way; nothing touched yet) or "writing"."""
+    return {"keys": sorted(keys), "metadata": bool(metadata), "phase": phase,
+            "pid": os.getpid(), "host": socket.gethostname()}
+
+
+def same_state(before: bytes | None, after: bytes | None) -> bool:
+    """Whether a read that started at the manifest ``before`` and ended at ``after`` read one
+    state: the same manifest, or the same one with only a writer's "waiting" marker added (a
+    writer publishes it before it waits for the reads under way, and touches nothing until they
+    are done or it publishes "writing")."""
+    if before == after:
+        return True
+    if before is None or after is None:
+        return False
+    try:
+        old, new = parse_manifest(before), parse_manifest(after)
+    except ManifestError:
+        return False
+    marker = new.get("writing") or {}
+    strip = ("writing", "sha256")
+    return old.get("writing") is None and marker.get("phase") == "waiting" and \
+        {k: v for k, v in old.items() if k not in strip} == \
+        {k: v for k, v in new.items() if k not in strip}
 
 
 def sealed(manifest: dict, metadata_sha256: str) -> dict:
@@ -201,3 +232,61 @@ def writer_gone(writing: dict, path) -> bool:
     except OSError:  # EPERM: it exists, someone else's
         return False
     return False
+
+
+def _flock_within(f, mode: int, seconds: float) -> bool:
+    """Take the flock ``mode`` on the open file ``f`` within ``seconds`` (polling, never
+    blocking longer); False when it was not had in time or locks are not available here."""
+    import fcntl
+
+    deadline = time.monotonic() + seconds
+    while True:
+        try:
+            fcntl.flock(f, mode | fcntl.LOCK_NB)
+            return True
+        except BlockingIOError:
+            if time.monotonic() >= deadline:
+                return False
+            time.sleep(0.01)
+        except OSError:  # a file system without locks: the manifest alone keeps reads honest
+            return False
+
+
+@contextmanager
+def reading(path, seconds: float):
+    """Hold the readers' shared lock of the store at ``path`` while a read runs (waiting at most
+    ``seconds`` for a merge under way; a store without the lock file, or a lock not had in
+    time, is read anyway: the manifest before and after the read decides)."""
+    from .files import open_regular
+
+    try:
+        f = open_regular(Path(path) / READERS_LOCK, 0)
+    except OSError:  # missing, or not a regular file (the store's check says so)
+        yield
+        return
+    with f:
+        _flock_within(f, _fcntl("LOCK_SH"), seconds)
+        yield
+
+
+@contextmanager
+def merging(path):
+    """Hold the readers' lock of the store at ``path`` exclusively while the writer merges
+    (waiting at most ``MERGE_WAIT`` for the reads under way; then it merges anyway and those
+    readers read again). Yields whether the lock was had. Makes the lock file when it is
+    missing."""
+    from .files import BadFile, open_update
+
+    try:
+        f = open_update(Path(path) / READERS_LOCK)
+    except (BadFile, OSError):
+        yield False
+        return
+    with f:
+        yield _flock_within(f, _fcntl("LOCK_EX"), MERGE_WAIT)
+
+
+def _fcntl(name: str) -> int:
+    import fcntl
+
+    return getattr(fcntl, name)

@@ -52,8 +52,8 @@ from .journal import _journal_path, journal_line, pending_journal, read_journal
 from .layout import (COUNTS, DIAGNOSTIC, FLAGS, FLOATS, SCALING, STORE_SCHEMA, VARIABLES, _encoding,
                      _fill, _now, _package_versions, empty_dataset, grid_copy, record_problem,
                      zarr_warnings)
-from .manifest import (WRITING_HERE, ManifestError, build, read_manifest, redigest, sealed,
-                       write_manifest, writing_marker)
+from .manifest import (READERS_LOCK, WRITING_HERE, ManifestError, build, merging, read_manifest,
+                       redigest, sealed, write_manifest, writing_marker)
 
 __all__ = ["open_results", "SweepStore", "StoreMismatch", "StoreBusy", "seal"]
 
@@ -169,6 +169,7 @@ def _write_new(ds, path: Path) -> None:
         root = _root(tmp)
         write_manifest(tmp, build(tmp, root["consolidated_metadata"]["metadata"],
                                   root["attributes"][DIGEST_KEY]))
+        (tmp / READERS_LOCK).touch()
     if path.exists():
         old = _old_path(path)
         path.rename(old)
@@ -429,11 +430,11 @@ class SweepStore:
             manifest = read_manifest(self.path)[0]
         except ManifestError:
             return  # load_checked says what is wrong with it
-        writing = manifest.get("writing")
-        if writing is None:
+        marker = manifest.get("writing")
+        if marker is None:
             return
         root = read_root(self.path)  # the metadata checked first: nothing damaged is blessed
-        redigest(self.path, manifest, writing.get("keys") or ())
+        redigest(self.path, manifest, marker.get("keys") or ())
         self.require_writable()
         with writing(None, "writing the store's manifest", self.path):
             write_manifest(self.path, sealed(manifest, root["attributes"][DIGEST_KEY]))
@@ -447,18 +448,23 @@ class SweepStore:
         WRITING_HERE.add(str(self.path))
         try:
             with writing(None, "writing the store's manifest", self.path):
-                write_manifest(self.path, {**self.manifest,
+                write_manifest(self.path, {**self.manifest,  # new readers wait from here on
                                            "writing": writing_marker(keys, metadata)})
-            try:
-                yield
-            except BaseException:
+            with merging(self.path) as alone:  # the reads under way finish first
+                if not alone:  # they did not within MERGE_WAIT: they read again
+                    with writing(None, "writing the store's manifest", self.path):
+                        write_manifest(self.path, {**self.manifest, "writing": writing_marker(
+                            keys, metadata, phase="writing")})
                 try:
+                    yield
+                except BaseException:
+                    try:
+                        self._seal_manifest(keys)
+                    except Exception:  # noqa: BLE001 - the first failure is the one reported
+                        pass
+                    raise
+                with writing(None, "writing the store's manifest", self.path):
                     self._seal_manifest(keys)
-                except Exception:  # noqa: BLE001 - the first failure is the one reported
-                    pass
-                raise
-            with writing(None, "writing the store's manifest", self.path):
-                self._seal_manifest(keys)
         finally:
             WRITING_HERE.discard(str(self.path))
 
