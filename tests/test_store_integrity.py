@@ -59,13 +59,8 @@ def other(tmp_path_factory):
     d = tmp_path_factory.mktemp("other")
     (d / "o.toml").write_text(sweep_text(ST, EPS, store="o.zarr").replace('name = "test"',
                                                                            'name = "other"'))
-    cwd = os.getcwd()
-    os.chdir(d)
-    try:
-        run_module.run_sweep(load_sweep("o.toml"), runner="serial", solve=other_solve,
-                             progress=None)
-    finally:
-        os.chdir(cwd)
+    run_module.run_sweep(load_sweep(d / "o.toml").with_store(d / "o.zarr"), runner="serial",
+                         solve=other_solve, progress=None)
     return d / "o.zarr"
 
 
