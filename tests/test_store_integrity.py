@@ -367,7 +367,7 @@ def test_a_read_that_a_sweep_changed_is_read_again(ws, monkeypatch):
     real_variable, real_once = integrity._load_variable, integrity._load_once
     merging, reads = [], []
 
-    def load_variable(ds, name, damage):
+    def load_variable(ds, name, damage, **kwargs):
         if name == "status" and not merging:  # the data is read: now the merge lands
             merging.append(True)
             with SweepStore.open(sweep) as st:
@@ -375,7 +375,7 @@ def test_a_read_that_a_sweep_changed_is_read_again(ws, monkeypatch):
                     if st.scene(cell)["St"] == 40.0:
                         st.record(cell, fake_solve(st.scene(cell), "fast", {}), now=0.0)
             merging[0] = False
-        real_variable(ds, name, damage)
+        real_variable(ds, name, damage, **kwargs)
 
     def load_once(*args, **kwargs):
         result = real_once(*args, **kwargs)
