@@ -100,14 +100,15 @@ def read_regular(path, limit: int | None = None) -> bytes:
     try:
         parts, size = [], 0
         while True:  # one read for a small file; a file that grows is read to its end or limit
-            part = os.read(fd, 2**20 if limit is None else min(limit + 1 - size, 2**24))
-            if not part:
-                break
+            want = 2**20 if limit is None else min(limit + 1 - size, 2**24)
+            part = os.read(fd, want)
             parts.append(part)
             size += len(part)
             if limit is not None and size > limit:
                 raise BadFile(f"{str(path)!r} grew past the {_size(limit)} such a file can "
                               "reach while it was read")
+            if len(part) < want:  # a regular file's short read is its end
+                break
     finally:
         os.close(fd)
     return b"".join(parts)

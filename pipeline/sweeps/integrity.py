@@ -498,22 +498,17 @@ def _load_once(path: Path, read, raw: bytes | None, force: bool = False):
         lazy = xr.open_zarr(path, consolidated=True, chunks=None, drop_variables=list(dims))
     ds = lazy.assign_coords(coords)
     for name in (n for n in names if n not in lazy_names):
+        # a chunk known damaged from its bytes is never decoded: its cells keep the fill value
         _load_variable(ds, name, damage, skip={idx[:-1] for idx in bad.get(name, ())})
-    _check_cells(ds, damage)
     for name, chunks in bad.items():
-        if name in dims:
-            continue
         for idx, how in chunks.items():
+            if name in dims:
+                continue
             cells = _chunk_cells(idx, arrays[name])
             for offset in np.ndindex(*(s.stop - s.start for s in cells)):
                 damage.add(tuple(s.start + o for s, o in zip(cells, offset)), f"{name} ({how})")
-            if name not in lazy_names:  # never read as data
-                ds.variables[name].values[cells] = _fill_of(ds[name].dtype)
+    _check_cells(ds, damage)
     return ds, damage
-
-
-def _fill_of(dtype):
-    return math.nan if dtype.kind == "f" else ("" if dtype.kind in "OUST" else 0)
 
 
 def _check_cells(ds, damage: Damage) -> None:
