@@ -425,6 +425,7 @@ def load_checked(path, read=None):
     path = Path(path)
     deadline = time.monotonic() + WRITING_WAIT
     for attempt in range(READ_TRIES):
+        before = None
         try:
             with reading(path, WRITING_WAIT):  # a merge waits for this read, or it for the merge
                 before = _manifest_raw(path)
@@ -434,7 +435,7 @@ def load_checked(path, read=None):
             while _manifest_raw(path) == before and time.monotonic() <= deadline:
                 time.sleep(POLL_SECONDS)
             continue
-        except (EhdError, FileNotFoundError):
+        except Exception:  # noqa: BLE001 - a re-layout swaps the whole store under a read
             if attempt + 1 < READ_TRIES and (_manifest_raw(path) != before
                                              or _relayout_underway(path)):
                 time.sleep(POLL_SECONDS)
