@@ -11,10 +11,10 @@ Exit codes of every ``ehd`` command (docs/pipeline.md, "Exit codes"):
 |---:|---|
 | 0 | success |
 | 1 | ``run``/``scene``: the scene failed (its status and message are printed); ``restitution --threshold``: a solve of the bisection failed |
-| 2 | bad input: arguments, sweep/scene/materials/scheduler file (also a FIFO, a device, over 1 MiB), unusable path (also an existing ``--save`` path ``run --save`` did not write, a name too long), store of other physics or numerics, busy store, scheduler unreachable (nothing computed) |
+| 2 | bad input: arguments, sweep/scene/materials/scheduler file (also a FIFO, a device, over 1 MiB), unusable path (also an existing ``--save`` path ``run --save`` did not write, a name too long), store of other physics or numerics, busy store (or one a sweep changed during every read), scheduler unreachable (nothing computed) |
 | 3 | ``sweep``: finished, but failed scenes remain in the store |
 | 4 | ``sweep``: the scheduler went away mid-sweep (every scene finished so far is kept; rerun) |
-| 5 | damaged store: ``status`` found damaged cells, coordinates or metadata (listed), ``figures`` refuses to draw them, ``sweep`` refuses metadata it cannot repair |
+| 5 | damaged store: ``status`` found damaged cells (unreadable, replaced or missing chunks), coordinates or metadata (listed), ``figures`` refuses to draw them, ``sweep`` refuses what it cannot repair (metadata, the manifest, a link, FIFO or device inside the store, a journal that is not a regular file or too large) |
 | 70 | internal error: a bug (traceback printed; please report it) |
 | 74 | an output could not be written: disk full or another I/O error (the line names the path and the free space; nothing partial is left behind), or stdout closed or full (also for ``--version``/``--help``) |
 | 130 | interrupted (Ctrl-C): every scene finished so far is kept |

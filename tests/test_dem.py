@@ -221,14 +221,20 @@ def test_liggghts_contact_time_is_the_hooke_half_period():
 
 # ---- bad input: one line, the documented exit code, no partial files ------------------------
 
-def _tiny_store(path, st):
+def _tiny_store(path, st, run=True):
+    """A store over St x eps = 0.01, its scenes solved (``run``) or only laid out."""
     from pipeline.sweeps.config import parse_sweep
     from pipeline.sweeps.run import run_sweep
+    from pipeline.sweeps.store import SweepStore
 
     text = (f'name = "dem-bad"\nstore = "x.zarr"\n[grid]\nSt = {list(st)}\neps = [0.01]\n'
             '[numerics]\naccuracy = "fast"\n')
     sweep = parse_sweep(text).with_store(path)
-    run_sweep(sweep, runner="serial", progress=None)
+    if run:
+        run_sweep(sweep, runner="serial", progress=None)
+    else:
+        with SweepStore.open(sweep):  # laid out, no scene run (a store's chunks are checked
+            pass                      # against its manifest: none may be edited behind it)
     return sweep.store
 
 
@@ -239,10 +245,7 @@ def _one_error_line(capsys, code_expected, code):
 
 
 def test_export_dem_refuses_a_store_without_finished_scenes(tmp_path, capsys):
-    import zarr
-
-    store = _tiny_store(tmp_path / "s.zarr", [20.0, 40.0, 80.0])
-    zarr.open_group(str(store), mode="r+")["status"][:] = 0  # as if never run
+    store = _tiny_store(tmp_path / "s.zarr", [20.0, 40.0, 80.0], run=False)
     capsys.readouterr()
     line = _one_error_line(capsys, 2, main(["export-dem", str(store), "--out", str(tmp_path / "o")]))
     assert "no finished" in line

@@ -3,11 +3,15 @@
 
 ``update_figures`` writes ``<out>/.sweep-figures.sha256`` after a render: the fingerprint of the
 store's contents and the figure code (``sweep_maps.fingerprint``, which needs the store read
-whole), and the store's file state (every file's path, size and modification time, which needs
-only a directory listing) with the figure code and matplotlib version. When the file state is
-unchanged since the render the contents are unchanged too (a sweep writes its chunks through new
-files; a no-op ``ehd sweep`` touches nothing inside the store), so the figures are up to date
-without reading the store: this is what makes a no-op ``make sweep`` cheap
+whole), and the store's file state (every entry's path, type, size, inode, modification and
+change times, which needs only a directory listing) with the figure code and matplotlib version.
+The file state is the one taken *before* the store was read (``ehd figures`` takes it first): a
+sweep that writes the store during or after the read changes it, so the next ``ehd figures``
+reads the store again and redraws what changed, never certifying figures of a half-written store
+as up to date. When the file state is unchanged since then the contents are unchanged too (a
+sweep writes its chunks through new files; a no-op ``ehd sweep`` touches nothing inside the
+store; a file's change time cannot be set back, unlike its modification time), so the figures
+are up to date without reading the store: this is what makes a no-op ``make sweep`` cheap
 (benchmarks/startup.md). Anything else goes to the full check.
 """
 
@@ -39,18 +43,21 @@ def _code_key() -> str:
 
 
 def store_state(store) -> str | None:
-    """sha256 of every file under the store directory (relative path, size, mtime in ns) and the
-    figure code; None when the store is not a directory."""
+    """sha256 of every entry under the store directory (relative path, type, size, inode, mtime
+    and ctime in ns; links not followed) and the figure code; None when the store is not a
+    directory."""
     root = os.path.realpath(store)
     if not os.path.isdir(root):
         return None
     entries = []
     for folder, dirs, files in os.walk(root):
         dirs.sort()
-        for name in sorted(files):
+        for name in sorted(files) + sorted(d for d in dirs if os.path.islink(
+                os.path.join(folder, d))):
             path = os.path.join(folder, name)
-            st = os.stat(path)
-            entries.append(f"{os.path.relpath(path, root)}|{st.st_size}|{st.st_mtime_ns}")
+            st = os.lstat(path)
+            entries.append(f"{os.path.relpath(path, root)}|{st.st_mode}|{st.st_size}|"
+                           f"{st.st_ino}|{st.st_mtime_ns}|{st.st_ctime_ns}")
     h = hashlib.sha256(_code_key().encode())
     h.update("\n".join(entries).encode())
     return h.hexdigest()

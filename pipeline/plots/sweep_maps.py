@@ -129,16 +129,18 @@ def fingerprint(ds) -> str:
     return h.hexdigest()
 
 
-def update_figures(ds, out, store=None) -> tuple[list, bool]:
+def update_figures(ds, out, store=None, state=None) -> tuple[list, bool]:
     """Render the figures of ``ds`` into ``out`` unless that folder already holds them for the
     same store contents and figure code (a rerun of ``make sweep`` with nothing new then takes a
-    second, not the ten a full render needs). ``store``: the path ``ds`` was read from, whose
-    file state the stamp then records (``stamp.up_to_date`` checks it without reading the
-    store). Returns ``(paths, rendered)``."""
+    second, not the ten a full render needs). ``state``: the file state (``stamp.store_state``)
+    of the store ``ds`` was read from, taken before it was read, which the stamp records
+    (``stamp.up_to_date`` checks it without reading the store); ``store``: that store's path, its
+    state taken now (for a ``ds`` not read yet). Returns ``(paths, rendered)``."""
     from .stamp import read_stamp, stamp_text, store_state
 
     out = Path(out)
-    state = None if store is None else store_state(store)  # before the read: a conservative key
+    if state is None and store is not None:
+        state = store_state(store)  # before the read below: a conservative key
     ds = ds.load()
     key = fingerprint(ds)
     stamp = out / STAMP_NAME

@@ -222,12 +222,15 @@ def _status_table(plane, extra: dict, format_physics) -> None:
 
 def cmd_figures(args) -> int:
     from ..cli import check_output_dir
-    from ..plots.stamp import up_to_date
+    from ..plots.stamp import store_state, up_to_date
 
     check_output_dir("--out", args.out)
     if up_to_date(args.store, args.out):  # the store's files unchanged since the last render
         print(f"figures in {args.out} are up to date with {args.store}")
         return 0
+    # the file state the stamp records, taken before the read: a sweep writing the store after
+    # it changes the state, and the next ehd figures reads the store again (stamp.py)
+    state = store_state(args.store)
     from ..errors import StoreDamaged, UsageError
     from ..plots.sweep_maps import update_figures
     from ..writes import guarded_dir
@@ -245,7 +248,7 @@ def cmd_figures(args) -> int:
                          "its sweep first (ehd sweep SWEEP_FILE)")
     try:  # the store as read and checked above: one read per command
         with guarded_dir(args.out, f"--out {args.out}"):
-            paths, rendered = update_figures(checked, args.out, store=args.store)
+            paths, rendered = update_figures(checked, args.out, state=state)
     except PlaneError as exc:
         raise UsageError(f"no figures for {args.store}: {exc}") from None
     if not rendered:

@@ -27,12 +27,14 @@ from solver.observables import MODEL_CODES, OBSERVABLES, STATUS_CODES
 from solver.physics import Physics
 
 __all__ = ["STORE_SCHEMA", "VARIABLES", "FLOATS", "FLAGS", "COUNTS", "DIAGNOSTIC", "SCALING",
-           "STATUS_CODES", "MODEL_CODES", "CODECS", "empty_dataset", "zarr_warnings"]
+           "STATUS_CODES", "MODEL_CODES", "CODECS", "BOUNDS", "empty_dataset", "record_problem",
+           "zarr_warnings"]
 
 # bump when variables, their encoding or their meaning change (an old store is then refused);
 # 6: checksummed chunks (crc32c), the coordinates' copy ``grid`` and ``metadata_sha256``;
-# 7: the far-field observables e_far and v_outer_start
-STORE_SCHEMA = 7
+# 7: the far-field observables e_far and v_outer_start;
+# 8: the manifest (pipeline/sweeps/manifest.py): every chunk's sha256 keyed by its place
+STORE_SCHEMA = 8
 
 _DTYPE = {"float": "f8", "flag": "i1", "count": "i4"}
 # name: (dtype, long_name, units), generated from the registry; flags are int8 0/1 with fill -1
@@ -48,18 +50,58 @@ FLAGS = tuple(o.name for o in OBSERVABLES if o.kind == "flag")
 COUNTS = tuple(o.name for o in OBSERVABLES if o.kind == "count")
 DIAGNOSTIC = frozenset(o.name for o in OBSERVABLES if o.diagnostic)
 
+# what physics allows a stored observable (a record with a value outside is refused: a journal
+# line is skipped and counted, a worker's record stored as an error): restitutions and the
+# rebound speed in [0, 1] (no collision gives back more energy than it had), counts and the
+# wall time never negative
+BOUNDS = {"v_r": (0.0, 1.0), "e_wet": (0.0, 1.0), "e_far": (0.0, 1.0), "wall_s": (0.0, math.inf),
+          **{name: (0, math.inf) for name in COUNTS}}
+
 SCALING = ("lengths along the axis in x1 = (4 theta mu a^1.5 v0)^0.4 (suffix _x1) or x0 (suffix "
            "_x0); eps = (x1/x0)^2.5; tau = v0 t / x0; velocity / v0; force / (6 pi mu a^2 v0 / x1); "
            "energies / (m v0^2 / 2)")
 
 
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def record_problem(rec: dict) -> str | None:
+    """Why a scene record cannot be stored, as one clause (a value of the wrong type, or outside
+    ``BOUNDS``), or None. Missing values are fine (a failed scene has only some); NaN is
+    "unknown", within any bound (the store's checks find an ok scene without its data)."""
+    for key in ("status", "model", "message"):
+        if key in rec and not isinstance(rec[key], str):
+            return f"{key} is {rec[key]!r}, not text"
+    for name in (*FLOATS, *COUNTS):
+        value = rec.get(name)
+        if value is None:
+            continue
+        whole = isinstance(value, int) or (_is_number(value) and math.isfinite(value)
+                                           and value == int(value))
+        if not _is_number(value) or (name in COUNTS and not whole):
+            return f"{name} is {str(value)[:40]!r}, not a {'whole ' if name in COUNTS else ''}number"
+        low, high = BOUNDS.get(name, (-math.inf, math.inf))
+        if not (math.isnan(value) or low <= value <= high):
+            return f"{name} = {value!r} is outside [{low:g}, {high:g}], which physics allows"
+    for name in FLAGS:
+        value = rec.get(name)
+        if value is not None and not isinstance(value, bool) and value not in (0, 1):
+            return f"{name} is {str(value)[:40]!r}, not true or false"
+    return None
+
+
 @contextmanager
 def zarr_warnings():
     """The one place that silences zarr 3's notice that consolidated metadata is not part of the
-    v3 spec: we consolidate on purpose, so plain ``xr.open_zarr(path)`` opens the store without
-    falling back (and warning) to listing every array."""
+    v3 spec (we consolidate on purpose, so plain ``xr.open_zarr(path)`` opens the store without
+    falling back, and warning, to listing every array) and its notice that the manifest is no
+    zarr node when it lists the store's members."""
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message="Consolidated metadata is currently not part",
+                                category=UserWarning)
+        # the store's manifest and readers' lock (pipeline/sweeps/manifest.py): files of ours
+        warnings.filterwarnings("ignore", message=r"Object at ehd_\w+\.\w+ is not",
                                 category=UserWarning)
         yield
 

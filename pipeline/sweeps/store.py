@@ -45,10 +45,15 @@ from solver.physics import Physics
 from ..errors import EhdError, PathError, StoreDamaged, StoreMismatch, UsageError
 from ..writes import write_error, writing
 from .config import physics_from_json, physics_json
-from .integrity import DIGEST_KEY, Damage, load_checked, load_rest, metadata_digest
-from .journal import _journal_path, pending_journal, read_journal
+from .files import BadFile, open_append, open_update, read_regular
+from .integrity import (DIGEST_KEY, METADATA_LIMIT, Damage, load_checked, load_rest,
+                        metadata_digest, read_root)
+from .journal import _journal_path, journal_line, pending_journal, read_journal
 from .layout import (COUNTS, DIAGNOSTIC, FLAGS, FLOATS, SCALING, STORE_SCHEMA, VARIABLES, _encoding,
-                     _fill, _now, _package_versions, empty_dataset, grid_copy, zarr_warnings)
+                     _fill, _now, _package_versions, empty_dataset, grid_copy, record_problem,
+                     zarr_warnings)
+from .manifest import (READERS_LOCK, WRITING_HERE, ManifestError, build, merging, read_manifest,
+                       redigest, sealed, write_manifest, writing_marker)
 
 __all__ = ["open_results", "SweepStore", "StoreMismatch", "StoreBusy", "seal"]
 
@@ -110,8 +115,6 @@ def open_results(path, check: bool = True, **open_kwargs):
     """
     import xarray as xr
 
-    from .integrity import read_root
-
     path = Path(path)
     if check:
         checked, damage = load_checked(path)
@@ -144,6 +147,11 @@ def seal(path: Path) -> None:
         zarr.consolidate_metadata(str(path))
 
 
+def _root(path: Path) -> dict:
+    """The root ``zarr.json`` as this process wrote it (the writer's own reads)."""
+    return json.loads(read_regular(Path(path) / "zarr.json", METADATA_LIMIT).decode("utf-8"))
+
+
 def _write_new(ds, path: Path) -> None:
     """Write a complete store next to ``path`` and move it into place (readers never see a
     half-written layout). An existing store at ``path`` is replaced only after the new one is
@@ -158,6 +166,10 @@ def _write_new(ds, path: Path) -> None:
             # one call is enough: nobody sees the temporary directory until the rename below
             ds.to_zarr(tmp, mode="w-", consolidated=True, encoding=_encoding(ds))
         seal(tmp)
+        root = _root(tmp)
+        write_manifest(tmp, build(tmp, root["consolidated_metadata"]["metadata"],
+                                  root["attributes"][DIGEST_KEY]))
+        (tmp / READERS_LOCK).touch()
     if path.exists():
         old = _old_path(path)
         path.rename(old)
@@ -177,8 +189,8 @@ def _recover(path: Path) -> None:
             old.rename(path)  # killed between the two renames: the old store is intact
     for tmp in path.parent.glob(f"{path.name}.tmp-*"):
         shutil.rmtree(tmp, ignore_errors=True)
-    if path.exists():  # a kill during zarr's atomic write leaves its temporary file behind
-        for partial in path.rglob("*.partial"):
+    if path.exists():  # a kill during zarr's (or the manifest's) atomic write leaves its
+        for partial in path.rglob("*.partial"):  # temporary file behind
             partial.unlink(missing_ok=True)
 
 
@@ -263,6 +275,7 @@ class SweepStore:
         self._writable = False  # require_writable() passed
         self.damage_text = ""  # one line: how many cells, which variables, where
         self.journal_skipped = 0  # journal lines that were not records (skipped, scenes rerun)
+        self.manifest = None  # the store's manifest as this writer last published it
 
     # ---- opening --------------------------------------------------------------------------------
     @classmethod
@@ -321,10 +334,13 @@ class SweepStore:
         if not parent.is_dir():
             raise PathError(f"{where}: {str(parent)!r} is not a directory")
         lock = _lock_path(self.path)
-        new_lock = not lock.exists()
+        new_lock = not os.path.lexists(lock)
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            f = lock.open("a+")
+            f = open_update(lock)
+        except BadFile as exc:
+            raise PathError(f"{where}: the store's lock file {exc}; remove it (a sweep makes "
+                            "its own)") from None
         except OSError as exc:
             raise PathError(f"{where}: cannot write next to the store in {str(self.path.parent)!r} "
                             f"({exc.strerror}); choose a writable --store") from None
@@ -383,6 +399,7 @@ class SweepStore:
             raise StoreMismatch(f"{self.shown!r} exists but is not a zarr store; choose "
                                 "another --store")
         try:
+            self._settle_manifest()
             self._load()
         except EhdError:  # the integrity check's own line (schema, damaged metadata)
             raise
@@ -401,7 +418,70 @@ class SweepStore:
         # every chunk checked once, the planned variables decoded; chunks that cannot be decoded
         # and ok cells without data are reported in self.damage (pipeline/sweeps/integrity.py)
         self.ds, self.damage = load_checked(self.path, read=PLANNED)
+        self.manifest = read_manifest(self.path)[0]  # under the lock: what was just checked
         self._lazy = True
+
+    def _settle_manifest(self) -> None:
+        """A manifest left ``writing`` by a writer that was killed between its two manifests
+        (pipeline/sweeps/manifest.py): digest the chunks it was writing as they are (every
+        reader still checks their CRC-32C) and publish it again, once the metadata is known to
+        be intact. Under the lock: no other writer is between its manifests."""
+        try:
+            manifest = read_manifest(self.path)[0]
+        except ManifestError:
+            return  # load_checked says what is wrong with it
+        marker = manifest.get("writing")
+        if marker is None:
+            return
+        root = read_root(self.path)  # the metadata checked first: nothing damaged is blessed
+        redigest(self.path, manifest, marker.get("keys") or ())
+        self.require_writable()
+        with writing(None, "writing the store's manifest", self.path):
+            write_manifest(self.path, sealed(manifest, root["attributes"][DIGEST_KEY]))
+
+    @contextmanager
+    def _changing(self, keys=(), metadata: bool = False):
+        """Publish that the chunks ``keys`` (and the metadata) are about to change, run the
+        block that changes them, then publish their new digests as the next generation (also
+        after a failed block, as far as the disk lets it: the next sweep settles the rest)."""
+        keys = sorted(set(keys))
+        WRITING_HERE.add(str(self.path))
+        try:
+            with writing(None, "writing the store's manifest", self.path):
+                write_manifest(self.path, {**self.manifest,  # new readers wait from here on
+                                           "writing": writing_marker(keys, metadata)})
+            with merging(self.path) as alone:  # the reads under way finish first
+                if not alone:  # they did not within MERGE_WAIT: they read again
+                    with writing(None, "writing the store's manifest", self.path):
+                        write_manifest(self.path, {**self.manifest, "writing": writing_marker(
+                            keys, metadata, phase="writing")})
+                try:
+                    yield
+                except BaseException:
+                    try:
+                        self._seal_manifest(keys)
+                    except Exception:  # noqa: BLE001 - the first failure is the one reported
+                        pass
+                    raise
+                with writing(None, "writing the store's manifest", self.path):
+                    self._seal_manifest(keys)
+        finally:
+            WRITING_HERE.discard(str(self.path))
+
+    def _seal_manifest(self, keys) -> None:
+        manifest = {**self.manifest, "chunks": dict(self.manifest["chunks"])}
+        redigest(self.path, manifest, keys)
+        manifest = sealed(manifest, _root(self.path)["attributes"][DIGEST_KEY])
+        write_manifest(self.path, manifest)
+        self.manifest = manifest
+
+    def _chunk_keys(self, lead_ranges) -> list:
+        """The keys of the chunks of every variable over the rows ``lead_ranges`` (one range
+        per axis but the last; chunks are whole along the last)."""
+        import itertools
+
+        rows = list(itertools.product(*lead_ranges))
+        return ["/".join((name, "c", *map(str, row), "0")) for name in VARIABLES for row in rows]
 
     def load_all(self) -> int:
         """Decode every variable not decoded yet (before the in-memory copy changes: a flush
@@ -472,7 +552,8 @@ class SweepStore:
         import zarr
 
         self.require_writable()
-        with writing(None, "writing the store", self.path), zarr_warnings():
+        with self._changing(f"{name}/c/0" for name in damage.coords), \
+                writing(None, "writing the store", self.path), zarr_warnings():
             group = zarr.open_group(str(self.path), mode="r+", use_consolidated=False)
             for name in damage.coords:
                 group[name][:] = self.ds[name].values
@@ -541,7 +622,8 @@ class SweepStore:
         import zarr
 
         self.require_writable()
-        with writing(None, "writing the store", self.path), zarr_warnings():
+        with self._changing(metadata=True), writing(None, "writing the store", self.path), \
+                zarr_warnings():
             group = zarr.open_group(str(self.path), mode="r+", use_consolidated=False)
             group.attrs.update(attrs)
             seal(self.path)
@@ -599,11 +681,15 @@ class SweepStore:
 
         physics = self.scene(cell)
         jpath = _journal_path(self.path)
-        line = json.dumps({"physics": physics, "key": self.key, **rec}) + "\n"
+        line = journal_line({"physics": physics, "key": self.key, **rec})
         try:
             if self._journal is None:
                 self.require_writable()
-                self._journal = jpath.open("a")
+                try:
+                    self._journal = open_append(jpath)
+                except BadFile as exc:
+                    raise StoreDamaged(f"the store's journal is not one a sweep writes: {exc}; "
+                                       "move it aside") from None
             start = self._journal.tell()
             try:
                 self._journal.write(line)
@@ -625,8 +711,13 @@ class SweepStore:
         cell = tuple(cell)
         status = rec.get("status")
         message = str(rec.get("message", ""))
-        code = STATUS_CODES.get(status)
-        if code is None or code == 0:
+        code = STATUS_CODES.get(status) if isinstance(status, str) else None
+        problem = record_problem(rec)
+        if problem is not None:  # never stored as data: the scene's values are not trusted
+            rec = {"model": "unknown"}
+            code = STATUS_CODES["error"]
+            message = f"refused the solver's record: {problem}"
+        elif code is None or code == 0:
             code = STATUS_CODES["error"]
             message = f"unknown solver status {status!r}: {message}"
         key = rec.get("cache_key")
@@ -686,8 +777,10 @@ class SweepStore:
                       for k, a in enumerate(axes[:-1])}
             region[axes[-1]] = slice(None)
             block = self.ds.isel({a: r for a, r in region.items()}).drop_vars(list(axes))
+            keys = self._chunk_keys([range(region[a].start, region[a].stop) for a in axes[:-1]])
             # zarr writes each chunk through a temporary file it removes on failure
-            with writing(None, "writing the store", self.path), zarr_warnings():
+            with self._changing(keys), writing(None, "writing the store", self.path), \
+                    zarr_warnings():
                 block.drop_vars("status").to_zarr(self.path, region=region, mode="r+",
                                                   consolidated=False)
                 block[["status"]].to_zarr(self.path, region=region, mode="r+",
