@@ -25,6 +25,7 @@ import os
 import platform
 import re
 import resource
+import shutil
 import statistics
 import subprocess
 import sys
@@ -54,6 +55,11 @@ def commit_of(repo: Path = REPO) -> tuple[str, bool]:
 
 
 _VERSION = re.compile(r'^SOLVER_VERSION\s*=\s*"([^"]+)"', re.M)
+
+
+def resolve_commit(ref: str, repo: Path = REPO) -> str:
+    """The full hash of ``ref`` ('' when it names no commit of this repository)."""
+    return _git("rev-parse", "--verify", "-q", f"{ref}^{{commit}}", repo=repo)
 
 
 def solver_version(repo: Path = REPO, commit: str | None = None) -> str:
@@ -101,11 +107,12 @@ def historical_provenance(path: Path, repo: Path = REPO) -> dict:
             "harness_schema": SCHEMA}
 
 
-def write_json(path: Path, payload: dict, load_start: list[float]) -> dict:
+def write_json(path: Path, payload: dict, load_start: list[float], default=None) -> dict:
     """Write ``payload`` with the provenance keys added at its top level (the payload's own keys
-    and layout stay as they are; a payload key of the same name wins)."""
+    and layout stay as they are; a payload key of the same name wins). ``default``: as for
+    ``json.dumps``."""
     doc = {**payload, **{k: v for k, v in provenance(load_start).items() if k not in payload}}
-    Path(path).write_text(json.dumps(doc, indent=1) + "\n")
+    Path(path).write_text(json.dumps(doc, indent=1, default=default) + "\n")
     return doc
 
 
@@ -197,29 +204,99 @@ def compare(this: Sequence[float], base: Sequence[float]) -> dict:
             "ratio": {**ratio, "rounds": ratios}, "moved": moved(ratio)}
 
 
-def moved(ratio: dict) -> str:
-    """"slower" / "faster" when every round's ratio lies on the same side of 1, else "no": the
-    change is then within the spread the rounds themselves measured."""
-    if ratio["min"] > 1.0:
+# A figure moved when every round's ratio lies on the same side of 1 (with 7 rounds, a chance
+# of 2 in 128 for a change that is not there) and the median ratio is off 1 by more than
+# TOLERANCE (identical code measures a few per cent apart: where it sits in memory and on disk).
+TOLERANCE = 0.03
+MIN_ROUNDS = 5
+
+
+def moved(ratio: dict, tolerance: float = TOLERANCE, min_rounds: int = MIN_ROUNDS) -> str:
+    """"slower" / "faster" when every round's ratio lies on the same side of 1 and their median
+    is off 1 by more than ``tolerance``; "no" when the change is within the spread the rounds
+    measured (or smaller than ``tolerance``); "too few rounds" below ``min_rounds``."""
+    if ratio["n"] < min_rounds:
+        return "too few rounds"
+    if ratio["min"] > 1.0 and ratio["median"] > 1.0 + tolerance:
         return "slower"
-    if ratio["max"] < 1.0:
+    if ratio["max"] < 1.0 and ratio["median"] < 1.0 - tolerance:
         return "faster"
     return "no"
 
 
 def figure_rows(figures: dict[str, dict], unit_scale: float = 1e3, unit: str = "ms") -> list[str]:
-    """The Markdown table of compared figures (``{name: compare(...)}``)."""
-    rows = [f"| figure | this [{unit}] | baseline [{unit}] | ratio (median of rounds) | "
-            "rounds' ratios | rounds | moved |", "|---|---:|---:|---:|---|---:|---|"]
+    """The Markdown table of compared figures, ``{name: {"cpu_s": compare(...), "wall_s":
+    compare(...)}}``: the verdict on CPU time (on a shared machine the wall time of a round
+    depends on what else runs: context, not a result), the wall time's ratios beside it."""
+    rows = [f"| figure | this CPU [{unit}] | baseline CPU [{unit}] | CPU ratio | rounds' CPU "
+            "ratios | moved | wall ratio | rounds' wall ratios | rounds |",
+            "|---|---:|---:|---:|---|---|---:|---|---:|"]
+
+    def verdict(f):
+        return f"**{f['moved']}**" if f["moved"] in ("slower", "faster") else f["moved"]
+
     for name, f in figures.items():
-        t, b, r = f["this"], f["baseline"], f["ratio"]
-        rows.append(f"| {name} | {t['median'] * unit_scale:.4g} | {b['median'] * unit_scale:.4g} |"
-                    f" {r['median']:.2f} | {r['min']:.2f}-{r['max']:.2f} | {r['n']} | "
-                    f"{'**' + f['moved'] + '**' if f['moved'] != 'no' else 'no'} |")
+        c, w = f["cpu_s"], f["wall_s"]
+        rows.append(f"| {name} | {c['this']['median'] * unit_scale:.4g} | "
+                    f"{c['baseline']['median'] * unit_scale:.4g} | {c['ratio']['median']:.2f} | "
+                    f"{c['ratio']['min']:.2f}-{c['ratio']['max']:.2f} | {verdict(c)} | "
+                    f"{w['ratio']['median']:.2f} | {w['ratio']['min']:.2f}-{w['ratio']['max']:.2f}"
+                    f" | {c['ratio']['n']} |")
     return rows
 
 
+def compare_runs(this: list[dict], base: list[dict], metrics=("cpu_s", "wall_s")) -> dict:
+    """:func:`compare` per metric of two sides' rounds (lists of ``{metric: seconds}``)."""
+    return {m: compare([r[m] for r in this], [r[m] for r in base]) for m in metrics}
+
+
 # ------------------------------------------------------------------------------------ checkouts
+
+def bench_folder() -> Path:
+    """Where the speed suite keeps its checkouts, stores and compiled kernels between runs, so
+    that a second run compiles and builds only what changed: ``<cache root>/numba/bench-suite``
+    (the documented cache root, docs/solver.md; ``make clean-cache`` removes it)."""
+    from solver._jit import cache_root
+
+    return cache_root() / "numba" / "bench-suite"
+
+
+def export_commit(sha: str, dest: Path, repo: Path = REPO) -> Path:
+    """The tree of commit ``sha`` in ``dest`` (``git archive``: every file stamped with the
+    commit's time, so the numba cache of an earlier export stays valid); kept if already there."""
+    done = dest / ".exported"
+    if done.exists():
+        return dest
+    shutil.rmtree(dest, ignore_errors=True)
+    dest.mkdir(parents=True)
+    archive = subprocess.run(["git", "-C", str(repo), "archive", sha], capture_output=True,
+                             check=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(dest)], input=archive, check=True)
+    done.write_text(sha + "\n")
+    return dest
+
+
+def sync_worktree(dest: Path, repo: Path = REPO) -> Path:
+    """This checkout as it is (committed or not, untracked files that git does not ignore
+    included) mirrored into ``dest``, time stamps kept: measured from a folder like the
+    baseline's, and an unchanged file keeps the numba cache of an earlier run valid."""
+    files = subprocess.run(["git", "-C", str(repo), "ls-files", "-z", "--cached", "--others",
+                            "--exclude-standard"], capture_output=True, check=True).stdout
+    wanted = {name for name in files.decode().split("\0") if name and (repo / name).is_file()}
+    for name in wanted:
+        src, dst = repo / name, dest / name
+        st = src.stat()
+        if dst.exists() and (dst.stat().st_size, dst.stat().st_mtime_ns) == (st.st_size,
+                                                                             st.st_mtime_ns):
+            continue
+        dst.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(src, dst)
+    for path in [p for p in dest.rglob("*") if p.is_file()]:
+        rel = path.relative_to(dest).as_posix()
+        if rel not in wanted and "__pycache__" not in path.parts:
+            path.unlink()
+    return dest
+
 
 @contextlib.contextmanager
 def checkout(ref: str, repo: Path = REPO) -> Iterator[Path]:
@@ -255,7 +332,8 @@ def cli_launch(checkout_dir: Path, env: dict | None = None) -> tuple[list[str], 
 
 # A solver worker: reads one JSON request a line ({"St", "eps", "fields", "accuracy",
 # "repeats"}), solves it once untimed (grid, compile) the first time it sees the scene, then
-# "repeats" times, and answers each solve's wall and CPU time and the last solve's counters.
+# "repeats" times, and answers each solve's wall and CPU time and the last solve's counters
+# ({"error": ...} when this checkout cannot solve the scene).
 # Checkouts without Physics (solver <= 1.2) take (St, eps) and no fields.
 _WORKER = r"""
 import json, sys, time
@@ -269,14 +347,18 @@ print(json.dumps({"solver_file": solver.__file__}), flush=True)
 seen = set()
 for line in sys.stdin:
     req = json.loads(line)
-    if req["fields"]:
-        scene = (Physics(St=req["St"], eps=req["eps"], **req["fields"]),)
-    else:
-        scene = (req["St"], req["eps"])
-    kw = dict(accuracy=req["accuracy"], save_profiles=False)
-    if line not in seen:
-        seen.add(line)
-        collide(*scene, **kw)
+    try:
+        if req["fields"]:
+            scene = (Physics(St=req["St"], eps=req["eps"], **req["fields"]),)
+        else:
+            scene = (req["St"], req["eps"])
+        kw = dict(accuracy=req["accuracy"], save_profiles=False)
+        if line not in seen:
+            seen.add(line)
+            c = collide(*scene, **kw)
+    except Exception as exc:  # e.g. an older solver without this physics
+        print(json.dumps({"error": f"{type(exc).__name__}: {exc}"}), flush=True)
+        continue
     walls, cpus = [], []
     for _ in range(req["repeats"]):
         t, cpu = time.perf_counter(), time.process_time()
@@ -315,11 +397,23 @@ class SolverProcess:
             raise RuntimeError(f"the solver process of {self.checkout} ended (its error above)")
         return json.loads(line)
 
+    def submit(self, st: float, eps: float, fields: dict | None = None,
+               accuracy: str = "standard", repeats: int = 1) -> None:
+        """Send a scene without waiting (read its answer with :meth:`answer`): several
+        processes then compile, or solve, at once."""
+        try:
+            self.proc.stdin.write(json.dumps({"St": st, "eps": eps, "fields": fields or {},
+                                              "accuracy": accuracy, "repeats": repeats}) + "\n")
+            self.proc.stdin.flush()
+        except BrokenPipeError:
+            raise RuntimeError(f"the solver process of {self.checkout} ended (its error above)")
+
+    def answer(self) -> dict:
+        return self._answer()
+
     def solve(self, st: float, eps: float, fields: dict | None = None,
               accuracy: str = "standard", repeats: int = 1) -> dict:
-        self.proc.stdin.write(json.dumps({"St": st, "eps": eps, "fields": fields or {},
-                                          "accuracy": accuracy, "repeats": repeats}) + "\n")
-        self.proc.stdin.flush()
+        self.submit(st, eps, fields, accuracy, repeats)
         return self._answer()
 
     def close(self) -> None:

@@ -56,10 +56,17 @@ def test_ratio_is_the_median_of_per_round_ratios_with_their_spread(harness):
 
 
 def test_a_ratio_whose_rounds_straddle_one_has_not_moved(harness):
-    noisy = harness.compare([1.0, 1.8, 0.9], [2.0, 1.0, 1.0])  # ratios 0.5, 1.8, 0.9
-    assert noisy["ratio"]["median"] == pytest.approx(0.9)
+    noisy = harness.compare([1.0, 1.8, 0.9, 1.0, 1.0], [2.0, 1.0, 1.0, 1.0, 1.0])
+    assert noisy["ratio"]["median"] == pytest.approx(1.0)
+    assert (noisy["ratio"]["min"], noisy["ratio"]["max"]) == pytest.approx((0.5, 1.8))
     assert noisy["moved"] == "no"
-    assert harness.compare([1.2, 1.3, 1.1], [1.0, 1.0, 1.0])["moved"] == "slower"
+    assert harness.compare([1.2, 1.3, 1.1, 1.2, 1.2], [1.0] * 5)["moved"] == "slower"
+
+
+def test_a_change_smaller_than_the_tolerance_or_from_too_few_rounds_is_not_a_result(harness):
+    # every round 1 % faster: consistent, but identical code lands that far apart
+    assert harness.compare([0.99] * 7, [1.0] * 7)["moved"] == "no"
+    assert harness.compare([0.5] * 3, [1.0] * 3)["moved"] == "too few rounds"
 
 
 def test_rounds_not_alternated_in_one_run_are_refused(harness):
@@ -68,10 +75,18 @@ def test_rounds_not_alternated_in_one_run_are_refused(harness):
 
 
 def test_the_table_marks_what_moved(harness):
-    rows = harness.figure_rows({"fast one": harness.compare([1.0, 1.0], [2.0, 2.0]),
-                                "same": harness.compare([1.0, 2.0], [2.0, 1.0])})
-    assert "**faster**" in rows[2] and rows[2].startswith("| fast one | 1000 | 2000 | 0.50 |")
-    assert rows[3].endswith("| no |")
+    def runs(cpu, wall):
+        return [{"cpu_s": c, "wall_s": w} for c, w in zip(cpu, wall)]
+
+    rows = harness.figure_rows({
+        "fast one": harness.compare_runs(runs([1.0] * 5, [1.0, 3.0, 1.0, 3.0, 2.0]),
+                                         runs([2.0] * 5, [2.0] * 5)),
+        "same": harness.compare_runs(runs([1.0, 2.0, 1.0, 2.0, 1.5], [1.0] * 5),
+                                     runs([2.0, 1.0, 2.0, 1.0, 1.5], [2.0] * 5))})
+    assert rows[2] == ("| fast one | 1000 | 2000 | 0.50 | 0.50-0.50 | **faster** | 1.00 | "
+                       "0.50-1.50 | 5 |")
+    # the verdict is the CPU time's: a wall time that moved (every round 0.5) is context
+    assert rows[3] == "| same | 1500 | 1500 | 1.00 | 0.50-2.00 | no | 0.50 | 0.50-0.50 | 5 |"
 
 
 def test_written_results_keep_their_keys_and_add_the_provenance(harness, tmp_path):
@@ -104,3 +119,18 @@ def test_every_result_file_names_its_solver_commit_machine_and_load():
         missing = [k for k in PROVENANCE if k not in doc]
         assert not missing, f"{path.name} lacks {missing}"
         assert doc["solver_version"] and doc["commit"]
+
+
+def test_the_mirrored_checkout_keeps_time_stamps_and_drops_stale_files(harness, tmp_path):
+    dest = tmp_path / "this"
+    (dest / "solver" / "__pycache__").mkdir(parents=True)
+    (dest / "solver" / "__pycache__" / "x.pyc").write_bytes(b"")
+    (dest / "solver" / "gone.py").write_text("stale")
+    harness.sync_worktree(dest)
+    src = harness.REPO / "benchmarks" / "harness.py"
+    copy = dest / "benchmarks" / "harness.py"
+    assert copy.read_bytes() == src.read_bytes()
+    # numba's cache of an earlier run stays valid only if the stamp is the source's
+    assert copy.stat().st_mtime_ns == src.stat().st_mtime_ns
+    assert not (dest / "solver" / "gone.py").exists()
+    assert (dest / "solver" / "__pycache__" / "x.pyc").exists()
