@@ -162,10 +162,7 @@ def measure_all(trees: dict[str, Path], keep: Path, rounds: int, noop: bool) -> 
     workers = {side: harness.SolverProcess(tree, caches[side]) for side, tree in trees.items()}
     try:
         print("compiling both sides' solvers (at once)", flush=True)
-        for w in workers.values():  # one untimed solve each: compile, concurrently
-            w.submit(5.0, 1e-2, accuracy="fast", repeats=0)
-        for w in workers.values():
-            w.answer()
+        harness.SolverProcess.compile_all(workers.values())
         for name in SOLVES:
             record(name, "solver", solver_sides(workers, name, errors, counts))
     finally:
