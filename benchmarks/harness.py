@@ -87,9 +87,24 @@ def load_now() -> list[float]:
     return [round(x, 2) for x in os.getloadavg()]
 
 
+# the checkout as the measuring script started: edits or commits made while it runs are not what
+# it measured
+_AT_START: dict[Path, tuple[str, bool]] = {}
+
+
+def _started(repo: Path) -> tuple[str, bool]:
+    if repo not in _AT_START:
+        _AT_START[repo] = commit_of(repo)
+    return _AT_START[repo]
+
+
+_started(REPO)
+
+
 def provenance(load_start: list[float], repo: Path = REPO) -> dict:
-    """The keys every result file carries; ``load_start`` is :func:`load_now` at the start."""
-    commit, dirty = commit_of(repo)
+    """The keys every result file carries; ``load_start`` is :func:`load_now` at the start;
+    ``commit`` and ``dirty`` are the checkout's when this module was imported."""
+    commit, dirty = _started(repo)
     return {"solver_version": solver_version(repo), "commit": commit, "dirty": dirty,
             "machine": machine(), "load": {"start": load_start, "end": load_now()},
             "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
