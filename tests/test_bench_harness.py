@@ -134,3 +134,25 @@ def test_the_mirrored_checkout_keeps_time_stamps_and_drops_stale_files(harness, 
     assert copy.stat().st_mtime_ns == src.stat().st_mtime_ns
     assert not (dest / "solver" / "gone.py").exists()
     assert (dest / "solver" / "__pycache__" / "x.pyc").exists()
+
+
+def test_the_suite_report_names_what_moved_against_the_baseline(harness, monkeypatch):
+    monkeypatch.syspath_prepend(str(BENCH))  # suite.py imports harness as its neighbour
+    suite = _load("suite")
+
+    def runs(cpu):
+        return [{"cpu_s": c, "wall_s": c} for c in cpu]
+
+    doc = {"baseline": {"ref": "main", "commit": "a" * 40, "solver_version": "1.0.0"},
+           "rounds": 5, "errors": {"old physics": "TypeError: no such field"},
+           "figures": {
+               "slower one": {"group": "solver", **harness.compare_runs(
+                   runs([2.0, 2.1, 1.9, 2.0, 2.2]), runs([1.0] * 5))},
+               "steady one": {"group": "solver", **harness.compare_runs(
+                   runs([1.0, 1.1, 0.9, 1.0, 1.0]), runs([1.0] * 5))}},
+           **harness.provenance([1.0, 1.0, 1.0])}
+    text = suite.render(doc)
+    assert "Moved beyond the rounds' spread: slower one (slower, 2.00x in CPU time)." in text
+    assert "steady one (" not in text
+    assert "old physics: TypeError: no such field" in text
+    assert "`main` = commit aaaaaaa (solver 1.0.0)" in text
