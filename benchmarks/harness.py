@@ -35,6 +35,10 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
+# one scene per core, as in the sweeps and make (docs/solver.md): threaded BLAS only slows the
+# small dense solves; set before any script imports numpy
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 SCHEMA = 1  # of the provenance keys below; add keys, never rename
 # the code a measurement depends on: a change here (uncommitted) marks the result "dirty"
 MEASURED_CODE = ("solver", "pipeline", "benchmarks/*.py", "setup.py", "pyproject.toml")
@@ -141,9 +145,18 @@ def describe(doc: dict) -> str:
     m = doc.get("machine")
     where = (f"{m['cores']} cores ({m['machine']}), OPENBLAS_NUM_THREADS={m['blas_threads']}"
              if isinstance(m, dict) else "machine not recorded")
-    return (f"solver {doc.get('solver_version', NOT_RECORDED)}, commit {short}"
+    text = (f"solver {doc.get('solver_version', NOT_RECORDED)}, commit {short}"
             f"{' with uncommitted changes' if doc.get('dirty') is True else ''}, {doc.get('date')}, "
             f"{where}, {load_text}")
+    if isinstance(load, dict) and isinstance(m, dict) and shared(load, m["cores"]):
+        text += (" (a shared machine: absolute times here are longer than on an idle one; the "
+                 "results are the ratios measured within this run)")
+    return text
+
+
+def shared(load: dict, cores: int) -> bool:
+    """Whether other work held the cores: a load average above half of them at either end."""
+    return max(load["start"][0], load["end"][0]) > 0.5 * cores
 
 
 # ------------------------------------------------------------------------------------- timing

@@ -156,3 +156,13 @@ def test_the_suite_report_names_what_moved_against_the_baseline(harness, monkeyp
     assert "steady one (" not in text
     assert "old physics: TypeError: no such field" in text
     assert "`main` = commit aaaaaaa (solver 1.0.0)" in text
+
+
+def test_a_report_from_a_loaded_machine_says_its_times_are_not_results(harness):
+    doc = harness.provenance([3.8, 3.0, 2.0])
+    doc["machine"]["cores"] = 2
+    assert "a shared machine" in harness.describe(doc)
+    doc["load"] = {"start": [0.2, 0.2, 0.2], "end": [0.4, 0.3, 0.2]}
+    assert "shared" not in harness.describe(doc)
+    assert "load not recorded" in harness.describe(harness.historical_provenance(
+        BENCH / "accuracy.json"))
