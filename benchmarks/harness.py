@@ -376,6 +376,8 @@ seen = set()
 for line in sys.stdin:
     req = json.loads(line)
     try:
+        if req["fields"] and Physics is None:
+            raise TypeError("this solver takes St and eps only (no solver.Physics)")
         if req["fields"]:
             scene = (Physics(St=req["St"], eps=req["eps"], **req["fields"]),)
         else:

@@ -78,15 +78,13 @@ def resolve(ref: str) -> str:
     return sha
 
 
-def startup_sides(trees: dict[str, Path], keep: Path, caches: dict[str, str | None],
-                  noop: bool) -> dict[str, dict]:
+def startup_sides(trees: dict[str, Path], keep: Path, cache: str, noop: bool) -> dict[str, dict]:
     """``{figure: {side: callable}}`` of the start-up figures (each side's paper store and
     figures kept in ``keep`` between runs)."""
     launches = {}
     for side, tree in trees.items():
         argv, env = harness.cli_launch(tree)
-        if caches[side] is not None:
-            env.update(EHD_CACHE_DIR=caches[side], NUMBA_CACHE_DIR=caches[side])
+        env.update(EHD_CACHE_DIR=cache, NUMBA_CACHE_DIR=cache)
         env.pop("PYTHONDONTWRITEBYTECODE", None)  # as after pip install: .pyc files written
         launches[side] = (argv, env, tree)
 
@@ -142,7 +140,8 @@ def solver_sides(workers: dict[str, harness.SolverProcess], name: str, errors: d
 
 
 def measure_all(trees: dict[str, Path], keep: Path, rounds: int, noop: bool) -> dict:
-    caches = {side: str(keep / "cache") for side in trees}  # kernels apart by path and source
+    # one cache for both: numba keeps kernels apart by source path, the solver by source hash
+    cache = str(keep / "cache")
     figures, errors, counts = {}, {}, {}
 
     def record(name, group, sides):
@@ -159,7 +158,7 @@ def measure_all(trees: dict[str, Path], keep: Path, rounds: int, noop: bool) -> 
         print(f"{name}: CPU ratio {c['ratio']['median']:.2f} ({c['ratio']['min']:.2f}-"
               f"{c['ratio']['max']:.2f}), moved: {c['moved']}", flush=True)
 
-    workers = {side: harness.SolverProcess(tree, caches[side]) for side, tree in trees.items()}
+    workers = {side: harness.SolverProcess(tree, cache) for side, tree in trees.items()}
     try:
         print("compiling both sides' solvers (at once)", flush=True)
         harness.SolverProcess.compile_all(workers.values())
@@ -168,7 +167,7 @@ def measure_all(trees: dict[str, Path], keep: Path, rounds: int, noop: bool) -> 
     finally:
         for w in workers.values():
             w.close()
-    for name, sides in startup_sides(trees, keep, caches, noop).items():
+    for name, sides in startup_sides(trees, keep, cache, noop).items():
         record(name, "startup", sides)
     return {"figures": figures, "errors": errors}
 
