@@ -31,6 +31,11 @@ install: $(STAMP)
 test: $(STAMP)
 	$(PY) -m pytest -q -m "not install and not memory"
 
+# The inner loop: the suite without the tests marked slow (tests/conftest.py SLOW), under 2 minutes
+.PHONY: test-fast
+test-fast: $(STAMP)
+	$(PY) -m pytest -q -m "not install and not memory and not slow"
+
 # pip install of the clone into a fresh venv, then the README's first commands from an empty
 # folder (tests/install_from_pip.py), and the install tests of the compile cache's folder (a few
 # minutes: each fresh install compiles the solver)
@@ -101,6 +106,17 @@ bench-sweep: $(STAMP)
 
 bench-accuracy: $(STAMP)
 	$(PY) benchmarks/bench_accuracy.py
+
+# The documentation site -> docs/_build/html/index.html (docs/conf.py), warnings as errors. Phony:
+# the docs/ folder never makes it "up to date". The docs extra is installed once per venv.
+.PHONY: docs
+DOCS_STAMP := $(VENV)/.installed-docs
+$(DOCS_STAMP): $(STAMP)
+	$(PY) -m pip install --quiet -e .[docs]
+	touch $(DOCS_STAMP)
+
+docs: $(DOCS_STAMP)
+	$(VENV)/bin/sphinx-build -W --keep-going -q -b html docs docs/_build/html
 
 # the compiled kernels of every solver version (solver-*/ under <cache root>/numba, the root
 # resolved as in solver/_jit.py:cache_root), and the project-local folder older versions used

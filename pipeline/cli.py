@@ -65,13 +65,24 @@ def _print_scene(d: dict) -> None:
 
 
 def physics_from_args(args):
-    """The ``Physics`` of the ``--St``, ``--eps``... flags (``_add_physics_flags``)."""
+    """The ``Physics`` of the ``--St``, ``--eps``... flags (``_add_physics_flags``); a contact
+    group given without a roughness (it would do nothing) is refused."""
     from solver.physics import Physics
 
+    from .cli_shared import unused_contact_groups
+
     try:
-        return Physics.from_mapping({name: getattr(args, name) for name in Physics.names()})
+        physics = Physics.from_mapping({name: getattr(args, name) for name in Physics.names()})
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+    unused = unused_contact_groups(physics.as_dict())
+    if unused:
+        given = " and ".join(f"{Physics.group(n).option} {getattr(physics, n):g}" for n in unused)
+        raise UsageError(f"{given}: {'they act' if len(unused) > 1 else 'it acts'} only where "
+                         "rough surfaces touch, and --roughness is 0 "
+                         "(smooth surfaces): give --roughness > 0, or leave "
+                         f"{' and '.join(Physics.group(n).option for n in unused)} out")
+    return physics
 
 
 def outer_from_args(args):
@@ -155,9 +166,12 @@ def cmd_run(args) -> int:
 
 def _save_dataset(ds, path: str) -> None:
     """Write under a temporary name and move into place: a failed write (a full disk) leaves
-    neither a partial file nor a changed old one (pipeline/writes.py)."""
+    neither a partial file nor a changed old one (pipeline/writes.py). The file carries the mark
+    (``cli_shared.SAVED_BY``) by which a later ``--save`` knows it may replace it."""
+    from .cli_shared import SAVED_BY, SAVED_BY_KEY
     from .writes import atomic_path
 
+    ds.attrs[SAVED_BY_KEY] = SAVED_BY
     with atomic_path(path, f"--save {path}") as tmp:
         if path.endswith(".zarr"):
             from .sweeps.layout import zarr_warnings
@@ -427,19 +441,44 @@ def main(argv=None) -> int:
             pass
 
 
+def _stdout_closed_line(name: str) -> int:
+    _say(f"{name}: error: stdout is closed (>&-): the output would be lost; run with stdout "
+         "open (> FILE, or > /dev/null to discard it)")
+    return EXIT_WRITE
+
+
+def _parse(argv, stdout_closed: bool):
+    """The parsed arguments, or None when ``--help`` or ``--version`` printed into a closed
+    stdout. Their output (argparse prints it to stdout, then exits 0) is flushed here, so a
+    full stdout is exit 74 like any command's (``_StdoutLost``)."""
+    try:
+        return _parser(argv).parse_args(argv)
+    except SystemExit as exc:
+        if exc.code not in (0, None):  # a usage error: argparse said it on stderr
+            raise
+        if stdout_closed:
+            return None
+        sys.stdout.flush()
+        raise
+
+
 def _main(argv=None) -> int:
     import errno
+    import io
 
     stdout_closed = _closed_stdout()
     argv = _negative_values(sys.argv[1:] if argv is None else list(argv))
-    args = _parser(argv).parse_args(argv)
-    name = f"ehd {args.command}"
-    if stdout_closed:
-        _say(f"{name}: error: stdout is closed (>&-): the results would be lost; run with stdout "
-             "open (> FILE, or > /dev/null to discard them)")
-        return EXIT_WRITE
-    real_stdout, sys.stdout = sys.stdout, _Stdout(sys.stdout)
+    name = "ehd"
+    real_stdout = sys.stdout
+    # a closed stdout takes nothing: what --help would print is dropped, then one line says so
+    sys.stdout = _Stdout(io.StringIO() if stdout_closed else sys.stdout)
     try:
+        chosen = _chosen_command(argv)
+        name = f"ehd {chosen}" if chosen else "ehd"  # for --help into a full stdout, too
+        args = _parse(argv, stdout_closed)
+        if stdout_closed:
+            return _stdout_closed_line(name)
+        name = f"ehd {args.command}"
         code = args.func(args)
         sys.stdout.flush()  # a closed pipe or a full stdout shows here, not at interpreter exit
         return code
@@ -483,16 +522,38 @@ class _StdoutLost(Exception):
         self.error = error
 
 
+# ASCII spellings of the characters a report prints (pint's units: 25 µm, mPa·s, 3×10⁶ µm³),
+# for a stdout that cannot encode them (PYTHONIOENCODING=ascii, LANG=C on old systems)
+_ASCII = str.maketrans({"µ": "u", "μ": "u", "·": "*", "×": "x", "°": " deg"})
+_SUPERSCRIPTS = dict(zip("⁰¹²³⁴⁵⁶⁷⁸⁹⁻⁺", "0123456789-+"))
+
+
+def ascii_spelling(text: str, encoding: str = "ascii") -> str:
+    """``text`` as ``encoding`` can print it: µ as u, · as *, × as x, a superscript run as
+    ``^`` and its digits (``µm³`` -> ``um^3``); any other character it cannot encode (e.g. in a
+    scene's title) as ``?`` (docs/pipeline.md, "Output encoding")."""
+    import re
+
+    text = re.sub("[" + "".join(_SUPERSCRIPTS) + "]+",
+                  lambda m: "^" + "".join(_SUPERSCRIPTS[c] for c in m.group()),
+                  text.translate(_ASCII))
+    return text.encode(encoding, errors="replace").decode(encoding)
+
+
 class _Stdout:
     """stdout as the commands see it: a failed write (``> /dev/full``) is told apart from a
-    failed write of a file (the error boundary reports each with its own line)."""
+    failed write of a file (the error boundary reports each with its own line), and text the
+    stream cannot encode is printed in ASCII spellings (``ascii_spelling``)."""
 
     def __init__(self, stream):
         self._stream = stream
 
     def write(self, text):
         try:
-            return self._stream.write(text)
+            try:
+                return self._stream.write(text)
+            except UnicodeEncodeError:  # nothing was written: the whole text is encoded first
+                return self._stream.write(ascii_spelling(text, self._stream.encoding or "ascii"))
         except BrokenPipeError:
             raise
         except OSError as exc:

@@ -12,7 +12,8 @@ import os
 from .errors import PathError
 
 __all__ = ["add_numerics_flags", "numerics_overrides", "format_value", "check_output_dir",
-           "check_output_paths", "accuracy_help"]
+           "check_output_paths", "check_name_length", "accuracy_help", "saved_by_run",
+           "SAVED_BY_KEY", "SAVED_BY", "CONTACT_GROUPS", "unused_contact_groups"]
 
 
 def accuracy_help(what: str = "preset") -> str:
@@ -52,6 +53,26 @@ def numerics_overrides(args) -> dict:
             "rtol": args.rtol, "max_steps": args.max_steps}
 
 
+# the groups that act only where rough surfaces touch (solver/physics.py: the asperity
+# stiffness is "not used without roughness", e_dry "acts only where the asperities touch")
+CONTACT_GROUPS = ("asperity_stiffness", "e_dry")
+
+
+def unused_contact_groups(values: dict) -> list[str]:
+    """The ``CONTACT_GROUPS`` that ``values`` (``{group: value}`` of one run, or of a sweep
+    with a tuple of values per axis) set away from their default while every roughness is 0:
+    smooth surfaces never touch, so those values would silently do nothing."""
+    from solver.physics import Physics
+
+    def each(name):
+        v = values.get(name, Physics.group(name).default)
+        return v if isinstance(v, (tuple, list)) else (v,)
+
+    if any(r != 0.0 for r in each("roughness")):
+        return []
+    return [n for n in CONTACT_GROUPS if any(v != Physics.group(n).default for v in each(n))]
+
+
 def format_value(v, spec=".6g"):
     """A value of a report row: numbers with ``spec`` (non-finite as ``inf``/``nan``), flags as
     yes/no, missing (or empty text, e.g. no viscosity table) as "-", anything else as text."""
@@ -64,6 +85,42 @@ def format_value(v, spec=".6g"):
     return str(v)
 
 
+def _name_max(folder) -> int:
+    """The longest file name (bytes) the file system of ``folder`` (or its nearest existing
+    parent) takes: NAME_MAX, 255 on most; 255 where it does not say."""
+    from pathlib import Path
+
+    folder = Path(os.path.abspath(folder))
+    existing = next((p for p in (folder, *folder.parents) if os.path.isdir(p)), Path("/"))
+    try:
+        return int(os.pathconf(existing, "PC_NAME_MAX"))
+    except (OSError, ValueError, AttributeError):
+        return 255
+
+
+def check_name_length(flag: str, value, siblings=()) -> None:
+    """PathError, before any work, when a name in the path ``value`` of ``flag`` is longer than
+    its file system takes, counting what the longest name made next to it adds (``siblings``:
+    a temporary, a lock, a journal), so that none of them fails halfway through a run."""
+    from pathlib import Path
+
+    path = Path(value)
+    added = max([len(os.fsencode(Path(s).name)) - len(os.fsencode(path.name)) for s in siblings]
+                + [0])
+    for p in reversed((path, *path.parents)):  # from the top: the first name too long
+        if not p.name:
+            continue
+        extra = added if p == path else 0
+        n, limit = len(os.fsencode(p.name)), _name_max(p.parent)
+        if n + extra > limit:
+            shown = p.name if len(p.name) <= 20 else p.name[:16] + "..."
+            why = (f"; ehd adds up to {extra} bytes to it for the temporary and lock files it "
+                   "makes next to it") if extra else ""
+            raise PathError(f"{flag} {value}: the name {shown!r} is {n} bytes, at most "
+                            f"{limit - extra} fit here (the file system takes {limit}{why}); "
+                            "choose a shorter name")
+
+
 def check_output_dir(flag: str, value: str | None) -> None:
     """PathError, before any work, when the folder ``value`` of ``flag`` cannot be made or
     written: empty, an existing file, a file among its parents, or a read-only parent."""
@@ -73,6 +130,7 @@ def check_output_dir(flag: str, value: str | None) -> None:
 
     if not str(value).strip():
         raise PathError(f"{flag}: empty path; give a folder")
+    check_name_length(flag, value)
     path = Path(value)
     if path.exists() and not path.is_dir():
         raise PathError(f"{flag} {value}: exists and is not a directory")
@@ -83,15 +141,55 @@ def check_output_dir(flag: str, value: str | None) -> None:
         raise PathError(f"{flag} {value}: {str(existing)!r} is not writable")
 
 
+# the mark of ``ehd run --save``'s own output (an attribute of the saved Dataset): the only
+# existing path ``--save`` replaces (docs/pipeline.md, "What ehd never overwrites")
+SAVED_BY_KEY, SAVED_BY = "written_by", "ehd run --save"
+
+
+def saved_by_run(path: str) -> bool:
+    """True when ``path`` (a ``.zarr`` folder or a ``.nc`` file, not a link) carries the mark
+    of ``ehd run --save``; anything else (a sweep store, a foreign folder or file, one that
+    cannot be read) is not its own."""
+    from pathlib import Path
+
+    target = Path(path)
+    try:
+        if target.is_symlink():
+            return False
+        if path.endswith(".zarr"):
+            import json
+
+            from .reads import read_input
+
+            meta = json.loads(read_input(target / "zarr.json", f"--save {path}"))
+            attrs = meta.get("attributes") if isinstance(meta, dict) else None
+        else:
+            import stat
+
+            if not stat.S_ISREG(target.stat().st_mode):
+                return False
+            import xarray as xr
+
+            with xr.open_dataset(target, engine="scipy") as ds:
+                attrs = dict(ds.attrs)
+    except Exception:  # noqa: BLE001 - unreadable or not a dataset: not ours
+        return False
+    return isinstance(attrs, dict) and attrs.get(SAVED_BY_KEY) == SAVED_BY
+
+
 def check_output_paths(save: str | None = None, plot: str | None = None) -> None:
     """PathError, before any solve, when ``--save FILE`` or ``--plot DIR`` cannot be written:
     a missing or read-only parent directory, or an existing path of the wrong kind (a ``.zarr``
-    store and ``DIR`` are directories, a ``.nc`` file is a file)."""
+    store and ``DIR`` are directories, a ``.nc`` file is a file), or an existing ``--save``
+    path that ``ehd run --save`` did not write (``saved_by_run``: it is never replaced)."""
     from pathlib import Path
 
     if save is not None:
         if not save.endswith((".nc", ".zarr")):
             raise PathError(f"--save: unknown file type {save!r}; use a .nc or .zarr path")
+        from .writes import temporary_paths
+
+        check_name_length("--save", save, temporary_paths(save))
         path = Path(save)
         parent = path.parent
         if not parent.is_dir():
@@ -102,4 +200,8 @@ def check_output_paths(save: str | None = None, plot: str | None = None) -> None
             raise PathError(f"--save {save}: exists and is not a directory (a .zarr store is one)")
         if save.endswith(".nc") and path.is_dir():
             raise PathError(f"--save {save}: is a directory, not a file")
+        if os.path.lexists(save) and not saved_by_run(save):
+            raise PathError(f"--save {save}: exists and is not the output of an earlier ehd run "
+                            "--save (a sweep store, a link or someone else's files), so it is "
+                            "not replaced: give a new path, or move it away yourself")
     check_output_dir("--plot", plot)

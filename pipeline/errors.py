@@ -10,13 +10,13 @@ Exit codes of every ``ehd`` command (docs/pipeline.md, "Exit codes"):
 | code | meaning |
 |---:|---|
 | 0 | success |
-| 1 | ``run``/``scene``: the scene failed (its status and message are printed) |
-| 2 | bad input: arguments, sweep/scene file, unusable path, store of other physics or numerics, busy store, scheduler unreachable (nothing computed) |
+| 1 | ``run``/``scene``: the scene failed (its status and message are printed); ``restitution --threshold``: a solve of the bisection failed |
+| 2 | bad input: arguments, sweep/scene/materials/scheduler file (also a FIFO, a device, over 1 MiB), unusable path (also an existing ``--save`` path ``run --save`` did not write, a name too long), store of other physics or numerics, busy store, scheduler unreachable (nothing computed) |
 | 3 | ``sweep``: finished, but failed scenes remain in the store |
 | 4 | ``sweep``: the scheduler went away mid-sweep (every scene finished so far is kept; rerun) |
 | 5 | damaged store: ``status`` found damaged cells, coordinates or metadata (listed), ``figures`` refuses to draw them, ``sweep`` refuses metadata it cannot repair |
 | 70 | internal error: a bug (traceback printed; please report it) |
-| 74 | an output could not be written: disk full or another I/O error (the line names the path and the free space; nothing partial is left behind), or stdout closed or full |
+| 74 | an output could not be written: disk full or another I/O error (the line names the path and the free space; nothing partial is left behind), or stdout closed or full (also for ``--version``/``--help``) |
 | 130 | interrupted (Ctrl-C): every scene finished so far is kept |
 | 141 | the reader of stdout went away (``ehd ... | head``) |
 | 143 | terminated (SIGTERM, e.g. ``kill`` or a batch system's time limit): every scene finished so far is kept |

@@ -11,7 +11,7 @@ whichever copy this is. Imports nothing heavy.
 from __future__ import annotations
 
 import filecmp
-import shutil
+import os
 from pathlib import Path
 
 __all__ = ["FOLDERS", "folder", "sweep_names", "resolve_sweep", "copy_examples", "register"]
@@ -61,29 +61,60 @@ def resolve_sweep(text: str) -> str:
                      f"{', '.join(sweep_names()) or 'none'}); give a path, e.g. sweeps/paper.toml")
 
 
+def _same_file(src: Path, dst: Path) -> bool:
+    """``dst`` is a regular file (not a link) with the bytes of ``src``."""
+    import stat
+
+    try:
+        return stat.S_ISREG(dst.lstat().st_mode) and filecmp.cmp(src, dst, shallow=False)
+    except OSError:
+        return False
+
+
+def _refuse_unsafe(target: Path, plan) -> None:
+    """PathError before anything is written, also with ``--force``: a link where a folder of
+    ``target`` goes (writing through it would write outside DIR), or a folder where a shipped
+    file goes (``ehd examples`` deletes nothing it did not make)."""
+    from .errors import PathError
+
+    for kind in FOLDERS:
+        folder = target / kind
+        if folder.is_symlink():
+            raise PathError(f"{folder} is a symbolic link: ehd examples writes only inside DIR, "
+                            "never through a link; remove the link, or choose another folder")
+        if folder.exists() and not folder.is_dir():
+            raise PathError(f"{folder} exists and is not a folder; move it away, or choose "
+                            "another folder")
+    for _, dst in plan:
+        if dst.is_dir() and not dst.is_symlink():
+            raise PathError(f"{dst} is a folder where a shipped file goes; ehd examples never "
+                            "deletes a folder (not with --force either): move it away, or "
+                            "choose another folder")
+
+
 def copy_examples(target: str | Path, force: bool = False) -> list[Path]:
     """Copy the shipped files into ``target/examples`` and ``target/sweeps`` (the clone's
     layout, so the README's commands run as written from ``target``). A different file already
-    there is kept unless ``force``: ``FileExistsError`` names it."""
+    there (or a link, a FIFO...) is kept unless ``force``: ``FileExistsError`` names it; with
+    ``force`` it is replaced by the shipped file (a link itself, never what it points to). A
+    link in place of ``examples``/``sweeps`` or a folder in place of a file is refused
+    (``PathError``). The files are written all or none (``writes.write_all``): a failed write
+    (a full disk) leaves no file changed and no partial copy. Returns the files written."""
     target = Path(target)
     plan = [(src, target / kind / src.name) for kind in FOLDERS for src in _files(kind)]
     if not plan:
         raise FileNotFoundError("this installation carries no example or sweep files; "
                                 "reinstall ehd-collision (pip install ehd-collision)")
-    clash = [dst for src, dst in plan
-             if dst.exists() and not (dst.is_file() and filecmp.cmp(src, dst, shallow=False))]
+    _refuse_unsafe(target, plan)
+    todo = [(src, dst) for src, dst in plan if not _same_file(src, dst)]
+    clash = [dst for _, dst in todo if os.path.lexists(dst)]
     if clash and not force:
         raise FileExistsError(f"{clash[0]} exists and differs from the shipped file"
                               + (f" (and {len(clash) - 1} more)" if len(clash) > 1 else "")
                               + "; use --force to overwrite, or another folder")
-    written = []
-    for src, dst in plan:
-        dst.parent.mkdir(parents=True, exist_ok=True)
-        if dst.is_dir():
-            shutil.rmtree(dst)
-        shutil.copyfile(src, dst)
-        written.append(dst)
-    return written
+    from .writes import write_all
+
+    return write_all({dst: src.read_bytes() for src, dst in todo}, f"DIR {target}")
 
 
 def cmd_examples(args) -> int:
@@ -92,11 +123,11 @@ def cmd_examples(args) -> int:
 
     check_output_dir("DIR", args.dir)
     try:
-        written = copy_examples(args.dir, force=args.force)
+        copy_examples(args.dir, force=args.force)
     except (FileExistsError, FileNotFoundError) as exc:
         raise PathError(str(exc)) from None
     for kind in FOLDERS:
-        names = [p.name for p in written if p.parent.name == kind]
+        names = [p.name for p in _files(kind)]
         print(f"{Path(args.dir) / kind}: {', '.join(names)}")
     print(f"then, from {args.dir}: ehd scene examples/sandstone_water.toml; "
           "ehd sweep sweeps/quick.toml (or by name: ehd sweep quick)")

@@ -8,6 +8,7 @@ Every output of ``ehd`` (a sweep store's temporary layout, its journal and lock,
   exit 74), after removing the temporary ``cleanup`` path;
 - :func:`atomic_path` gives a temporary name next to the target, moved into place by
   ``os.replace`` only once it is complete (a file or a directory, e.g. a ``.zarr`` store);
+- :func:`write_all` writes several files all or none (``ehd examples``, a DEM export);
 - :func:`guarded_dir` watches a folder that a plotting function fills with several files: on a
   failed write, every file it created or changed is removed (a half-written figure is worse than
   none: the next run draws it again).
@@ -22,7 +23,8 @@ from pathlib import Path
 
 from .errors import WriteError, describe_os_error
 
-__all__ = ["writing", "atomic_path", "guarded_dir", "write_error"]
+__all__ = ["writing", "atomic_path", "temporary_paths", "write_all", "guarded_dir",
+           "write_error"]
 
 
 def write_error(exc: OSError, what: str, path=None) -> WriteError:
@@ -101,23 +103,64 @@ def writing(cleanup, what: str, path=None):
         raise
 
 
+def temporary_paths(path) -> tuple[Path, Path]:
+    """The names :func:`atomic_path` uses next to ``path``: the temporary it writes, and where
+    an old directory waits while the new one moves in."""
+    path = Path(path)
+    return (path.with_name(f".{path.name}.tmp-{os.getpid()}"),
+            path.with_name(f".{path.name}.old-{os.getpid()}"))
+
+
 @contextmanager
 def atomic_path(path, what: str):
     """Yield a temporary path next to ``path``; once the block completes it replaces ``path``
     (a file by ``os.replace``; a directory by two renames). On any failure the temporary is
     removed and ``path`` is left as it was."""
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    tmp, old = temporary_paths(path)
     _remove(tmp)
     with writing(tmp, what, path):
         yield tmp
         if tmp.is_dir() and path.is_dir():
-            old = path.with_name(f".{path.name}.old-{os.getpid()}")
             path.rename(old)
             tmp.rename(path)
             shutil.rmtree(old, ignore_errors=True)
         else:
             os.replace(tmp, path)
+
+
+def write_all(contents: dict, what: str) -> list[Path]:
+    """Write every file of ``contents`` (``{path: bytes or str}``) or none: each to a temporary
+    name next to it (its folders made as needed), all moved into place only once every one is
+    written. On a failure every temporary and every folder made here is removed and no file has
+    changed; an ``OSError`` becomes ``WriteError`` naming the file being written (not the
+    temporary, nor where the bytes came from). Returns the paths written."""
+    made, pending, current = [], [], None
+    try:
+        for path, data in contents.items():
+            current = path = Path(path)
+            missing = [p for p in (path.parent, *path.parent.parents) if not p.exists()]
+            path.parent.mkdir(parents=True, exist_ok=True)
+            made += [p for p in missing if p not in made]
+            tmp = temporary_paths(path)[0]
+            pending.append((tmp, path))
+            with open(tmp, "wb") as f:
+                f.write(data.encode("utf-8") if isinstance(data, str) else data)
+        for tmp, path in pending:
+            current = path
+            os.replace(tmp, path)  # a rename: no new space needed
+    except BaseException as exc:
+        for tmp, _ in pending:
+            _remove(tmp)  # those moved into place already are whole files
+        for folder in sorted(made, key=lambda p: -len(p.parts)):  # innermost first
+            try:
+                folder.rmdir()
+            except OSError:
+                pass
+        if isinstance(exc, OSError):
+            raise write_error(exc, what, current) from None
+        raise
+    return [path for _, path in pending]
 
 
 def _listing(folder: Path) -> dict:

@@ -281,18 +281,22 @@ def test_interrupted_export_leaves_no_file(tmp_path, capsys, monkeypatch):
 
 
 def test_write_files_leaves_the_old_export_when_a_write_fails(tmp_path, monkeypatch):
+    import builtins
+    import errno
+
+    import pipeline.writes
     from pipeline.dem import export
+    from pipeline.errors import WriteError
 
     export.write_files({"a.txt": "old a", "b.txt": "old b"}, tmp_path)
-    real = Path.write_text
 
-    def fail_on_b(self, text, *a, **k):
-        if ".b.txt" in self.name:
-            raise OSError("disk full")
-        return real(self, text, *a, **k)
+    def fail_on_b(path, *a, **k):
+        if ".b.txt" in Path(path).name:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return builtins.open(path, *a, **k)
 
-    monkeypatch.setattr(Path, "write_text", fail_on_b)
-    with pytest.raises(OSError):
+    monkeypatch.setattr(pipeline.writes, "open", fail_on_b, raising=False)
+    with pytest.raises(WriteError, match="b.txt"):  # the file being written, in one line
         export.write_files({"a.txt": "new a", "b.txt": "new b"}, tmp_path)
     monkeypatch.undo()
     # nothing renamed (a.txt is still the old one) and no temporary file left behind

@@ -109,18 +109,18 @@ def test_documented_python_names_exist():
     assert not missing, missing
 
 
-def _readme_block(after: str) -> list[str]:
-    text = (REPO / "README.md").read_text()
+def _doc_block(after: str, doc: str = "docs/solver.md") -> list[str]:
+    text = (REPO / doc).read_text()
     start = text.index(after) + len(after)
     return text[start:text.index("```", start)].strip("\n").splitlines()
 
 
-def test_readme_ehd_run_sample_is_what_ehd_run_prints(capsys):
+def test_solver_doc_ehd_run_sample_is_what_ehd_run_prints(capsys):
     from pipeline.cli import main, report_rows
 
     assert main(["run", "--St", "10", "--eps", "0.01"]) == 0
     printed = capsys.readouterr().out.splitlines()
-    sample = _readme_block("$ ehd run --St 10 --eps 0.01\n")
+    sample = _doc_block("$ ehd run --St 10 --eps 0.01\n")
     label = re.compile(r"^(.*?\S)\s{2,}(\S.*)$")
     got = [label.match(line).groups() for line in printed]
     shown = [label.match(line).groups() for line in sample]
@@ -145,11 +145,11 @@ def _json_keys():
     return JSON_KEYS
 
 
-def test_readme_json_key_order_is_the_code_order():
+def test_documented_json_key_order_is_the_code_order():
     from solver.physics import Physics
 
     keys = list(_json_keys())
-    text = " ".join((REPO / "README.md").read_text().split())
+    text = " ".join((REPO / "docs" / "solver.md").read_text().split())
     para = text[text.index("`--json` prints exactly one JSON object"):]
     para = para[:para.index("`solver.JSON_KEYS`")]
     runs = [[k.strip() for k in span.split(",") if k.strip() not in ("", "...")]
@@ -213,3 +213,181 @@ def test_python_example_runs_from_a_copy_of_the_examples(tmp_path):
                        capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stderr[-2000:]
     assert "sticking threshold: St_c = " in p.stdout and "e_wet = " in p.stdout
+
+
+# ---- cited headings and links resolve (the site cuts docs/model.md into pages by heading) -------
+CITING = [REPO / "README.md", REPO / "Makefile", *sorted((REPO / "docs").glob("*.md")),
+          *(p for d in ("solver", "pipeline", "tests", "benchmarks", "examples", "sweeps")
+            for p in sorted((REPO / d).rglob("*")) if p.suffix in (".py", ".md", ".toml"))]
+
+
+def _headings(doc: Path, labels: bool = False) -> list[str]:
+    """The heading texts of a Markdown file, outside code blocks, without backticks; with
+    ``labels``, also the bold labels that open a paragraph or an item (``**Surface roughness**``)."""
+    pattern = r"#{1,6} (.*)" + (r"|(?:- )?\*\*([^*]+)\*\*" if labels else "")
+    out, fenced = [], False
+    for line in doc.read_text().splitlines():
+        if line.startswith("```"):
+            fenced = not fenced
+        elif not fenced and (m := re.match(pattern, line)):
+            out.append(next(g for g in m.groups() if g).replace("`", "").strip())
+    return out
+
+
+def _slug(heading: str) -> str:
+    """GitHub's (and myst-parser's) anchor of a heading."""
+    return re.sub(r"\s", "-", re.sub(r"[^\w\s-]", "", heading.strip().lower()))
+
+
+def test_cited_headings_exist():
+    """``docs/NAME.md, "Heading"`` anywhere in the code, tests or docs names a heading of that
+    file, or the start of one (``"Outer flow"``), or a paragraph's bold label; a moved or
+    renamed section fails here."""
+    cite = re.compile(r'(?:docs/)?(\w+)\.md(?:,[ \t]*|[ \t]+)(?:\n[ \t]*(?:#[ \t]*)?)?"([^"]{2,120})"')
+    found, bad = 0, []
+    for path in CITING:
+        text = path.read_text()
+        for name, quoted in cite.findall(text):
+            doc = REPO / "docs" / f"{name}.md"
+            if not doc.exists():
+                continue
+            wanted = " ".join(re.sub(r"\n[ \t]*#?[ \t]*", " ", quoted).split()).replace("`", "")
+            found += 1
+            if not any(h.lower().startswith(wanted.lower()) for h in _headings(doc, labels=True)):
+                bad.append(f"{path.relative_to(REPO)}: docs/{name}.md has no heading {wanted!r}")
+    assert found > 50, found  # the code cites many; a broken pattern finds none
+    assert not bad, "\n".join(bad)
+
+
+def test_relative_links_between_docs_resolve():
+    """``[text](other.md#anchor)`` and ``(#anchor)`` in README and docs/ point at a file that
+    exists and a heading it has (``make docs`` fails on the same, with warnings as errors)."""
+    bad = []
+    for doc in DOCS:
+        for target in re.findall(r"\]\(([^)\s]+)\)", doc.read_text()):
+            if "://" in target or target.startswith("mailto:"):
+                continue
+            path, _, anchor = target.partition("#")
+            if doc.parent.name == "docs" and path.startswith(("gallery/", "model/")):
+                continue  # pages make docs generates (it checks those links itself)
+            dest = (doc.parent / path) if path else doc
+            if not dest.exists():
+                bad.append(f"{doc.name}: {target}: no file {path}")
+            elif anchor and dest.suffix == ".md" and anchor not in map(_slug, _headings(dest)):
+                bad.append(f"{doc.name}: {target}: no heading with anchor #{anchor}")
+    assert not bad, "\n".join(bad)
+
+
+def test_api_page_documents_the_entry_points():
+    """The site's API page (docs/api.md) renders what a user calls and what they get back."""
+    page = (REPO / "docs" / "api.md").read_text()
+    for directive in (".. autofunction:: solver.collide", ".. autoclass:: solver.Physics",
+                      ".. autoclass:: solver.Collision", "{collision-fields}",
+                      ".. autofunction:: pipeline.open_results"):
+        assert directive in page, directive
+
+
+# ---- numbers the docs quote from the benchmark result files (benchmarks/*.json) ---------------
+# A quoted number agrees with its source when it is the source's value rounded to the digits
+# quoted: a re-run of the benchmark that moves a number fails here until the docs say the new one.
+def _bench(name: str) -> dict:
+    import json
+
+    return json.loads((REPO / "benchmarks" / f"{name}.json").read_text())
+
+
+def _quoted_matches(quoted: str, value: float) -> bool:
+    """``"1.6"``, ``"0.47"``, ``"1.3e-3"``, ``"19"`` against ``value`` (same units): equal to
+    the value rounded to the quoted digits."""
+    mantissa, _, exponent = quoted.lower().partition("e")
+    decimals = len(mantissa.partition(".")[2])
+    step = 10.0 ** (int(exponent or 0) - decimals)
+    return abs(float(quoted) - value) <= 0.5 * step * (1 + 1e-9)
+
+
+def _accuracy_maxima(preset: str) -> dict:
+    """Largest error of each observable over the panel, and over its scenes with St <= 30."""
+    acc = _bench("accuracy")
+    row = acc["table"][preset]
+    small = [St <= 30 for St, _ in acc["panel"]]
+    out = {"wall_ms": row["wall_median"] * 1e3}
+    for obs, errors in row["errors"].items():
+        out[obs] = max(errors)
+        out[obs + "_st30"] = max(e for e, s in zip(errors, small) if s)
+    return out
+
+
+def _docs_text() -> dict[str, str]:
+    return {doc.name: doc.read_text() for doc in DOCS}
+
+
+def test_preset_tables_quote_benchmarks_accuracy_json():
+    """Each preset table (header ``| preset | v_r |``, README's "What each preset buys") quotes
+    benchmarks/accuracy.json: max errors in %, St <= 30 with the whole panel in brackets, and
+    the median wall time per collision in ms."""
+    columns = (("v_r",), ("h_m_x1_st30", "h_m_x1"), ("h_m_approach_x1_st30", "h_m_approach_x1"),
+               ("ln_x_e_x1_st30", "ln_x_e_x1"), ("wall_ms",))
+    tables, bad = 0, []
+    for name, text in _docs_text().items():
+        for table in re.findall(r"^\| preset \| v_r \|.*\n\|[-| ]+\|\n((?:\|.*\|\n)+)", text, re.M):
+            tables += 1
+            for line in table.splitlines():
+                cells = [c.strip() for c in line.strip("|").split("|")]
+                preset = cells[0].strip("`")
+                want = _accuracy_maxima(preset)
+                assert len(cells) == 1 + len(columns), line
+                for keys, cell in zip(columns, cells[1:]):
+                    numbers = re.findall(r"\d+(?:\.\d+)?", cell)
+                    assert len(numbers) == len(keys), (name, line, cell)
+                    for key, quoted in zip(keys, numbers):
+                        value = want[key] * (1 if key == "wall_ms" else 100)
+                        if not _quoted_matches(quoted, value):
+                            bad.append(f"{name}: {preset} {key}: quoted {quoted}, "
+                                       f"benchmarks/accuracy.json {value:.3g}")
+    assert tables >= 1, "no doc quotes the preset table of benchmarks/accuracy.json any more"
+    assert not bad, "\n".join(bad)
+
+
+def _piezoviscous_cost(preset: str, variants: tuple) -> list[float]:
+    """Median per-scene time ratio to the classic film (benchmarks/piezoviscous.json), by the
+    benchmark's own definition (bench_piezoviscous.ratios)."""
+    import importlib
+    import statistics
+    import sys
+
+    sys.path.insert(0, str(REPO / "benchmarks"))
+    try:
+        bench = importlib.import_module("bench_piezoviscous")
+    finally:
+        sys.path.remove(str(REPO / "benchmarks"))
+    speed = _bench("piezoviscous")["speed"]
+    return [statistics.median(bench.ratios(speed, preset, v)) for v in variants]
+
+
+# (what is quoted, a pattern over a doc's text with its whitespace collapsed whose groups are the
+#  numbers, and the source value of each group, in the units quoted)
+QUOTES = [
+    ("the standard preset's largest errors (docs/scenes.md, viscosity switch)",
+     r"standard: largest errors (\S+) on `v_r`, (\S+) on `h_m`, (\S+) on `h_m` on approach",
+     lambda: [_accuracy_maxima("standard")[k] for k in ("v_r", "h_m_x1", "h_m_approach_x1")]),
+    ("the pressure-dependent liquid's cost against the classic film, standard preset "
+     "(benchmarks/piezoviscous.json)",
+     r"(\d+\.\d)x at beta = 1, (\d+\.\d)x at 2, (\d+\.\d)x at 5, (\d+\.\d)x at 10[;( ]+"
+     r"Roelands at 5: (\d+\.\d)x[;,] (?:Barus )?with Dowson-Higginson:? (\d+\.\d)x",
+     lambda: _piezoviscous_cost("standard", ("barus-1", "barus-2", "barus-5", "barus-10",
+                                             "roelands-5", "barus-dh-5"))),
+]
+
+
+@pytest.mark.parametrize("what, pattern, source", QUOTES, ids=[q[0] for q in QUOTES])
+def test_quoted_benchmark_numbers_are_the_result_files(what, pattern, source):
+    values = source()
+    found = 0
+    for name, text in _docs_text().items():
+        for groups in re.findall(pattern, " ".join(text.split())):
+            groups = (groups,) if isinstance(groups, str) else groups
+            found += 1
+            for quoted, value in zip(groups, values):
+                assert _quoted_matches(quoted, value), \
+                    f"{name}: {what}: quoted {quoted}, the benchmark's result {value:.4g}"
+    assert found, f"no doc quotes {what} any more: quote it again or drop it from QUOTES"

@@ -920,12 +920,16 @@ def test_run_save_on_a_full_disk_leaves_no_file(ws, capsys, monkeypatch):
 
 
 def test_run_save_replaces_an_old_file_only_when_complete(ws, capsys, monkeypatch):
-    (ws / "r.nc").write_bytes(b"old")
+    from pipeline.cli_shared import SAVED_BY, SAVED_BY_KEY
+
+    # an earlier --save output (only that may be replaced: tests/test_user_input.py)
+    xr.Dataset(attrs={SAVED_BY_KEY: SAVED_BY}).to_netcdf(ws / "r.nc", engine="scipy")
+    old = (ws / "r.nc").read_bytes()
     monkeypatch.setattr(xr.Dataset, "to_netcdf", _enospc)
     code, _, err = ehd(capsys, "run", "--St", "5", "--eps", "0.01", "--accuracy", "fast",
                        "--save", "r.nc")
     _assert_full_disk_line(code, err)
-    assert (ws / "r.nc").read_bytes() == b"old"
+    assert (ws / "r.nc").read_bytes() == old
     assert [p.name for p in ws.iterdir() if "r.nc" in p.name] == ["r.nc"]
 
 
@@ -933,6 +937,8 @@ def test_run_save_replaces_an_old_file_only_when_complete(ws, capsys, monkeypatc
     (["run", "--St", "5", "--eps", "0.01", "--accuracy", "fast", "--plot", "figs/run"],
      "pipeline.plots.scene_plots.plot_scene"),
     (["figures", "s.zarr", "--out", "figs/sweep"], "pipeline.plots.sweep_maps.update_figures"),
+    (["restitution", str(REPO / "examples" / "glass_beads_water.toml"), "--n", "2", "--accuracy",
+      "fast", "--plot", "figs/restitution"], "pipeline.plots.restitution_plot.plot_restitution"),
 ])
 def test_figures_on_a_full_disk_leave_nothing_new(ws, capsys, monkeypatch, argv, target):
     import importlib

@@ -81,6 +81,18 @@ def _fit_range(args):
     return (lo, hi)
 
 
+def _check_density_ratio(value: float) -> None:
+    """UsageError unless ``--density-ratio`` is a ratio the far-field reading takes
+    (``solver.far_field.OuterFlow``: finite, in [0, 1e6]; 1e300 overflowed the fits)."""
+    from pipeline.cli import UsageError
+    from solver.far_field import OuterFlow
+
+    try:
+        OuterFlow(density_ratio=value)
+    except ValueError as exc:
+        raise UsageError(f"--density-ratio {value:g}: {exc}") from None
+
+
 def cmd_export_dem(args) -> int:
     from pipeline.cli import UsageError, check_output_dir
 
@@ -90,20 +102,25 @@ def cmd_export_dem(args) -> int:
 
     check_output_dir("--out", args.out)  # before any solve
     fit_range = _fit_range(args)
+    _check_density_ratio(args.density_ratio)
+    if args.n < 1:
+        raise UsageError(f"--n {args.n}: give a whole number of speeds >= 1")
+    if not args.path.strip():
+        raise UsageError("STORE_OR_SCENE: empty path; give a sweep store (.zarr) or a scene file")
     path = Path(args.path)
     if not path.exists():
         raise UsageError(f"{args.path}: no such store or scene file")
     if path.is_dir():
         from pipeline import open_results
+        from pipeline.sweeps.commands import opening_store
 
-        ds = open_results(str(path))
+        ds = opening_store(str(path), open_results, "export-dem takes a sweep store or a "
+                           "scene file")
         if "St" not in ds.dims or "eps" not in ds.dims:
             raise UsageError(f"{args.path}: export-dem needs a store with St and eps axes")
         if "e_wet" not in ds:
             raise UsageError(f"{args.path}: the store has no e_wet (made before solver 1.4.0); "
                              "rerun the sweep")
-        if not args.density_ratio >= 0.0:
-            raise UsageError(f"--density-ratio {args.density_ratio:g}: give rho_f/rho_p >= 0")
         rows = store_rows(ds, args.density_ratio)
         if not rows:
             raise UsageError(f"{args.path}: no finished (ok) scene in the store; run "
@@ -143,8 +160,8 @@ def cmd_restitution(args) -> int:
     check_output_dir("--out", args.out)  # before any solve
     check_output_dir("--plot", args.plot)
     scene = _scene(args.scene, args.materials)
-    if not (args.start > 0 and args.stop > 0 and args.n >= 1):
-        raise UsageError("--from and --to must be positive factors and --n >= 1")
+    if not (0 < args.start < np.inf and 0 < args.stop < np.inf and args.n >= 1):
+        raise UsageError("--from and --to must be finite positive factors and --n >= 1")
     factors = np.geomspace(args.start, args.stop, args.n)
     results, skipped = solve_path(scene, args.vary, factors, args.accuracy, progress=_progress)
     rows = scene_rows(results, f"{scene.body1.solid.name}-{scene.body2.solid.name} in "
@@ -159,13 +176,19 @@ def cmd_restitution(args) -> int:
         print(format_threshold(threshold))
     if args.plot:
         from pipeline.plots.restitution_plot import plot_restitution
+        from pipeline.writes import guarded_dir
 
-        paths = plot_restitution(results, args.vary, args.plot, threshold=threshold,
-                                 title=scene.title)
+        with guarded_dir(args.plot, f"--plot {args.plot}"):  # both files or neither
+            paths = plot_restitution(results, args.vary, args.plot, threshold=threshold,
+                                     title=scene.title)
         print("figure: " + ", ".join(str(p) for p in paths))
     if args.out:
         paths = write_export(rows, args.out, args.scene, progress=_progress)
         print("wrote " + ", ".join(str(p) for p in paths))
+    if threshold is not None and threshold.failed:  # the rest is written; the threshold is not
+        from pipeline.errors import EXIT_SCENE_FAILED, EhdError
+
+        raise EhdError(f"no sticking threshold: {threshold.note}", EXIT_SCENE_FAILED)
     return 0
 
 

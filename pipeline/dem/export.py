@@ -23,7 +23,6 @@ import csv
 import dataclasses
 import json
 import math
-import os
 import re
 import sys
 import time
@@ -448,22 +447,12 @@ def _csv_text(rows) -> str:
 
 def write_files(files: dict, out_dir) -> list[Path]:
     """Write ``files`` into ``out_dir``: each to a hidden temporary name first, all renamed into
-    place only once every one is written (a failure leaves no partial or half-new export)."""
+    place only once every one is written (a failure leaves no partial or half-new export:
+    ``pipeline.writes.write_all``)."""
+    from ..writes import write_all
+
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    tmp = []
-    try:
-        for name, text in files.items():
-            t = out / f".{name}.tmp-{os.getpid()}"
-            t.write_text(text)
-            tmp.append((t, out / name))
-        for t, final in tmp:
-            os.replace(t, final)
-    finally:
-        for t, _ in tmp:
-            if t.exists():
-                t.unlink()
-    return [final for _, final in tmp]
+    return write_all({out / name: text for name, text in files.items()}, f"--out {out_dir}")
 
 
 def write_export(rows: list[dict], out_dir, source: str, *, fit_range=None, density_ratio=0.0,

@@ -96,10 +96,9 @@ def load_scene(path=None, flags: dict | None = None, materials=(), *, user_files
         if not isinstance(target, dict):
             raise ValueError(f"{section} must be a table in the scene file")
         target[key] = value
-    table = load_table(materials, user_files=user_files)
     inline = {k: data.pop(k) for k in ("materials", "fluids") if k in data}
-    if inline:
-        table.add(inline, f"{path or 'scene'} (inline tables)")
+    table = load_table(materials, user_files=user_files,
+                       inline=(inline, f"{path or 'scene'} (inline tables)") if inline else None)
     return scene_from_dict(data, table)
 
 

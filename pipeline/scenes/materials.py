@@ -36,7 +36,7 @@ from .units import FieldSpec, UnitError, to_si
 
 __all__ = ["Solid", "FluidProps", "DryPair", "MaterialTable", "SOLID_FIELDS", "FLUID_FIELDS",
            "PRESSURE_FIELDS", "PRESSURE_PAIRS", "load_table", "user_table_paths", "MaterialError",
-           "check_pairs"]
+           "check_pairs", "unknown_name"]
 
 
 class MaterialError(UsageError, ValueError):
@@ -213,6 +213,17 @@ def _parse_entry(kind, name, raw, where):
     return Solid(name=name, material=name, **values, **text)
 
 
+def unknown_name(kind: str, name: str, known, where: str) -> MaterialError:
+    """The one line for an unknown material or fluid ``name``: the nearest known name where one
+    is close (a typo), then all of them."""
+    import difflib
+
+    near = difflib.get_close_matches(name, list(known), n=1)
+    hint = f" (did you mean {near[0]!r}?)" if near else ""
+    return MaterialError(f"{where}: unknown {kind} {name!r}{hint}; known {kind}s: {sorted(known)} "
+                         "(add your own with --materials FILE)")
+
+
 class MaterialTable:
     """Named solids and fluids; later ``add`` calls override earlier entries of the same name."""
 
@@ -242,15 +253,25 @@ class MaterialTable:
 
     def solid(self, name: str, where: str) -> Solid:
         if name not in self.solids:
-            raise MaterialError(f"{where}: unknown material {name!r}; known materials: "
-                                f"{sorted(self.solids)} (add your own with --materials FILE)")
+            raise unknown_name("material", name, self.solids, where)
         return self.solids[name]
 
     def fluid(self, name: str, where: str) -> FluidProps:
         if name not in self.fluids:
-            raise MaterialError(f"{where}: unknown fluid {name!r}; known fluids: "
-                                f"{sorted(self.fluids)} (add your own with --materials FILE)")
+            raise unknown_name("fluid", name, self.fluids, where)
         return self.fluids[name]
+
+    def check_pairs(self) -> None:
+        """MaterialError when a ``[pairs.NAME]`` group names a material the table does not
+        hold: a typo ("sandston") would otherwise never match, and the scene's ``e_dry`` would
+        silently be 1 (checked once the table is complete: a group may name a material of a
+        later file)."""
+        for name, pair in self.pairs.items():
+            for material in sorted(pair.materials):
+                if material not in self.solids:
+                    raise unknown_name("material", material, self.solids,
+                                       f"{self.origins[('pairs', name)]}: [pairs.{name}] "
+                                       "materials")
 
     def dry_restitution(self, name1: str, name2: str) -> DryPair | None:
         """The pair group that holds both materials (the one added last), or None."""
@@ -261,10 +282,13 @@ class MaterialTable:
 
 
 def read_toml(path, what: str = "materials file", error=MaterialError) -> dict:
-    """Parse a TOML file; a missing, unreadable or invalid file raises ``error`` naming it."""
-    try:
-        with open(path, "rb") as fh:  # a UTF-8 byte-order mark (some editors write one) is read
-            return tomllib.loads(fh.read().decode("utf-8-sig"))
+    """Parse a TOML file; a missing, unreadable or invalid file raises ``error`` naming it, and
+    so does a FIFO, a device or a file larger than ``reads.MAX_INPUT_BYTES``
+    (``pipeline.reads.read_input``)."""
+    from ..reads import read_input
+
+    try:  # a UTF-8 byte-order mark (some editors write one) is read
+        return tomllib.loads(read_input(path, f"{what} {str(path)!r}", error).decode("utf-8-sig"))
     except FileNotFoundError:
         raise error(f"{what} {str(path)!r} not found") from None
     except IsADirectoryError:
@@ -292,8 +316,11 @@ def user_table_paths(environ=None) -> list[Path]:
     return paths
 
 
-def load_table(extra_files=(), *, user_files: bool = True, environ=None) -> MaterialTable:
-    """The shipped table, then user files, then ``extra_files`` (each overriding the previous)."""
+def load_table(extra_files=(), *, user_files: bool = True, environ=None,
+               inline: tuple | None = None) -> MaterialTable:
+    """The shipped table, then user files, then ``extra_files``, then ``inline`` (a scene
+    file's own tables: ``(parsed tables, where)``), each overriding the previous; the complete
+    table's ``[pairs]`` are checked against its materials (``MaterialTable.check_pairs``)."""
     table = MaterialTable()
     shipped = resources.files("pipeline.scenes").joinpath("data", "materials.toml")
     table.add(tomllib.loads(shipped.read_text(encoding="utf-8")), "pipeline/scenes/data/materials.toml")
@@ -301,4 +328,7 @@ def load_table(extra_files=(), *, user_files: bool = True, environ=None) -> Mate
     paths += [Path(p) for p in extra_files]
     for path in paths:
         table.add(read_toml(path), str(path))
+    if inline is not None:
+        table.add(*inline)
+    table.check_pairs()
     return table

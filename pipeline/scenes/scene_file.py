@@ -280,6 +280,11 @@ def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
         if not 0.0 < e_dry <= 1.0:
             raise SceneError(f"e_dry = {data['e_dry']!r} is outside its valid range (0, 1] (the "
                              "pair's dry coefficient of restitution)")
+        if not any(b.solid.roughness for b in (body1, body2)):
+            # smooth surfaces never touch: the given e_dry would silently do nothing
+            raise SceneError(f"e_dry = {data['e_dry']!r} acts only where rough surfaces touch, "
+                             "and neither body has a roughness: give one (e.g. body1.roughness "
+                             "= '0.3 um', --roughness1), or leave e_dry out")
         e_dry_source = "the scene's e_dry"
     return Scene(title=title, body1=body1, body2=body2, fluid=fluid, v0=v0, x0=x0,
                  ambient_pressure=ambient, cavitation_pressure=p_cav,

@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["Threshold", "sticking_threshold", "format_threshold", "RTOL"]
+__all__ = ["Threshold", "SolveFailed", "sticking_threshold", "format_threshold", "RTOL"]
 
 RTOL = 1e-3  # the bracket's final relative width: below the presets' errors on x_e near St_c
 # (standard: 1.1 % on ln x_e, benchmarks/accuracy.md), which decide whether a scene sticks
@@ -34,6 +34,11 @@ class Threshold:
     bracket: tuple  # (sticking factor, rebounding factor)
     solves: int
     note: str = ""
+    failed: bool = False  # a solve the bisection needed failed (``note`` says which and why)
+
+
+class SolveFailed(ValueError):
+    """A solve along the path failed (its status and message)."""
 
 
 def _sticks(scene, vary, factor, accuracy):
@@ -44,8 +49,8 @@ def _sticks(scene, vary, factor, accuracy):
     r = run_scene(scene_path(scene, vary, [factor])[0], accuracy=accuracy, save_profiles=False,
                    sensitivity_solves=False)
     if not r.collision.ok:
-        raise ValueError(f"the solve at {vary} x {factor:.4g} failed ({r.collision.status}): "
-                         f"{r.collision.message}")
+        raise SolveFailed(f"the solve at {vary} x {factor:.4g} failed ({r.collision.status}): "
+                          f"{r.collision.message}")
     return r.collision.e_wet == 0.0, r.scene.stokes
 
 
@@ -70,33 +75,49 @@ def sticking_threshold(scene, vary: str = "v0", accuracy: str = "standard", *,
     Returns
     -------
     Threshold
-        With ``St_c = None`` and a ``note`` when every scene on the path sticks or rebounds.
+        With ``St_c = None`` and a ``note`` when every scene on the path sticks or rebounds, or
+        (``failed``) when a solve the bisection needed failed. A failed solve of the first
+        ``n`` factors is left out of the search, as ``ehd restitution`` leaves it out of its
+        table (a failed scene's ``e_wet`` says nothing about sticking).
     """
     import numpy as np
 
-    factors = np.geomspace(start, stop, n)
+    factors = [float(f) for f in np.geomspace(start, stop, n)]
     solves = 0
-    if results is not None and len(results) == n:
-        sticks = [r.collision.e_wet == 0.0 for r in results]
-    else:
-        sticks = []
-        for f in factors:
-            sticks.append(_sticks(scene, vary, float(f), accuracy)[0])
-            solves += 1
     unit = "m/s" if vary == "v0" else "m"
+    if results is not None and len(results) == n:
+        outcome = [(f, r.collision.e_wet == 0.0) for f, r in zip(factors, results)
+                   if r.collision.ok]
+    else:
+        outcome = []
+        for f in factors:
+            solves += 1
+            try:
+                outcome.append((f, _sticks(scene, vary, f, accuracy)[0]))
+            except SolveFailed:
+                continue
     base = scene.v0 if vary == "v0" else scene.body1.radius
     # St grows with v0 and with size (St ~ v0 a): the first rebounding factor after a sticking one
-    change = next((i for i in range(1, n) if sticks[i - 1] and not sticks[i]), None)
+    change = next((i for i in range(1, len(outcome))
+                   if outcome[i - 1][1] and not outcome[i][1]), None)
     if change is None:
+        sticks = [stuck for _, stuck in outcome]
         what = "rebound" if not any(sticks) else "stick" if all(sticks) else "alternate"
+        if not outcome:
+            what = "fail to solve"
         return Threshold(vary, None, None, None, unit, (), solves,
                          note=f"the spheres {what} at every {vary} from {start:g} to {stop:g} "
                               f"times the scene's; widen --from/--to")
-    lo, hi = float(factors[change - 1]), float(factors[change])
+    lo, hi = outcome[change - 1][0], outcome[change][0]
     while hi / lo - 1.0 > rtol:
         mid = math.sqrt(lo * hi)
-        stuck, _ = _sticks(scene, vary, mid, accuracy)
         solves += 1
+        try:
+            stuck, _ = _sticks(scene, vary, mid, accuracy)
+        except SolveFailed as exc:
+            return Threshold(vary, None, None, None, unit, (lo, hi), solves, failed=True,
+                             note=f"between {vary} x {lo:.4g} (sticks) and x {hi:.4g} "
+                                  f"(rebounds) {exc}")
         lo, hi = (mid, hi) if stuck else (lo, mid)
     factor = math.sqrt(lo * hi)
     from pipeline.dem.export import scene_path
@@ -107,6 +128,8 @@ def sticking_threshold(scene, vary: str = "v0", accuracy: str = "standard", *,
 
 def format_threshold(t: Threshold) -> str:
     """One line for the command line."""
+    if t.failed:
+        return f"sticking threshold: not found: {t.note}"
     if t.St_c is None:
         return f"sticking threshold: not on this path ({t.note})"
     from .units import format_quantity

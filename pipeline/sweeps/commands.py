@@ -101,24 +101,34 @@ def _open_checked(store: str):
     """``(dataset, damage, journal lines skipped)`` of the store at ``store``, read whole and
     checked (pipeline/sweeps/integrity.py); a missing or unreadable store is a one-line error
     (exit 2), metadata that cannot be trusted one line too (exit 5)."""
-    from ..errors import EhdError, PathError, UsageError
+    from ..errors import PathError
     from .integrity import load_checked
     from .journal import _journal_path, read_journal
 
     if not str(store).strip():
         raise PathError("STORE: empty path; give a store directory such as results/paper.zarr")
+    ds, damage = opening_store(store, load_checked)
+    _, skipped = read_journal(_journal_path(store))
+    return ds, damage, skipped
+
+
+def opening_store(store: str, open_fn,
+                  fix: str = "give the store a sweep wrote (its sweep file's store)"):
+    """``open_fn(store)`` with its failures as one line (exit 2): a missing store or a folder
+    that is none says so, with ``fix``; any other unreadable one "cannot be opened as an ehd
+    sweep store"; an ``EhdError`` (a damaged store: exit 5) passes unchanged."""
+    from ..errors import EhdError, UsageError
+
     try:
-        ds, damage = load_checked(store)
+        return open_fn(store)
     except EhdError:
         raise
     except FileNotFoundError as exc:
-        raise UsageError(str(exc)) from None
+        raise UsageError(f"{exc}; {fix}") from None
     except (ValueError, KeyError, OSError) as exc:
         raise UsageError(f"{store!r} cannot be opened as an ehd sweep store "
                          f"({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
                          ) from None
-    _, skipped = read_journal(_journal_path(store))
-    return ds, damage, skipped
 
 
 def cmd_status(args) -> int:

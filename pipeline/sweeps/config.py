@@ -37,6 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..cli_shared import unused_contact_groups
 from ..errors import UsageError
 
 __all__ = ["Sweep", "load_sweep", "parse_sweep", "cache_key", "canonical_json", "ConfigError",
@@ -166,12 +167,15 @@ def load_sweep(path) -> Sweep:
     Raises
     ------
     ConfigError
-        Unreadable file, unknown keys, bad grid values (naming the parameter and its valid
+        Unreadable file (also a FIFO, a device or one larger than ``reads.MAX_INPUT_BYTES``),
+        unknown keys, bad grid values (naming the parameter and its valid
         range) or unknown numerical settings.
     """
+    from ..reads import read_input
+
     path = Path(path)
-    try:
-        text = path.read_bytes().decode("utf-8-sig")  # a UTF-8 byte-order mark is no TOML
+    try:  # a UTF-8 byte-order mark is no TOML
+        text = read_input(path, f"sweep file {str(path)!r}", ConfigError).decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise ConfigError(f"sweep file {str(path)!r} is not a text file (byte {exc.start} is not "
                           "UTF-8): give a TOML sweep file such as sweeps/quick.toml") from None
@@ -201,8 +205,14 @@ def parse_sweep(text: str, path: Path | None = None) -> Sweep:
         raise ConfigError(f"{where}: store must be a path string, e.g. store = \"results/{name}.zarr\"")
 
     axes, fixed = _physics(where, doc)
-    numerics = dict(doc.get("numerics", {}))
+    numerics = doc.get("numerics", {})
+    if not isinstance(numerics, dict):
+        raise ConfigError(f"{where}: [numerics] must be a table, got {numerics!r}")
+    numerics = dict(numerics)
     accuracy = numerics.pop("accuracy", "standard")
+    if not isinstance(accuracy, str):
+        raise ConfigError(f"{where}: [numerics] accuracy must be the name of a preset "
+                          f"(e.g. accuracy = \"standard\"), got {accuracy!r}")
     fast_path = numerics.pop("fast_path", False)
     if not isinstance(fast_path, bool):
         raise ConfigError(f"{where}: [numerics] fast_path must be true or false, got {fast_path!r}")
@@ -268,7 +278,35 @@ def _physics(where: str, doc: dict) -> tuple[dict, dict]:
                 raise ConfigError(f"{where}: physics.{exc}") from None
         else:
             fixed[name] = Physics.group(name).default
+    _check_grid_points(where, axes, fixed)
+    unused = unused_contact_groups({**fixed, **axes})
+    if unused:
+        raise ConfigError(f"{where}: {' and '.join(unused)} set, but roughness is 0 at every "
+                          f"grid point: {'they act' if len(unused) > 1 else 'it acts'} only "
+                          "where rough surfaces touch; give roughness > 0 ([physics] or [grid]), "
+                          f"or leave {' and '.join(unused)} out")
     return axes, fixed
+
+
+def _check_grid_points(where: str, axes: dict, fixed: dict) -> None:
+    """The solver's own checks between groups (``Physics``: e.g. a roughness below the start
+    gap ``x0/x1 = eps^-0.4``) at the grid's corners (every axis at its smallest and its largest
+    value), before any solve; ``Physics`` itself checks, as each task will. Its checks between
+    groups are monotone in each value (a rougher or a larger-eps scene fails first), so a grid
+    passes them at every point when it does at its corners: 2^axes scenes checked, not all."""
+    import itertools
+
+    from solver.physics import Physics
+
+    ends = [sorted({values[0], values[-1]}) for values in axes.values()]
+    for corner in itertools.product(*ends):
+        point = dict(zip(axes, corner))
+        try:
+            Physics.from_mapping({**fixed, **point})
+        except ValueError as exc:
+            raise ConfigError(f"{where}: the grid point {format_physics(point)}: {exc}; every "
+                              "grid point must be a valid scene (checked before any solve)"
+                              ) from None
 
 
 def _axis_size(where: str, name: str, spec) -> int:
@@ -306,6 +344,10 @@ def _axis(where: str, name: str, spec) -> tuple:
         start, stop = (_number(where, f"{name}.{k}", spec[k]) for k in ("start", "stop"))
         check(f"{name}.start", start)
         check(f"{name}.stop", stop)
+        if not (start > 0.0 and stop > 0.0):
+            raise ConfigError(f"{where}: grid.{name} = {{start = {start:g}, stop = {stop:g}, ...}}"
+                              " is log-spaced and cannot reach 0: give the values as a list "
+                              f"({name} = [0.0, ...]), or a start > 0")
         if spec["num"] == 1 and start != stop:
             raise ConfigError(f"{where}: grid.{name} = {{start = {start:g}, stop = {stop:g}, num = "
                               f"1}} is one value but two ends: give num >= 2, or the one value as "

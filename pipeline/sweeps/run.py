@@ -142,6 +142,8 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         Counts; ``summary.exit_code`` is ``EXIT_FAILED`` (3) when failed scenes remain.
     """
     t0 = time.monotonic()
+    check_store_name(sweep.store if store is None else store,
+                     "store" if store is None else "--store")
     check_memory(sweep.n_scenes, progress, allow_large)  # before any allocation
     kwargs = {} if flush_seconds is None else {"flush_seconds": flush_seconds}
     if warm_up is None:
@@ -221,6 +223,23 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         _count(summary, st, cells)
     summary.wall_s = time.monotonic() - t0
     return summary
+
+
+def check_store_name(path, label: str = "store") -> None:
+    """PathError, before anything is made, when the store's name or a name the store makes
+    next to it (its lock, journal, temporary layout, old copy: pipeline/sweeps/store.py) is
+    longer than the file system takes: the lock would fail first, as a bug (exit 70)."""
+    from pathlib import Path
+
+    from ..cli_shared import check_name_length
+    from .journal import _journal_path
+    from .store import _lock_path, _old_path, _tmp_path
+
+    if not str(path).strip():
+        return  # the store says "empty path" itself
+    path = Path(path)
+    check_name_length(label, path, [made(path) for made in (_lock_path, _journal_path,
+                                                            _old_path, _tmp_path)])
 
 
 # bytes one scene takes while a sweep is planned and run: its cell in the in-memory store (every

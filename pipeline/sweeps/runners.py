@@ -48,12 +48,15 @@ class RunnerError(SchedulerError, RuntimeError):
 def scheduler_address(scheduler_file) -> str:
     """The address in a ``dask scheduler --scheduler-file FILE`` file, or RunnerError naming
     what is wrong with the file (checked before anything else happens: distributed itself
-    would wait forever for a file that does not exist)."""
+    would wait forever for a file that does not exist; a FIFO, a device or a file larger than
+    ``reads.MAX_INPUT_BYTES`` is refused unread, ``pipeline.reads``)."""
     import json
+
+    from ..reads import read_input
 
     where = f"--scheduler-file {scheduler_file}"
     try:
-        text = open(scheduler_file, "rb").read().decode("utf-8")
+        text = read_input(scheduler_file, where, RunnerError).decode("utf-8")
     except FileNotFoundError:
         raise RunnerError(f"{where}: no such file; start the scheduler first (dask scheduler "
                           f"--scheduler-file {scheduler_file})") from None
