@@ -13,7 +13,7 @@ export OMP_NUM_THREADS := 1
 export OPENBLAS_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: install test test-install test-memory test-dem sweep quick figures bench bench-sweep bench-accuracy bench-experiments clean-cache clean
+.PHONY: install test test-install test-memory test-dem sweep quick figures bench bench-validation bench-sweep bench-accuracy bench-experiments clean-cache clean
 
 # solver/result.py: the package version is its SOLVER_VERSION (pyproject: dynamic), so a new
 # solver version reinstalls and the installed metadata never goes stale
@@ -81,14 +81,19 @@ figures: $(STAMP)
 	$(VENV)/bin/ehd figures results/paper.zarr --out figures
 	$(VENV)/bin/ehd paper-figures --out figures
 
+# The speed suite (benchmarks/README.md): start-up and solver figures of this checkout against a
+# baseline commit, alternated in one run; the report says which figures moved beyond the spread of
+# their rounds -> benchmarks/speed.md/.json. BASELINE=REF (default: the commit of speed.json).
+BASELINE ?=
 bench: $(STAMP)
-	$(PY) benchmarks/bench_contact.py
-	$(PY) benchmarks/bench_startup.py
-	$(PY) benchmarks/bench_solver.py
+	$(PY) benchmarks/suite.py $(if $(BASELINE),--baseline $(BASELINE))
+
+# The validation studies (accuracy per preset, cavitation, piezoviscous film, experiments): tens
+# of minutes; each also has its own script (benchmarks/README.md, "Validation")
+bench-validation: $(STAMP)
 	$(PY) benchmarks/bench_accuracy.py
 	$(PY) benchmarks/bench_cavitation.py
 	$(PY) benchmarks/bench_piezoviscous.py
-	$(PY) benchmarks/bench_versus.py
 	$(PY) benchmarks/bench_experiments.py
 
 # e(St) on the conditions of published sphere-wall experiments, per variant of the physics,

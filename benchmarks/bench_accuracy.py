@@ -26,6 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
+import harness
+
 HERE = Path(__file__).parent
 STOKES = (1.0, 2.5, 5.0, 10.0, 30.0, 100.0, 300.0)
 EPS = (1e-2, 1e-5, 1e-8)
@@ -82,6 +84,7 @@ def run(pool, jobs):
 
 def main():
     t_start = time.perf_counter()
+    load_start = harness.load_now()
     from solver import PRESETS, collide
 
     collide(5.0, 0.01)  # compile once before the workers load the cache
@@ -154,7 +157,7 @@ def main():
                    switch_error=switch_err, release_error=release_err,
                    table=table, seconds=time.perf_counter() - t_start)
     results = _jsonable(results)  # the report reads what the JSON holds (string keys, None)
-    (HERE / "accuracy.json").write_text(json.dumps(results, indent=1))
+    results = harness.write_json(HERE / "accuracy.json", results, load_start)
     write_report(results)
     plot(results)
     print((HERE / "accuracy.md").read_text())

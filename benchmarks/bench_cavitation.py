@@ -23,6 +23,8 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
+import harness
+
 HERE = Path(__file__).parent
 SPEED_SCENES = [(st, ep) for ep in (1e-2, 1e-6) for st in (5.0, 10.0, 30.0, 100.0)]
 FLOORS = (math.inf, 1e-2, 1e-4)
@@ -82,6 +84,7 @@ def richardson(values):
 def main():
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     t0 = time.time()
+    load_start = harness.load_now()
     with ProcessPoolExecutor(2) as pool:
         pool.submit(timed, (5.0, 1e-2, 1e-4, "jfo", "fast")).result()  # compile once
         speed_jobs = [(st, ep, pi, model, pr) for pr in PRESETS for pi in FLOORS
@@ -111,7 +114,7 @@ def main():
             row["presets"][pr]["wall_s"] = got["wall_s"]
         res["accuracy"].append(row)
     res["seconds"] = time.time() - t0
-    (HERE / "cavitation.json").write_text(json.dumps(res, indent=1, default=str))
+    res = harness.write_json(HERE / "cavitation.json", res, load_start, default=str)
     write_report(res)
 
 

@@ -6,39 +6,41 @@ steel ball on glass is about 0.6 x1, docs/model.md "Surface roughness"), asperit
 and 20, e_dry 0.97; on the classic film, and on the cavitating film (JFO, Pi 1e-3) that the
 scenes switch on for liquids whose tension crosses their vapour pressure, where the asperities
 touch inside the cavity too (the cells whose gap stays implicit, docs/solver.md "Surface
-roughness"). Each scene is solved ``REPEATS`` times on each side, alternately, after one warm-up
-solve of each (compilation); the table gives the CPU-time medians, their ratio and the counters
-of both.
+roughness"). Each scene is solved ``REPEATS`` times on each side in rounds, the order of the
+sides rotated from round to round, after one warm-up round (compilation; benchmarks/harness.py);
+the table gives the CPU-time medians, the median of the per-round ratios rough / smooth with
+their range, and the counters of both.
 
-``python benchmarks/bench_contact.py [--quick]`` (about a minute; ``make bench``) writes
-``benchmarks/contact.md`` (``--quick``: two scenes, written to /tmp).
+``python benchmarks/bench_contact.py [--quick]`` (a few minutes) writes ``benchmarks/contact.md``
+and ``contact.json`` (``--quick``: two scenes, written to /tmp). Against another commit,
+alternated: ``make bench`` (``benchmarks/suite.py``).
 """
 
 from __future__ import annotations
 
 import argparse
 import os
-import platform
 import statistics
-import time
 from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from solver import SOLVER_VERSION, Physics, collide  # noqa: E402
+import harness  # noqa: E402
+from solver import Physics, collide  # noqa: E402
 
 HERE = Path(__file__).parent
-REPEATS = 3
+REPEATS = 5
 FILMS = (("classic", {}), ("JFO, Pi 1e-3", dict(Pi=1e-3, cavitation="jfo")))
 SCENES = [(film, st, eps, sigma, k) for film in FILMS for st in (10.0, 30.0, 100.0)
           for eps in (1e-4, 1e-5) for sigma, k in ((0.5, 20.0), (1.0, 2.0))]
 TARGET = 2.0
 
 
-def _cpu(physics):
-    start = time.process_time()
-    result = collide(physics)
-    return time.process_time() - start, result
+def _side(physics, last: dict, key: str):
+    """One timed solve of ``physics``, keeping the result in ``last[key]``."""
+    def once():
+        return harness.time_call(lambda: last.__setitem__(key, collide(physics)))
+    return once
 
 
 def _counts(res):
@@ -51,40 +53,47 @@ def main():
     args = parser.parse_args()
     scenes = SCENES[:2] if args.quick else SCENES
     out = Path("/tmp/contact.md") if args.quick else HERE / "contact.md"
-    rows, ratios = [], {name: [] for name, _ in FILMS}
+    load_start = harness.load_now()
+    rows, ratios, records = [], {name: [] for name, _ in FILMS}, []
     for (film, extra), st, eps, sigma, k in scenes:
         smooth = Physics(St=st, eps=eps, **extra)
         rough = smooth.replace(roughness=sigma, asperity_stiffness=k, e_dry=0.97)
-        _cpu(smooth), _cpu(rough)  # compile, fill caches
-        t_s, t_r = [], []
-        for _ in range(REPEATS):
-            t, res_s = _cpu(smooth)
-            t_s.append(t)
-            t, res_r = _cpu(rough)
-            t_r.append(t)
+        last = {}
+        runs = harness.alternate({"smooth": _side(smooth, last, "smooth"),
+                                  "rough": _side(rough, last, "rough")}, REPEATS)
+        res_s, res_r = last["smooth"], last["rough"]
         if not (res_s.ok and res_r.ok):
             raise SystemExit(f"{film} St {st:g} eps {eps:g}: {res_s.status} / {res_r.status}")
-        ratio = statistics.median(t_r) / statistics.median(t_s)
+        cmp = harness.compare_runs(runs["rough"], runs["smooth"], ("cpu_s",))["cpu_s"]
+        ratio = cmp["ratio"]["median"]
         ratios[film].append(ratio)
-        touched = res_r.series["F_contact"].max() > 0.0
+        touched = bool(res_r.series["F_contact"].max() > 0.0)
+        records.append({"film": film, "St": st, "eps": eps, "roughness": sigma,
+                        "asperity_stiffness": k, "touched": touched, "e_wet_smooth": res_s.e_wet,
+                        "e_wet_rough": res_r.e_wet, "cpu_s": cmp,
+                        "counts_smooth": _counts(res_s), "counts_rough": _counts(res_r)})
+        t_s, t_r = cmp["baseline"]["median"], cmp["this"]["median"]
         rows.append(f"| {film} | {st:g} | {eps:g} | {sigma:g} | {k:g} | "
                     f"{'yes' if touched else 'no'} | {res_s.e_wet:.4f} | {res_r.e_wet:.4f} | "
-                    f"{1e3 * statistics.median(t_s):.0f} | {1e3 * statistics.median(t_r):.0f} | "
-                    f"{ratio:.2f} | {_counts(res_s)} | {_counts(res_r)} |")
+                    f"{1e3 * t_s:.0f} | {1e3 * t_r:.0f} | "
+                    f"{ratio:.2f} | {cmp['ratio']['min']:.2f}-{cmp['ratio']['max']:.2f} | "
+                    f"{_counts(res_s)} | {_counts(res_r)} |")
         print(rows[-1], flush=True)
+    doc = harness.write_json(out.with_suffix(".json"), {
+        "repeats": REPEATS, "target": TARGET, "scenes": records}, load_start)
     summary = [f"- {film}: median ratio {statistics.median(r):.2f}, largest {max(r):.2f} "
                f"({sum(x <= TARGET for x in r)} of {len(r)} scenes within {TARGET:g}x)."
                for film, r in ratios.items() if r]
     text = [
         "# Rough against smooth collisions: cost", "",
-        f"`python benchmarks/bench_contact.py` (solver {SOLVER_VERSION}, {platform.machine()}, "
-        f"{os.cpu_count()} cores, OPENBLAS_NUM_THREADS=1), standard preset, e_dry 0.97. CPU time "
-        f"per collision, median of {REPEATS} alternated solves of each side; counts are "
+        f"`python benchmarks/bench_contact.py`: {harness.describe(doc)}. Standard preset, e_dry "
+        f"0.97. CPU time per collision, median of {REPEATS} rounds alternating the two sides; "
+        "ratio: the median of the per-round ratios rough / smooth, with their range; counts are "
         "steps/rejected steps/Newton iterations/LU factorisations. Target (issue 17): a rough "
         f"collision at most {TARGET:g}x the smooth one.", "",
         "| film | St | eps | roughness | k | touched | e_wet smooth | e_wet rough | smooth ms "
-        "| rough ms | ratio | smooth counts | rough counts |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| rough ms | ratio | rounds' ratios | smooth counts | rough counts |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
         *rows, "", *summary, "",
         "How: a rough film's unknown is the total surface load `T = P + p_a` (docs/solver.md, "
         "\"Surface roughness\"), so its gap is explicit and its Jacobian costs the smooth film's "

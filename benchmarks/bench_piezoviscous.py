@@ -40,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
+import harness
 from bench_cavitation import richardson  # the same extrapolation as the cavitation bench
 
 HERE = Path(__file__).parent
@@ -340,7 +341,8 @@ def main():
     res["accuracy"] = accuracy()
     res["seconds"] = time.time() - t0
     res["load_average"] = dict(start=load_start, end=os.getloadavg())
-    (HERE / "piezoviscous.json").write_text(json.dumps(_jsonable(res), indent=1))
+    harness.write_json(HERE / "piezoviscous.json", _jsonable(res),
+                       [round(x, 2) for x in load_start])
     write_report(res)
 
 

@@ -19,8 +19,10 @@ measures the no-op ``make sweep`` of DIR in the same run, alternating with this 
 started the ``--source`` way, on the same store), and shows it as the "before" columns of those
 rows: the load of a shared machine then falls on both alike.
 
-Usage: ``make bench`` (writes ``benchmarks/startup.md`` and ``startup.json``) or
-``python benchmarks/bench_startup.py [--repeat N] [--store S] [--source DIR] [--out FILE]``.
+Usage: ``python benchmarks/bench_startup.py [--repeat N] [--store S] [--source DIR] [--compare DIR]
+[--out FILE]`` (writes ``benchmarks/startup.md`` and ``startup.json``, with the provenance of
+``benchmarks/harness.py``). Against another commit, alternated, with the other speed figures:
+``make bench`` (``benchmarks/suite.py``).
 """
 
 from __future__ import annotations
@@ -29,14 +31,12 @@ import argparse
 import datetime
 import json
 import os
-import resource
 import shutil
-import statistics
-import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
+
+import harness
 
 REPO = Path(__file__).resolve().parent.parent
 HELP_TARGET = 1.5  # ehd --help over the bare Python start (issue 20)
@@ -44,31 +44,26 @@ NOOP_TARGET_S = 2.0  # the no-op make sweep, seconds on 2 cores (issue 20)
 BASE = "python -c 'import argparse'"
 
 
-def _child_cpu() -> float:
-    r = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return r.ru_utime + r.ru_stime
-
-
 def _timed(cmd, env, cwd=REPO, ok=(0,), optional=False) -> tuple[float, float] | None:
     """Wall and CPU seconds of one run of ``cmd`` (None: it failed and is ``optional``, e.g.
     ``--version`` of a checkout that has none)."""
-    cpu = _child_cpu()
-    t = time.perf_counter()
-    proc = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True)
-    wall = time.perf_counter() - t
-    if proc.returncode not in ok:
+    try:
+        t = harness.time_process(cmd, env, cwd=cwd, ok=ok)
+    except RuntimeError as exc:
         if optional:
             return None
-        sys.exit(f"{' '.join(map(str, cmd))} failed ({proc.returncode}):\n{proc.stderr[-2000:]}")
-    return wall, _child_cpu() - cpu
+        sys.exit(str(exc))
+    return t["wall_s"], t["cpu_s"]
 
 
 def _median(runs) -> dict | None:
+    """Medians of wall and CPU time, with their ranges (``[min, max]``) and the count."""
     runs = [r for r in runs if r is not None]
     if not runs:
         return None
-    return {"wall_s": statistics.median(w for w, _ in runs),
-            "cpu_s": statistics.median(c for _, c in runs), "runs": len(runs)}
+    wall, cpu = harness.spread([w for w, _ in runs]), harness.spread([c for _, c in runs])
+    return {"wall_s": wall["median"], "cpu_s": cpu["median"], "runs": len(runs),
+            "wall_range": [wall["min"], wall["max"]], "cpu_range": [cpu["min"], cpu["max"]]}
 
 
 def measure(repeat: int, store: Path, figures: Path, ehd: list[str], env: dict) -> dict:
@@ -105,46 +100,46 @@ def measure(repeat: int, store: Path, figures: Path, ehd: list[str], env: dict) 
     return out
 
 
-def _source_launch(source, env: dict) -> tuple[list, dict]:
-    """``python -S -P -m pipeline.cli`` of the checkout ``source`` with this venv's packages
-    (-S: no .pth files, whose editable install would shadow it; -P: nor the working directory)."""
-    import sysconfig
-
-    env = dict(env, PYTHONPATH=os.pathsep.join([str(Path(source).resolve()),
-                                                sysconfig.get_paths()["purelib"]]))
-    return [sys.executable, "-S", "-P", "-m", "pipeline.cli"], env
-
-
 NOOP_ROWS = ("ehd sweep (nothing to do)", "ehd figures (up to date)", "no-op make sweep (both)")
 
 
 def compare_noop(repeat: int, store: Path, tmp: Path, launches: dict) -> dict:
-    """The no-op ``make sweep`` of each ``{label: (argv, env)}``, runs alternated: ``{label:
-    {row: median}}`` (the store must be complete; each label draws its own figures once)."""
-    cmds = {}
+    """The no-op ``make sweep`` of each ``{label: (argv, env)}``, in rounds that run every label
+    once in a rotated order (benchmarks/harness.py): ``{label: {row: median}}``, and under
+    ``"ratio"`` the per-round ratios of the last label to the first (the store must be complete;
+    each label draws its own figures once)."""
+    sides = {}
     for label, (ehd, env) in launches.items():
         sweep = [*ehd, "sweep", "sweeps/paper.toml", "--store", str(store)]
         figs = [*ehd, "figures", str(store), "--out", str(tmp / f"figures-{label}")]
         _timed(sweep, env, ok=(0, 3))
         _timed(figs, env)
-        cmds[label] = (sweep, figs, env)
-    runs = {label: {row: [] for row in NOOP_ROWS} for label in launches}
-    for _ in range(repeat):
-        for label, (sweep, figs, env) in cmds.items():
+
+        def both(sweep=sweep, figs=figs, env=env):
             a, b = _timed(sweep, env, ok=(0, 3)), _timed(figs, env)
-            for row, r in zip(NOOP_ROWS, (a, b, (a[0] + b[0], a[1] + b[1]))):
-                runs[label][row].append(r)
-    return {label: {row: _median(r) for row, r in rows.items()} for label, rows in runs.items()}
+            return dict(zip(NOOP_ROWS, (a, b, (a[0] + b[0], a[1] + b[1]))))
+        sides[label] = both
+    runs = harness.alternate(sides, repeat, warmup=0)
+    out = {label: {row: _median([r[row] for r in rounds]) for row in NOOP_ROWS}
+           for label, rounds in runs.items()}
+    first, last = list(launches)[0], list(launches)[-1]
+
+    def seconds(label):
+        return [{"wall_s": r[NOOP_ROWS[-1]][0], "cpu_s": r[NOOP_ROWS[-1]][1]} for r in runs[label]]
+    out["ratio"] = harness.compare_runs(seconds(last), seconds(first))
+    return out
 
 
-def render(results: dict, meta: dict, before: dict | None) -> str:
+def render(results: dict, meta: dict, before: dict | None, doc: dict) -> str:
     base = results[BASE]
+    where = (harness.describe(doc) if "commit" in doc else
+             f"{meta['date']}, {meta['cores']} cores (shared: load average {meta['load']} at the "
+             "start)")
     lines = [
         "# Start-up of `ehd` (`benchmarks/bench_startup.py`)", "",
-        f"{meta['date']}, {meta['cores']} cores (shared: load average {meta['load']} at the "
-        f"start), median of {meta['repeat']} runs each, all from one run of the script. "
-        "CPU = user + system time of the process; the ratios are to the bare Python start "
-        "measured in the same run.", "",
+        f"{where}; median of {meta['repeat']} runs each (their range in `startup.json`), all "
+        "from one run of the script, the cases interleaved. CPU = user + system time of the "
+        "process; the ratios are to the bare Python start measured in the same run.", "",
         "| command | wall [s] | CPU [s] | wall / python | CPU / python |"
         + (" before: wall [s] | before: CPU [s] |" if before else ""),
         "|---|---:|---:|---:|---:|" + ("---:|---:|" if before else ""),
@@ -182,6 +177,11 @@ def render(results: dict, meta: dict, before: dict | None) -> str:
                   + ", ".join(f"{row} {meta['compared'][row]['wall_s']:.3f} s wall, "
                               f"{meta['compared'][row]['cpu_s']:.3f} s CPU"
                               for row in NOOP_ROWS[2:]) + " the same way for this checkout."]
+        r = meta["compared_ratio"]["cpu_s"]["ratio"]
+        w = meta["compared_ratio"]["wall_s"]["ratio"]
+        lines += ["", f"No-op `make sweep`, this checkout / before, median of the per-round "
+                  f"ratios: {r['median']:.2f} in CPU time (rounds {r['min']:.2f}-{r['max']:.2f}), "
+                  f"{w['median']:.2f} in wall time (rounds {w['min']:.2f}-{w['max']:.2f})."]
     lines += ["", "Where the time goes: `ehd --help` imports only the command registry "
               "(`pipeline/cli.py`); a command imports its own module when chosen. The no-op "
               "`ehd sweep` verifies the CRC-32C of every chunk of the store from its bytes (2300 "
@@ -217,9 +217,10 @@ def main(argv=None) -> int:
     # environment would make every run compile every module again
     env.pop("PYTHONDONTWRITEBYTECODE", None)
     if args.source:
-        ehd, env = _source_launch(args.source, env)
+        ehd, env = harness.cli_launch(args.source, env)
     else:
         ehd = [str(Path(sys.executable).parent / "ehd")]
+    load_start = harness.load_now()
     tmp = Path(tempfile.mkdtemp(prefix="ehd-bench-startup-"))
     try:
         store = Path(args.store) if args.store else tmp / "paper.zarr"
@@ -230,8 +231,8 @@ def main(argv=None) -> int:
         compared = None
         if args.compare:
             compared = compare_noop(args.repeat, store, tmp, {
-                "before": _source_launch(args.compare, env),
-                "after": _source_launch(args.source or REPO, env)})
+                "before": harness.cli_launch(args.compare, env),
+                "after": harness.cli_launch(args.source or REPO, env)})
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     before = None
@@ -239,16 +240,18 @@ def main(argv=None) -> int:
         before = compared["before"]
         meta["before_source"] = str(args.compare)
         meta["compared"] = compared["after"]
+        meta["compared_ratio"] = compared["ratio"]
     elif args.before:
         doc = json.loads(Path(args.before).read_text())
         before = doc["results"]
         meta["before_source"] = doc["meta"].get("source")
-    text = render(results, meta, before)
+    payload = {"meta": meta, "results": results, "before": before}
+    if args.out != "-":
+        payload = harness.write_json(Path(args.out).with_suffix(".json"), payload, load_start)
+    text = render(results, meta, before, payload)
     print(text)
     if args.out != "-":
         Path(args.out).write_text(text)
-        Path(args.out).with_suffix(".json").write_text(
-            json.dumps({"meta": meta, "results": results, "before": before}, indent=1) + "\n")
     return 0
 
 

@@ -8,14 +8,14 @@ as subprocesses, but on a fresh store in a temporary folder (``--store``), so th
 - rerun with nothing to do (target: <= 5 s);
 - empty store with an empty numba cache (what the very first run on a machine pays).
 
-Usage: ``make bench-sweep`` (writes ``benchmarks/sweep.md``) or
+Usage: ``make bench-sweep`` (writes ``benchmarks/sweep.md`` and ``sweep.json``, with the provenance
+of ``benchmarks/harness.py``) or
 ``python benchmarks/bench_sweep.py [--quick] [--out FILE]`` (``--quick``: sweeps/quick.toml).
 """
 
 from __future__ import annotations
 
 import argparse
-import datetime
 import os
 import shutil
 import statistics
@@ -24,6 +24,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+import harness
 
 REPO = Path(__file__).resolve().parent.parent
 EHD = str(Path(sys.executable).parent / "ehd")
@@ -60,7 +62,7 @@ def main(argv=None) -> int:
     sweep_file = "sweeps/quick.toml" if args.quick else "sweeps/paper.toml"
     env = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
            "MKL_NUM_THREADS": "1"}
-    load_before = os.getloadavg()
+    load_start = harness.load_now()
     rows = []
     with tempfile.TemporaryDirectory(prefix="bench-sweep-") as tmp:
         tmp = Path(tmp)
@@ -73,29 +75,24 @@ def main(argv=None) -> int:
             if executor == "processes":  # the default of make sweep
                 reruns = [make_sweep(sweep_file, store, figs, env) for _ in range(args.repeat)]
                 med = {k: statistics.median(r[k] for r in reruns) for k in reruns[0]}
+                med["total_range"] = [min(r["total"] for r in reruns),
+                                      max(r["total"] for r in reruns)]
                 rows.append((f"rerun, nothing to do (median of {args.repeat})", med))
             shutil.rmtree(store)
         fresh = {**env, "EHD_CACHE_DIR": str(tmp / "numba-cold")}  # wins over NUMBA_CACHE_DIR
         cold_compile = make_sweep(sweep_file, tmp / "cc.zarr", tmp / "fig-cc", fresh)
         rows.append(("empty store, empty numba cache (first run on a machine)", cold_compile))
-    load_after = os.getloadavg()
-
-    from solver import SOLVER_VERSION
-
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=REPO, capture_output=True,
-                            text=True).stdout.strip()
-    dirty = subprocess.run(["git", "status", "--porcelain", "solver", "pipeline"], cwd=REPO,
-                           capture_output=True, text=True).stdout.strip()
-    if dirty:
-        commit += " (with uncommitted changes in solver/ or pipeline/)"
+    payload = {"sweep_file": sweep_file, "repeat": args.repeat,
+               "cases": [{"case": name, **r} for name, r in rows]}
+    doc = (harness.write_json(Path(args.out).with_suffix(".json"), payload, load_start)
+           if args.out != "-" else {**payload, **harness.provenance(load_start)})
     lines = [
         f"# Sweep benchmark: `make sweep` on `{sweep_file}`",
         "",
-        f"Measured {datetime.date.today().isoformat()} by `benchmarks/bench_sweep.py` on "
-        f"{os.cpu_count()} cores (load average {load_before[0]:.2f} before, "
-        f"{load_after[0]:.2f} after), commit {commit}, solver {SOLVER_VERSION}. Each row runs "
+        f"Measured by `benchmarks/bench_sweep.py`: {harness.describe(doc)}. Each row runs "
         "`ehd sweep` then `ehd figures` (the two steps of `make sweep`) as fresh processes on "
-        "a temporary store; times in seconds, scenes/s counts the sweep step only.",
+        "a temporary store; times in seconds (one run each, except the rerun: the median of "
+        "its runs, their range in `sweep.json`), scenes/s counts the sweep step only.",
         "",
         "| case | sweep [s] | figures [s] | total [s] | scenes computed | scenes/s |",
         "|---|---:|---:|---:|---:|---:|",

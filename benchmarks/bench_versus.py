@@ -5,26 +5,25 @@ collision, alternated scene by scene in one run so that both sides share the mac
   film's terms grew laws): the classic film at the standard preset on St 2-300 x eps 1e-2-1e-6.
   The reference is checked out from this repository's history into a temporary folder (``git
   worktree``) and solved in a process of its own with its own numba cache; each scene is solved
-  ``REPEATS`` times on each side, alternately, and the per-scene ratio of medians is reported
-  with the step, Newton and LU counts of both (the target, issue 16: at most 0.75x).
+  ``REPEATS`` rounds, each solving it once on each side in a rotated order, and the median of the
+  per-round ratios is reported with their range and the step, Newton and LU counts of both (the
+  target, issue 16: at most 0.75x).
 - The new physics against the classic film of this solver, same preset and scenes (eps 1e-4,
   St 10 and 30): JFO and Reynolds floors at Pi = 1e-3, Barus at beta 1, 2 and 5.
 
-``python benchmarks/bench_versus.py [--ref COMMIT] [--quick]`` (a few minutes; ``make bench``) writes
-``benchmarks/versus.md`` (``--quick``: a smoke run into /tmp).
+``python benchmarks/bench_versus.py [--ref COMMIT] [--quick]`` (a few minutes) writes
+``benchmarks/versus.md`` and ``versus.json`` (``--quick``: a smoke run into /tmp). Against the
+previous state of the code rather than a fixed release: ``make bench`` (``benchmarks/suite.py``).
 """
 
 from __future__ import annotations
 
 import argparse
-import json
-import os
-import platform
 import statistics
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
+
+import harness
 
 HERE = Path(__file__).parent
 ROOT = HERE.parent
@@ -40,140 +39,100 @@ PHYSICS = {  # name: Physics fields beyond St, eps
     "barus beta 5": {"beta": 5.0},
 }
 PHYSICS_SCENES = ((10.0, 1e-4), (30.0, 1e-4))
+COUNTS = ("status", "steps", "newton", "lu", "v_r")
 
-# The worker: reads one JSON request a line ({"St", "eps", "fields"}), solves it REPEATS times and
-# answers the median wall time and the counters. Runs in the checkout it is started in, so the
-# same text serves the reference (whose collide takes St, eps) and this solver (which also takes
-# a Physics).
-_WORKER = r"""
-import json, statistics, sys, time
-from solver import collide
-try:
-    from solver import Physics
-except ImportError:
-    Physics = None
-repeats = int(sys.argv[1])
-for line in sys.stdin:
-    req = json.loads(line)
-    if req["fields"]:
-        scene = (Physics(St=req["St"], eps=req["eps"], **req["fields"]),)
-    else:
-        scene = (req["St"], req["eps"])
-    c = collide(*scene, accuracy="standard", save_profiles=False)  # grid, compile
-    walls, cpus = [], []
-    for _ in range(repeats):
-        t, cpu = time.perf_counter(), time.process_time()
-        c = collide(*scene, accuracy="standard", save_profiles=False)
-        walls.append(time.perf_counter() - t)
-        cpus.append(time.process_time() - cpu)
-    print(json.dumps({"wall": statistics.median(walls), "cpu": statistics.median(cpus),
-                      "status": c.status, "steps": c.steps,
-                      "newton": c.newton_iterations, "lu": c.lu_factorizations,
-                      "v_r": c.v_r}), flush=True)
-"""
+def _side(proc: harness.SolverProcess, st, eps, fields=None, last: dict | None = None):
+    """One solve of the scene by ``proc``: its CPU and wall seconds (counters kept in ``last``)."""
+    def once():
+        got = proc.solve(st, eps, fields)
+        if "error" in got:
+            raise RuntimeError(f"St {st:g} eps {eps:g} {fields or ''}: {got['error']}")
+        if last is not None:
+            last.update(got)
+        return {"cpu_s": got["cpu_s"][0], "wall_s": got["wall_s"][0]}
+    return once
 
 
-class Side:
-    """A solver in a process of its own, answering one scene at a time."""
-
-    def __init__(self, checkout: Path, cache: str, repeats: int):
-        env = dict(os.environ, PYTHONPATH=str(checkout), NUMBA_CACHE_DIR=cache,
-                   EHD_CACHE_DIR=cache, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
-        self.proc = subprocess.Popen([sys.executable, "-c", _WORKER, str(repeats)], cwd=checkout,
-                                     env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                     text=True)
-
-    def solve(self, st, eps, fields=None) -> dict:
-        self.proc.stdin.write(json.dumps({"St": st, "eps": eps, "fields": fields or {}}) + "\n")
-        self.proc.stdin.flush()
-        line = self.proc.stdout.readline()
-        if not line:
-            raise RuntimeError("the solver process ended (see its error above)")
-        return json.loads(line)
-
-    def close(self):
-        self.proc.stdin.close()
-        self.proc.wait()
+def _row(runs, a: str, b: str, last: dict) -> dict:
+    """Per-round ratios a / b in wall and CPU time, with the counters of both sides."""
+    cmp = harness.compare_runs(runs[a], runs[b])
+    return {"wall": cmp["wall_s"], "cpu": cmp["cpu_s"], "ratio": cmp["wall_s"]["ratio"]["median"],
+            "cpu_ratio": cmp["cpu_s"]["ratio"]["median"],
+            **{side: {k: last[side][k] for k in COUNTS} for side in (a, b)}}
 
 
-def versus_reference(ref: str, scenes, repeats) -> list[dict]:
+def versus_reference(old: harness.SolverProcess, new: harness.SolverProcess, scenes,
+                     repeats) -> list[dict]:
     rows = []
-    with tempfile.TemporaryDirectory() as tmp:
-        old_tree = Path(tmp) / "reference"
-        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q",
-                        str(old_tree), ref], check=True)
-        try:
-            old = Side(old_tree, str(Path(tmp) / "cache-ref"), repeats)
-            new = Side(ROOT, str(Path(tmp) / "cache-new"), repeats)
-            for k, (st, eps) in enumerate(scenes):
-                # alternate which side goes first, so neither always follows the other
-                first, second = (old, new) if k % 2 == 0 else (new, old)
-                a = first.solve(st, eps)
-                b = second.solve(st, eps)
-                o, n = (a, b) if first is old else (b, a)
-                rows.append({"St": st, "eps": eps, "old": o, "new": n,
-                             "ratio": n["wall"] / o["wall"], "cpu_ratio": n["cpu"] / o["cpu"]})
-                print(f"St {st:g} eps {eps:g}: {n['wall'] * 1e3:.1f} ms against "
-                      f"{o['wall'] * 1e3:.1f} ms ({rows[-1]['ratio']:.2f}x)", flush=True)
-            old.close()
-            new.close()
-        finally:
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force",
-                            str(old_tree)], check=False)
+    for st, eps in scenes:
+        last = {"old": {}, "new": {}}
+        runs = harness.alternate({"old": _side(old, st, eps, last=last["old"]),
+                                  "new": _side(new, st, eps, last=last["new"])}, repeats)
+        rows.append({"St": st, "eps": eps, **_row(runs, "new", "old", last)})
+        print(f"St {st:g} eps {eps:g}: {rows[-1]['wall']['this']['median'] * 1e3:.1f} ms "
+              f"against {rows[-1]['wall']['baseline']['median'] * 1e3:.1f} ms "
+              f"({rows[-1]['ratio']:.2f}x)", flush=True)
     return rows
 
 
-def physics_against_classic(scenes, repeats) -> list[dict]:
+def physics_against_classic(proc: harness.SolverProcess, scenes, repeats) -> list[dict]:
     rows = []
-    with tempfile.TemporaryDirectory() as tmp:
-        side = Side(ROOT, str(Path(tmp) / "cache"), repeats)
-        for st, eps in scenes:
-            for name, fields in PHYSICS.items():
-                if name == "classic":
-                    continue
-                classic = side.solve(st, eps)  # alternated with each variant
-                other = side.solve(st, eps, fields)
-                rows.append({"St": st, "eps": eps, "physics": name, "classic": classic,
-                             "other": other, "ratio": other["wall"] / classic["wall"]})
-                print(f"{name} St {st:g}: {rows[-1]['ratio']:.2f}x the classic film", flush=True)
-        side.close()
+    for st, eps in scenes:
+        for name, fields in PHYSICS.items():
+            if name == "classic":
+                continue
+            last = {"classic": {}, "other": {}}
+            runs = harness.alternate({"classic": _side(proc, st, eps, last=last["classic"]),
+                                      "other": _side(proc, st, eps, fields, last["other"])},
+                                     repeats)
+            rows.append({"St": st, "eps": eps, "physics": name,
+                         **_row(runs, "other", "classic", last)})
+            print(f"{name} St {st:g}: {rows[-1]['ratio']:.2f}x the classic film", flush=True)
     return rows
 
 
-def report(ref, versus, physics, repeats) -> str:
+def report(ref, versus, physics, repeats, doc) -> str:
     ratios = [r["ratio"] for r in versus]
     cpu_ratios = [r["cpu_ratio"] for r in versus]
+
+    def spread(r):
+        return f"{r['wall']['ratio']['min']:.2f}-{r['wall']['ratio']['max']:.2f}"
+
     lines = [
         "# This solver against an earlier release, and its physics against its classic film",
         "",
-        f"Machine: {platform.machine()}, {os.cpu_count()} cores, one scene at a time per process"
-        f" (OPENBLAS_NUM_THREADS=1); median of {repeats} solves per scene and side, the two sides"
-        " alternated scene by scene in one run. `python benchmarks/bench_versus.py` regenerates"
-        " this file.",
+        f"{harness.describe(doc)}; one scene at a time per process. Per scene, {repeats} rounds "
+        "after a warm-up round, each solving the scene once on each side in a rotated order "
+        "(benchmarks/harness.py); a ratio is the median of the per-round ratios, with their "
+        "range. `python benchmarks/bench_versus.py` regenerates this file and `versus.json`.",
         "",
         f"## Classic film, standard preset: against commit {ref}",
         "",
-        f"Median ratio (this / reference) over {len(ratios)} scenes: "
-        f"**{statistics.median(ratios):.2f}x** in wall time (range {min(ratios):.2f}-"
-        f"{max(ratios):.2f}x), {statistics.median(cpu_ratios):.2f}x in CPU time (range "
+        f"Median over {len(ratios)} scenes of the per-scene ratio (this / reference): "
+        f"**{statistics.median(ratios):.2f}x** in wall time (scenes {min(ratios):.2f}-"
+        f"{max(ratios):.2f}x), {statistics.median(cpu_ratios):.2f}x in CPU time (scenes "
         f"{min(cpu_ratios):.2f}-{max(cpu_ratios):.2f}x). The target (issue 16) is at most 0.75x.",
         "",
-        "| St | eps | this [ms] | reference [ms] | ratio | steps | Newton | LU | steps ref | "
-        "Newton ref | LU ref |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "| St | eps | this [ms] | reference [ms] | ratio | rounds' ratios | steps | Newton | LU | "
+        "steps ref | Newton ref | LU ref |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in versus:
         o, n = r["old"], r["new"]
-        lines.append(f"| {r['St']:g} | {r['eps']:g} | {n['wall'] * 1e3:.1f} | "
-                     f"{o['wall'] * 1e3:.1f} | {r['ratio']:.2f} | {n['steps']} | {n['newton']} | "
+        lines.append(f"| {r['St']:g} | {r['eps']:g} | {r['wall']['this']['median'] * 1e3:.1f} | "
+                     f"{r['wall']['baseline']['median'] * 1e3:.1f} | {r['ratio']:.2f} | "
+                     f"{spread(r)} | {n['steps']} | {n['newton']} | "
                      f"{n['lu']} | {o['steps']} | {o['newton']} | {o['lu']} |")
     lines += ["", "## New physics against the classic film (standard preset)", "",
-              "| physics | St | eps | time [ms] | classic [ms] | ratio | steps | Newton | LU | "
-              "classic steps | classic LU |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+              "| physics | St | eps | time [ms] | classic [ms] | ratio | rounds' ratios | steps | "
+              "Newton | LU | classic steps | classic LU |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in physics:
         c, o = r["classic"], r["other"]
-        lines.append(f"| {r['physics']} | {r['St']:g} | {r['eps']:g} | {o['wall'] * 1e3:.1f} | "
-                     f"{c['wall'] * 1e3:.1f} | {r['ratio']:.2f} | {o['steps']} | {o['newton']} | "
+        lines.append(f"| {r['physics']} | {r['St']:g} | {r['eps']:g} | "
+                     f"{r['wall']['this']['median'] * 1e3:.1f} | "
+                     f"{r['wall']['baseline']['median'] * 1e3:.1f} | {r['ratio']:.2f} | "
+                     f"{spread(r)} | {o['steps']} | {o['newton']} | "
                      f"{o['lu']} | {c['steps']} | {c['lu']} |")
     by_name = {}
     for r in physics:
@@ -186,17 +145,27 @@ def report(ref, versus, physics, repeats) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--ref", default="bfedd7c", help="reference commit (default: bfedd7c)")
-    parser.add_argument("--quick", action="store_true", help="two scenes, one repeat, into /tmp")
+    parser.add_argument("--quick", action="store_true",
+                        help="two scenes, the fewest rounds that can say 'moved', into /tmp")
     args = parser.parse_args()
     scenes = [(st, eps) for eps in EPS for st in STOKES]
     repeats, out = REPEATS, HERE / "versus.md"
     physics_scenes = PHYSICS_SCENES
     if args.quick:
-        scenes, physics_scenes, repeats = scenes[2:4], PHYSICS_SCENES[:1], 1
+        scenes, physics_scenes, repeats = scenes[2:4], PHYSICS_SCENES[:1], harness.MIN_ROUNDS
         out = Path(tempfile.gettempdir()) / "versus.md"
-    versus = versus_reference(args.ref, scenes, repeats)
-    physics = physics_against_classic(physics_scenes, repeats)
-    text = report(args.ref, versus, physics, repeats)
+    load_start = harness.load_now()
+    with tempfile.TemporaryDirectory() as tmp, harness.checkout(args.ref) as old_tree, \
+            harness.SolverProcess(old_tree, str(Path(tmp) / "cache-ref")) as old, \
+            harness.SolverProcess(ROOT, str(Path(tmp) / "cache-new")) as new:
+        harness.SolverProcess.compile_all([old, new])
+        versus = versus_reference(old, new, scenes, repeats)
+        physics = physics_against_classic(new, physics_scenes, repeats)
+    doc = harness.write_json(out.with_suffix(".json"), {
+        "reference": {"ref": args.ref, "commit": harness.resolve_commit(args.ref),
+                      "solver_version": harness.solver_version(commit=args.ref)},
+        "rounds": repeats, "versus": versus, "physics": physics}, load_start)
+    text = report(args.ref, versus, physics, repeats, doc)
     print(text)
     out.write_text(text)
 

@@ -4,11 +4,11 @@ saved to benchmarks/e_wet_curves.json for the experiments figure (benchmarks/e_w
     python benchmarks/e_wet_curves.py     (~5 min on one core)
 """
 
-import json
 from pathlib import Path
 
 import numpy as np
 
+import harness
 from pipeline import environment  # noqa: F401  (single-threaded BLAS)
 from solver import SOLVER_VERSION, collide
 
@@ -17,6 +17,7 @@ STOKES = np.geomspace(8.0, 1000.0, 25)
 
 
 def main():
+    load_start = harness.load_now()
     out = {"solver_version": SOLVER_VERSION, "accuracy": "standard", "St": STOKES.tolist(),
            "e_wet": {}}
     for eps in EPS:
@@ -27,7 +28,7 @@ def main():
         out["e_wet"][f"{eps:g}"] = values
         print(eps, [round(v, 4) if v is not None else None for v in values], flush=True)
     path = Path(__file__).with_name("e_wet_curves.json")
-    path.write_text(json.dumps(out, indent=1))
+    harness.write_json(path, out, load_start)
     print("wrote", path)
 
 
