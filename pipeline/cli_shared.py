@@ -12,7 +12,7 @@ import os
 from .errors import PathError
 
 __all__ = ["add_numerics_flags", "numerics_overrides", "format_value", "check_output_dir",
-           "check_output_paths", "check_name_length", "accuracy_help", "saved_by_run",
+           "check_output_paths", "check_name_length", "accuracy_help", "check_accuracy", "saved_by_run",
            "SAVED_BY_KEY", "SAVED_BY", "CONTACT_GROUPS", "unused_contact_groups"]
 
 
@@ -22,6 +22,17 @@ def accuracy_help(what: str = "preset") -> str:
 
     return (f"numerical {what}: {', '.join(PRESETS)} (default standard; what each buys: "
             "README, benchmarks/accuracy.md)")
+
+
+def check_accuracy(value: str) -> None:
+    """``--accuracy`` names a preset, or ``UsageError`` (one line, exit 2) before any solve, as
+    the solver's own check words it."""
+    from solver.settings import PRESETS
+
+    from .errors import UsageError
+
+    if value not in PRESETS:
+        raise UsageError(f"--accuracy must be one of {sorted(PRESETS)}, got {value!r}")
 
 
 def add_numerics_flags(p) -> None:

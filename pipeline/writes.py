@@ -9,9 +9,9 @@ Every output of ``ehd`` (a sweep store's temporary layout, its journal and lock,
 - :func:`atomic_path` gives a temporary name next to the target, moved into place by
   ``os.replace`` only once it is complete (a file or a directory, e.g. a ``.zarr`` store);
 - :func:`write_all` writes several files all or none (``ehd examples``, a DEM export);
-- :func:`guarded_dir` watches a folder that a plotting function fills with several files: on a
-  failed write, every file it created or changed is removed (a half-written figure is worse than
-  none: the next run draws it again).
+- :func:`guarded_dir` guards a folder that a plotting function fills with several files, each
+  announced by :func:`claim`: on a failure, every claimed file that was written is removed (a
+  half-written figure is worse than none: the next run draws it again), and nothing else.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from pathlib import Path
 
 from .errors import WriteError, describe_os_error
 
-__all__ = ["writing", "atomic_path", "temporary_paths", "write_all", "guarded_dir",
+__all__ = ["writing", "atomic_path", "temporary_paths", "write_all", "guarded_dir", "claim",
            "write_error"]
 
 
@@ -163,43 +163,64 @@ def write_all(contents: dict, what: str) -> list[Path]:
     return [path for _, path in pending]
 
 
-def _listing(folder: Path) -> dict:
-    if not folder.is_dir():
-        return {}
-    out = {}
-    for p in folder.rglob("*"):
-        try:
-            st = p.lstat()
-        except OSError:
-            continue
-        out[p] = (st.st_mtime_ns, st.st_size)
-    return out
+def _stamp(path: Path):
+    try:
+        st = path.lstat()
+    except OSError:
+        return None
+    return (st.st_mtime_ns, st.st_size, st.st_ino)
+
+
+# the files the code inside each open guarded_dir said it writes (``claim``), with their state
+# before; the innermost guarded_dir is last
+_CLAIMS: list[dict] = []
+
+
+def claim(path) -> None:
+    """The running command is about to write the file ``path`` (a figure, a table, a stamp)
+    into a folder that ``guarded_dir`` guards: should the command fail, that file is removed if
+    it was written, and the folders made for it if they are empty. Nothing else in the folder
+    is ever touched (a file the user changed meanwhile stays). A no-op outside a guarded_dir."""
+    if not _CLAIMS:
+        return
+    path = Path(path).absolute()
+    claims = _CLAIMS[-1]
+    for folder in reversed((path.parent, *path.parent.parents)):
+        if folder not in claims and not folder.exists():
+            claims[folder] = None  # made for it
+    claims.setdefault(path, _stamp(path))
 
 
 @contextmanager
 def guarded_dir(folder, what: str):
-    """A folder filled by code that writes files in place: on an ``OSError`` (or any failure),
-    remove every file created or changed inside it, and the folders created for it, then raise
-    (``WriteError`` for an ``OSError``)."""
-    folder = Path(folder)
-    created_root = [p for p in (folder, *folder.parents) if not p.exists()]
-    before = _listing(folder)
+    """A folder filled by code that writes files in place, each announced by ``claim``: on an
+    ``OSError`` (or any failure, Ctrl-C and SIGTERM included), remove every claimed file that
+    was written, and the folders made for them (and for ``folder``) that are left empty, then
+    raise (``WriteError`` for an ``OSError``). Files the command did not claim are never
+    touched: the first version removed every file that changed under ``folder`` while it ran,
+    the user's included (a file edited in a subfolder of ``--plot DIR`` during the plot was
+    deleted by a SIGTERM)."""
+    folder = Path(folder).absolute()
+    claims: dict = {p: None for p in (folder, *folder.parents) if not p.exists()}
+    _CLAIMS.append(claims)
     try:
         yield folder
     except BaseException as exc:
-        after = _listing(folder)
-        for p, stamp in sorted(after.items(), key=lambda kv: -len(kv[0].parts)):
-            if p.is_dir() and not p.is_symlink():
-                if p not in before:
-                    shutil.rmtree(p, ignore_errors=True)
-            elif before.get(p) != stamp:
-                _remove(p)
-        for p in created_root:  # innermost first
+        for path, before in claims.items():
+            if before is None and path.is_dir() and not path.is_symlink():
+                continue  # folders below, once emptied
+            if _stamp(path) != before:
+                _remove(path)
+        made = [p for p, before in claims.items() if before is None and p.is_dir()
+                and not p.is_symlink()]
+        for path in sorted(made, key=lambda p: -len(p.parts)):  # innermost first
             try:
-                p.rmdir()
+                path.rmdir()  # only when empty: a user's file inside keeps it
             except OSError:
                 pass
         if isinstance(exc, OSError):
             _quiet_asyncio()
             raise write_error(exc, what, exc.filename or folder) from None
         raise
+    finally:
+        _CLAIMS.remove(claims)

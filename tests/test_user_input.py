@@ -594,3 +594,45 @@ def test_restitution_path_factors_must_be_finite_and_positive(capsys, monkeypatc
     code, _, err = ehd(capsys, "restitution", EXAMPLE, *args)
     assert code == EXIT_USAGE
     one_error_line(err, "--from and --to")
+
+
+# ---- the second hostile run (issue 27's "done when") -------------------------------------------
+@pytest.mark.parametrize("args", [
+    ["restitution", str(EXAMPLE), "--accuracy", "bogus"],
+    ["restitution", str(EXAMPLE), "--accuracy", "", "--threshold"],
+    ["export-dem", str(EXAMPLE), "--accuracy", "FAST", "--out", "x"],
+], ids=["restitution", "restitution-threshold", "export-dem"])
+def test_an_unknown_accuracy_is_exit_2_before_any_solve(ws, capsys, monkeypatch, args):
+    """A traceback (exit 70) from the solver's check in the second hostile run."""
+    no_solve(monkeypatch)
+    code, out, err = ehd(capsys, *args)
+    assert code == EXIT_USAGE
+    one_error_line(err, "--accuracy must be one of", "standard")
+
+
+def test_a_failed_plot_removes_only_the_files_it_wrote(tmp_path, capsys, monkeypatch):
+    """``--plot DIR`` cut short (here SIGTERM's exception after one figure): the figure it wrote
+    goes, a user's file that changed in DIR meanwhile stays (the second hostile run: a thesis
+    chapter edited under ``--plot`` during the plot was deleted)."""
+    import pipeline.plots.scene_plots as scene_plots
+    from pipeline.errors import EXIT_TERMINATED, Terminated
+
+    folder = tmp_path / "pk"
+    mine = folder / "mywork" / "thesis.txt"
+    mine.parent.mkdir(parents=True)
+    mine.write_text("chapter 1\n")
+    real = scene_plots.save_figure
+
+    def one_then_terminated(fig, out_dir, stem):
+        real(fig, out_dir, stem)
+        with mine.open("a") as f:  # the user edits a file meanwhile
+            f.write("chapter 2\n")
+        (folder / "notes.txt").write_text("new")  # and makes another
+        raise Terminated()
+
+    monkeypatch.setattr(scene_plots, "save_figure", one_then_terminated)
+    code, _, err = ehd(capsys, "run", "--St", "5", "--eps", "0.01", "--accuracy", "fast",
+                       "--plot", str(folder))
+    assert code == EXIT_TERMINATED
+    assert mine.read_text() == "chapter 1\nchapter 2\n"
+    assert sorted(p.name for p in folder.iterdir()) == ["mywork", "notes.txt"]

@@ -95,12 +95,14 @@ def _check_density_ratio(value: float) -> None:
 
 def cmd_export_dem(args) -> int:
     from pipeline.cli import UsageError, check_output_dir
+    from pipeline.cli_shared import check_accuracy
 
     from .export import export_files, progress_to_stderr, scene_rows, store_rows, write_files
 
     _progress = progress_to_stderr("export-dem")
 
     check_output_dir("--out", args.out)  # before any solve
+    check_accuracy(args.accuracy)
     fit_range = _fit_range(args)
     _check_density_ratio(args.density_ratio)
     if args.n < 1:
@@ -152,6 +154,7 @@ def cmd_export_dem(args) -> int:
 
 def cmd_restitution(args) -> int:
     from pipeline.cli import UsageError, check_output_dir
+    from pipeline.cli_shared import check_accuracy
 
     from .export import progress_to_stderr, scene_rows, write_export
 
@@ -159,6 +162,7 @@ def cmd_restitution(args) -> int:
 
     check_output_dir("--out", args.out)  # before any solve
     check_output_dir("--plot", args.plot)
+    check_accuracy(args.accuracy)
     scene = _scene(args.scene, args.materials)
     if not (0 < args.start < np.inf and 0 < args.stop < np.inf and args.n >= 1):
         raise UsageError("--from and --to must be finite positive factors and --n >= 1")

@@ -20,6 +20,8 @@ import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 
+from ..writes import claim
+
 __all__ = ["plot_scene", "save_figure", "profile_rows", "plot_profiles", "plot_motion",
            "plot_energy", "plot_dimple", "radial_extent", "si_scales", "STYLE", "LABELS"]
 
@@ -98,6 +100,8 @@ def save_figure(fig, out_dir, stem: str) -> list[Path]:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = [out / f"{stem}.png", out / f"{stem}.pdf"]
+    for path in paths:
+        claim(path)  # removed again if the command fails (writes.guarded_dir)
     fig.savefig(paths[0], metadata=_PNG_META)
     fig.savefig(paths[1], metadata=_PDF_META)
     return paths
