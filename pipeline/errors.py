@@ -128,7 +128,9 @@ def describe_os_error(exc: OSError, path) -> str:
     reason = exc.strerror or type(exc).__name__
     where = str(path)
     if exc.errno in (errno.ENOSPC, getattr(errno, "EDQUOT", -1)):
-        probe = os.path.dirname(os.path.abspath(where)) or "."
+        probe = os.path.abspath(where)  # a folder is its own file system (a mount point)
+        if not os.path.isdir(probe):
+            probe = os.path.dirname(probe) or "."
         while probe and not os.path.exists(probe):
             probe = os.path.dirname(probe)
         try:

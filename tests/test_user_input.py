@@ -636,3 +636,25 @@ def test_a_failed_plot_removes_only_the_files_it_wrote(tmp_path, capsys, monkeyp
     assert code == EXIT_TERMINATED
     assert mine.read_text() == "chapter 1\nchapter 2\n"
     assert sorted(p.name for p in folder.iterdir()) == ["mywork", "notes.txt"]
+
+
+def test_the_free_space_of_a_full_folder_is_its_own_file_systems(tmp_path, monkeypatch):
+    """A folder may be a mount point (a full tmpfs given as ``--plot DIR``): its free space is
+    asked of the folder itself, not of its parent's file system (the second hostile run: 73.5
+    GiB said free where the tmpfs had 12 KiB)."""
+    import errno
+    import shutil
+    from collections import namedtuple
+
+    from pipeline.errors import describe_os_error
+
+    asked = []
+    usage = namedtuple("usage", "total used free")
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: asked.append(p) or usage(1, 1, 12288))
+    full = OSError(errno.ENOSPC, "No space left on device")
+    folder = tmp_path / "figs"
+    folder.mkdir()
+    assert "12.0 KiB free" in describe_os_error(full, folder)
+    assert asked[-1] == str(folder)
+    describe_os_error(full, folder / "fig.png")  # a file: its folder's file system
+    assert asked[-1] == str(folder)
