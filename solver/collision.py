@@ -191,9 +191,15 @@ def energy_violation(result) -> str:
 
 def check_energy(result):
     """An ok ``result`` that breaks the energy balance (``energy_violation``) becomes
-    ``"unphysical"``: its message says why, and its observables are withheld (NaN, flags None;
+    ``"unphysical"`` (one whose closure is not finite, ``"nonfinite"``): its message says why, and its observables are withheld (NaN, flags None;
     the cost counters and wall time are kept), so no caller can take them for a result."""
     if result.status != "ok":
+        return result
+    if not math.isfinite(result.energy_error):  # a non-finite balance is no balance at all
+        result.status = "nonfinite"
+        result.message = (f"{failure_message('nonfinite')}: the energy closure is "
+                          f"{result.energy_error}")
+        withhold(result)
         return result
     why = energy_violation(result)
     if not why:
