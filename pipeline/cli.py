@@ -65,23 +65,27 @@ def _print_scene(d: dict) -> None:
 
 
 def physics_from_args(args):
-    """The ``Physics`` of the ``--St``, ``--eps``... flags (``_add_physics_flags``); a contact
-    group given without a roughness (it would do nothing) is refused."""
+    """The ``Physics`` of the ``--St``, ``--eps``... flags (``_add_physics_flags``); a group
+    given while the group that switches its physics on is off (it would do nothing:
+    ``cli_shared.INERT_RULES``, e.g. ``--e-dry`` without ``--roughness``) is refused."""
     from solver.physics import Physics
 
-    from .cli_shared import unused_contact_groups
+    from .cli_shared import inert_groups, inert_message
 
+    given = {name: getattr(args, name) for name in Physics.names()}
     try:
-        physics = Physics.from_mapping({name: getattr(args, name) for name in Physics.names()})
+        physics = Physics.from_mapping(given)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    unused = unused_contact_groups(physics.as_dict())
-    if unused:
-        given = " and ".join(f"{Physics.group(n).option} {getattr(physics, n):g}" for n in unused)
-        raise UsageError(f"{given}: {'they act' if len(unused) > 1 else 'it acts'} only where "
-                         "rough surfaces touch, and --roughness is 0 "
-                         "(smooth surfaces): give --roughness > 0, or leave "
-                         f"{' and '.join(Physics.group(n).option for n in unused)} out")
+    found = inert_groups({n: v for n, v in given.items() if v is not None})
+    if found:
+        def label(name):
+            value = given.get(name)
+            flag = Physics.group(name).option
+            if value is None:
+                return flag
+            return f"{flag} {value:g}" if isinstance(value, float) else f"{flag} {value}"
+        raise UsageError(inert_message(found, label))
     return physics
 
 

@@ -13,7 +13,8 @@ from .errors import PathError
 
 __all__ = ["add_numerics_flags", "numerics_overrides", "format_value", "check_output_dir",
            "check_output_paths", "check_name_length", "accuracy_help", "check_accuracy", "saved_by_run",
-           "SAVED_BY_KEY", "SAVED_BY", "CONTACT_GROUPS", "unused_contact_groups"]
+           "SAVED_BY_KEY", "SAVED_BY", "CONTACT_GROUPS", "unused_contact_groups", "INERT_RULES",
+           "inert_groups", "inert_message"]
 
 
 def accuracy_help(what: str = "preset") -> str:
@@ -66,22 +67,73 @@ def numerics_overrides(args) -> dict:
 
 # the groups that act only where rough surfaces touch (solver/physics.py: the asperity
 # stiffness is "not used without roughness", e_dry "acts only where the asperities touch")
-CONTACT_GROUPS = ("asperity_stiffness", "e_dry")
+# Groups that act only when another group switches their piece of physics on: (the groups,
+# the group that switches them, when a group counts as set (None: away from its default), when
+# the switch is on for one value of it, why, what to give). A run or a sweep that sets them
+# while the switch is off at every grid point would silently compute something else.
+INERT_RULES = (
+    (("asperity_stiffness", "e_dry"), "roughness", None, lambda v: v != 0.0,
+     "act{s} only where rough surfaces touch, and {ctl} is 0 (smooth surfaces)",
+     "give {ctl} > 0"),
+    (("Pi",), "cavitation", None, lambda v: v != "off",
+     "is the cavitation floor, and {ctl} is off", "give {ctl} auto, jfo or reynolds"),
+    (("cavitation",), "Pi", lambda v: v in ("jfo", "reynolds"), lambda v: v != float("inf"),
+     "needs the floor, and {ctl} is inf (no floor: the classic film)", "give {ctl}"),
+    (("beta",), "viscosity_law", None, lambda v: v != "constant",
+     "is the pressure dependence of the viscosity, and {ctl} is constant",
+     "give {ctl} auto, barus or roelands"),
+    (("viscosity_law",), "beta", lambda v: v in ("barus", "roelands"), lambda v: v > 0.0,
+     "needs the pressure-viscosity group, and {ctl} is 0", "give {ctl} > 0"),
+    (("roelands_Z", "roelands_PR"), "viscosity_law", None, lambda v: v == "roelands",
+     "belong{s} to the Roelands law, and {ctl} is not roelands", "give {ctl} roelands"),
+    (("dh_c1", "dh_c2"), "density_law", None, lambda v: v == "dowson-higginson",
+     "belong{s} to the Dowson-Higginson density, and {ctl} is constant",
+     "give {ctl} dowson-higginson"),
+)
+CONTACT_GROUPS = INERT_RULES[0][0]
 
 
-def unused_contact_groups(values: dict) -> list[str]:
-    """The ``CONTACT_GROUPS`` that ``values`` (``{group: value}`` of one run, or of a sweep
-    with a tuple of values per axis) set away from their default while every roughness is 0:
-    smooth surfaces never touch, so those values would silently do nothing."""
+def inert_groups(values: dict) -> list[tuple]:
+    """The groups that ``values`` (``{group: value}`` of one run, or of a sweep with a tuple of
+    values per axis; a group left out takes its default) set although the group that switches
+    their physics on is off at every point (``INERT_RULES``): ``[(names, switch, reason, fix)]``,
+    the reason and fix with ``{ctl}`` for the switch's name or flag and ``{s}`` for the verb's
+    ending of one name ("s")."""
     from solver.physics import Physics
 
     def each(name):
         v = values.get(name, Physics.group(name).default)
         return v if isinstance(v, (tuple, list)) else (v,)
 
-    if any(r != 0.0 for r in each("roughness")):
-        return []
-    return [n for n in CONTACT_GROUPS if any(v != Physics.group(n).default for v in each(n))]
+    found = []
+    for names, switch, is_set, acts, reason, fix in INERT_RULES:
+        if any(acts(v) for v in each(switch)):
+            continue
+        default = {n: Physics.group(n).default for n in names}
+        given = [n for n in names if any(is_set(v) if is_set else v != default[n]
+                                         for v in each(n))]
+        if given:
+            found.append((tuple(given), switch, reason, fix))
+    return found
+
+
+def inert_message(found, label) -> str:
+    """One line for ``inert_groups``'s findings, each group and switch written ``label(name)``
+    (a flag with its value, or a sweep file's name)."""
+    parts = []
+    for names, switch, reason, fix in found:
+        given = " and ".join(label(n) for n in names)
+        ctl = label(switch).split()[0]
+        parts.append(f"{given} " + reason.format(ctl=ctl, s="" if len(names) > 1 else "s")
+                     + f": {fix.format(ctl=ctl)}, or leave "
+                     + " and ".join(label(n).split()[0] for n in names) + " out")
+    return "; ".join(parts)
+
+
+def unused_contact_groups(values: dict) -> list[str]:
+    """The ``CONTACT_GROUPS`` that ``values`` set while every roughness is 0 (``inert_groups``)."""
+    return [n for names, switch, _, _ in inert_groups(values) if switch == "roughness"
+            for n in names]
 
 
 def format_value(v, spec=".6g"):

@@ -488,7 +488,7 @@ def test_sweep_contact_groups_without_roughness_are_exit_2(tmp_path, extra, ok):
     if ok:
         parse_sweep(text)
     else:
-        with pytest.raises(ConfigError, match="roughness is 0 at every grid point"):
+        with pytest.raises(ConfigError, match="every grid point e_dry|every grid point asperity"):
             parse_sweep(text)
 
 
@@ -658,3 +658,37 @@ def test_the_free_space_of_a_full_folder_is_its_own_file_systems(tmp_path, monke
     assert asked[-1] == str(folder)
     describe_os_error(full, folder / "fig.png")  # a file: its folder's file system
     assert asked[-1] == str(folder)
+
+
+@pytest.mark.parametrize("args, keywords", [
+    (["--cavitation", "jfo"], ["--cavitation jfo", "--Pi"]),
+    (["--Pi", "1e-3", "--cavitation", "off"], ["--Pi 0.001", "--cavitation"]),
+    (["--beta", "2", "--viscosity", "constant"], ["--beta 2", "--viscosity"]),
+    (["--viscosity", "barus"], ["--viscosity barus", "--beta"]),
+    (["--roelands-Z", "0.5"], ["--roelands-Z 0.5", "roelands"]),
+    (["--dh-c1", "5"], ["--dh-c1 5", "--density"]),
+], ids=["jfo-without-Pi", "Pi-with-cavitation-off", "beta-with-constant", "barus-without-beta",
+        "roelands-Z-without-roelands", "dh-c1-without-dowson-higginson"])
+def test_run_flags_whose_physics_is_off_are_exit_2(capsys, monkeypatch, args, keywords):
+    """A flag that would silently do nothing (the second hostile run: ``--cavitation jfo``
+    without ``--Pi`` ran the classic film, ``--roelands-Z`` and ``--dh-c1`` were echoed in the
+    JSON as if applied) is refused before any solve, with the flag that switches it on."""
+    no_solve(monkeypatch)
+    code, out, err = ehd(capsys, "run", "--St", "5", "--eps", "0.01", *args)
+    assert code == EXIT_USAGE and out == ""
+    one_error_line(err, *keywords)
+
+
+@pytest.mark.parametrize("extra, keyword", [
+    ('[physics]\ncavitation = "off"\n', "Pi"),
+    ('[physics]\nviscosity_law = "constant"\n', "beta"),
+], ids=["Pi-axis-with-cavitation-off", "beta-axis-with-constant-viscosity"])
+def test_a_sweep_axis_that_changes_nothing_is_refused(extra, keyword):
+    """A grid axis whose physics is off at every point stored identical cells (the second
+    hostile run)."""
+    from pipeline.sweeps.config import ConfigError, parse_sweep
+
+    axis = {"Pi": "Pi = [1e-3, 1e-2]", "beta": "beta = [1.0, 2.0]"}[keyword]
+    text = f'name = "t"\nstore = "t.zarr"\n[grid]\nSt = [5.0]\neps = [1e-2]\n{axis}\n{extra}'
+    with pytest.raises(ConfigError, match=keyword):
+        parse_sweep(text)

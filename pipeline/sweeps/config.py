@@ -37,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..cli_shared import unused_contact_groups
+from ..cli_shared import inert_groups, inert_message
 from ..errors import UsageError
 
 __all__ = ["Sweep", "load_sweep", "parse_sweep", "cache_key", "canonical_json", "ConfigError",
@@ -279,12 +279,10 @@ def _physics(where: str, doc: dict) -> tuple[dict, dict]:
         else:
             fixed[name] = Physics.group(name).default
     _check_grid_points(where, axes, fixed)
-    unused = unused_contact_groups({**fixed, **axes})
-    if unused:
-        raise ConfigError(f"{where}: {' and '.join(unused)} set, but roughness is 0 at every "
-                          f"grid point: {'they act' if len(unused) > 1 else 'it acts'} only "
-                          "where rough surfaces touch; give roughness > 0 ([physics] or [grid]), "
-                          f"or leave {' and '.join(unused)} out")
+    found = inert_groups({**fixed, **axes})
+    if found:  # e.g. e_dry without roughness, a Pi axis with cavitation off
+        raise ConfigError(f"{where}: at every grid point " + inert_message(found, str)
+                          + " ([physics] or [grid])")
     return axes, fixed
 
 
