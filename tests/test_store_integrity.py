@@ -285,9 +285,15 @@ def _edit_line(value_edit, reseal=False):
     _edit_line(lambda r: r.update(steps=-3), reseal=True),
     _edit_line(lambda r: r.update(v_r="fast"), reseal=True),
     _edit_line(lambda r: r.update(status=["ok"]), reseal=True),
+    # the second hostile run: a count beyond the store's int32 (exit 70 on every rerun), a
+    # negative gap, a NaN ln x_e in an ok scene
+    _edit_line(lambda r: r.update(steps=2**40), reseal=True),
+    _edit_line(lambda r: r.update(h_m_x1=-3.0), reseal=True),
+    _edit_line(lambda r: r.update(ln_x_e_x1=float("nan")), reseal=True),
 ], ids=["v_r-edited", "e_wet-edited", "v_r-7.5-checksummed", "e_wet-3-checksummed",
         "e_far-negative-checksummed", "steps-negative-checksummed", "v_r-text-checksummed",
-        "status-a-list-checksummed"])
+        "status-a-list-checksummed", "steps-2**40-checksummed", "h_m-negative-checksummed",
+        "ln_x_e-nan-checksummed"])
 def test_a_bad_journal_record_is_skipped_counted_and_computed_again(ws, capsys, edit):
     """``v_r = 7.5`` or ``e_wet = 3.0`` edited into a journal line (issue 27: merged, then
     protected as cached): an edited line fails its checksum, a value outside what physics
@@ -306,6 +312,21 @@ def test_a_bad_journal_record_is_skipped_counted_and_computed_again(ws, capsys, 
     assert np.all(ds.status.values == 1)
     np.testing.assert_array_equal(ds.v_r.values, [40.0 / 50.0] * len(EPS))
     assert np.all((ds.e_wet.values >= 0) & (ds.e_wet.values <= 1))
+
+
+def test_a_journal_record_off_the_grid_lands_in_no_cell(ws, capsys):
+    """A checksummed record whose coordinate is a list (``St: [[40.0]]``) matched the first row
+    of a 2-D comparison and wrote its values into another scene's cell (the second hostile
+    run); it lands nowhere and its scene is computed again."""
+    journal = _journal_for(ws, 40.0)
+    physics = json.loads(journal.read_text().splitlines()[0])["physics"]
+    _edit_line(lambda r: r.update(v_r=0.9, physics={**r["physics"], "St": [[r["physics"]["St"]]]}),
+               reseal=True)(journal)
+    code, out, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
+    assert code == 0, out + err
+    assert CALLS == [(physics["St"], physics["eps"])]
+    ds = xr.open_zarr(ws / "s.zarr").load()
+    assert not np.any(ds.v_r.values == 0.9)
 
 
 def test_a_workers_record_outside_physics_is_stored_as_an_error(ws, capsys, monkeypatch):
@@ -597,3 +618,47 @@ def test_a_journal_line_longer_than_any_record_is_skipped(ws, capsys):
     (ws / "s.zarr.journal").write_bytes(b"[" * (3 * 2**20) + b"\n" + b"{}\n")
     code, out, err = ehd(capsys, "status", "s.zarr")
     assert code == 0 and "2 " in out and "bad lines skipped" in out, out + err
+
+
+class _Killed(BaseException):
+    """A kill -9 at this instant, as far as the files are concerned."""
+
+
+def test_a_kill_while_the_sweep_file_is_recorded_leaves_a_readable_store(ws, monkeypatch):
+    """A sweep whose file text changed records it in the root attributes. Through zarr that was
+    two writes, the first without the consolidated metadata: a kill -9 between them (2 of 46
+    kill timings in the second hostile run) left a store every reader and sweep refused, every
+    scene lost. Now one atomic replace: killed at any write of it, the store reads as before."""
+    import zarr
+
+    import pipeline.sweeps.store as store_module
+    from pipeline import open_results
+
+    def killed(*a, **k):
+        raise _Killed()
+
+    (ws / "s.toml").write_text(sweep_text(ST, EPS, store="s.zarr") + "# a comment\n")
+    with monkeypatch.context() as m:
+        m.setattr(zarr, "consolidate_metadata", killed)  # the second write of zarr's way
+        try:
+            run_module.run_sweep(load_sweep(ws / "s.toml"), runner="serial", solve=fake_solve,
+                                 progress=None)
+        except _Killed:
+            pass
+    with open_results(ws / "s.zarr") as ds:
+        assert int((ds.status.values == 1).sum()) == len(ST) * len(EPS)
+    # killed at the one write it takes now, before the replace: the old metadata stands
+    (ws / "s.toml").write_text(sweep_text(ST, EPS, store="s.zarr") + "# another comment\n")
+    real = store_module.os.replace
+
+    def killed_at_the_metadata(src, dst, *a, **k):
+        if str(dst).endswith("s.zarr/zarr.json"):
+            raise _Killed()
+        return real(src, dst, *a, **k)
+
+    with monkeypatch.context() as m, pytest.raises(_Killed):
+        m.setattr(store_module.os, "replace", killed_at_the_metadata)
+        run_module.run_sweep(load_sweep(ws / "s.toml"), runner="serial", solve=fake_solve,
+                             progress=None)
+    with open_results(ws / "s.zarr") as ds:
+        assert int((ds.status.values == 1).sum()) == len(ST) * len(EPS)

@@ -55,7 +55,12 @@ DIAGNOSTIC = frozenset(o.name for o in OBSERVABLES if o.diagnostic)
 # rebound speed in [0, 1] (no collision gives back more energy than it had), counts and the
 # wall time never negative
 BOUNDS = {"v_r": (0.0, 1.0), "e_wet": (0.0, 1.0), "e_far": (0.0, 1.0), "wall_s": (0.0, math.inf),
-          **{name: (0, math.inf) for name in COUNTS}}
+          # gaps are positive; the energy closure and the start's strain energy are not negative
+          "h_m_x1": (0.0, math.inf), "h_m_approach_x1": (0.0, math.inf),
+          "energy_error": (0.0, math.inf), "start_strain_energy": (0.0, math.inf),
+          "void_volume_max": (0.0, math.inf), "cavity_radius_max": (0.0, math.inf),
+          # counts are stored as int32: a larger one overflowed the write (exit 70, every rerun)
+          **{name: (0, 2**31 - 1) for name in COUNTS}}
 
 SCALING = ("lengths along the axis in x1 = (4 theta mu a^1.5 v0)^0.4 (suffix _x1) or x0 (suffix "
            "_x0); eps = (x1/x0)^2.5; tau = v0 t / x0; velocity / v0; force / (6 pi mu a^2 v0 / x1); "
@@ -88,6 +93,10 @@ def record_problem(rec: dict) -> str | None:
         value = rec.get(name)
         if value is not None and not isinstance(value, bool) and value not in (0, 1):
             return f"{name} is {str(value)[:40]!r}, not true or false"
+    if rec.get("status") == "ok":  # what an ok scene has finite (tasks.nonfinite_reason)
+        from .tasks import nonfinite_reason
+
+        return nonfinite_reason(rec.get) or None
     return None
 
 

@@ -105,7 +105,7 @@ def collision_record(c, extra_numerics: dict | None = None) -> dict:
 
 # observables an ok scene has finite (v_r, h_m, the peak viscosity ratio: 1 for the classic
 # film) or at least not NaN (ln_x_e may be inf); anything else is an overflow, not a result
-FINITE_WHEN_OK = ("v_r", "h_m_x1", "h_m_x0", "viscosity_ratio_max_approach")
+FINITE_WHEN_OK = ("v_r", "h_m_x1", "h_m_x0", "viscosity_ratio_max_approach", "energy_error")
 NOT_NAN_WHEN_OK = ("ln_x_e_x1", "ln_x_e_x0")
 
 
