@@ -324,6 +324,7 @@ def test_a_journal_record_off_the_grid_lands_in_no_cell(ws, capsys):
                reseal=True)(journal)
     code, out, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
     assert code == 0, out + err
+    assert "bad lines skipped" in out  # counted, not dropped without a word
     assert CALLS == [(physics["St"], physics["eps"])]
     ds = xr.open_zarr(ws / "s.zarr").load()
     assert not np.any(ds.v_r.values == 0.9)

@@ -764,18 +764,20 @@ class SweepStore:
 
     def _replay(self) -> None:
         """Merge the journal of an interrupted run: records of this cache key whose physics
-        matches the store on every axis and in its fixed values."""
+        matches the store on every axis and in its fixed values; any other is counted in
+        ``journal_skipped`` (its scene runs again)."""
         recs, self.journal_skipped = read_journal(_journal_path(self.path))
         axes = self.axes
-        for rec in recs:
-            if rec.get("key") != self.key:
-                continue
+        for rec in recs:  # a record that fits no cell is counted with the bad lines
             physics = rec["physics"]
-            if any(physics.get(k) != v for k, v in self.fixed.items()):
+            if rec.get("key") != self.key or \
+                    any(physics.get(k) != v for k, v in self.fixed.items()):
+                self.journal_skipped += 1
                 continue
             try:
                 cell = tuple(int(_index(self.ds[a].values, [physics[a]])[0]) for a in axes)
             except (KeyError, TypeError):
+                self.journal_skipped += 1
                 continue
             self._apply(cell, {k: v for k, v in rec.items() if k not in ("physics", "key")})
         self.flush(force=True)
