@@ -692,3 +692,17 @@ def test_a_sweep_axis_that_changes_nothing_is_refused(extra, keyword):
     text = f'name = "t"\nstore = "t.zarr"\n[grid]\nSt = [5.0]\neps = [1e-2]\n{axis}\n{extra}'
     with pytest.raises(ConfigError, match=keyword):
         parse_sweep(text)
+
+
+def test_a_default_materials_file_that_is_no_file_is_refused(tmp_path, capsys, monkeypatch, fifo):
+    """``~/.config/ehd/materials.toml`` (or under ``$XDG_CONFIG_HOME``) that is a FIFO or a
+    folder was skipped without a word (the second hostile run), while the same given by
+    ``--materials`` is refused: now refused the same way."""
+    config = tmp_path / "config"
+    (config / "ehd").mkdir(parents=True)
+    os.mkfifo(config / "ehd" / "materials.toml")
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(config))
+    no_solve(monkeypatch)
+    code, out, err = ehd(capsys, "scene", str(EXAMPLE))
+    assert code == EXIT_USAGE
+    one_error_line(err, "materials.toml", "FIFO")

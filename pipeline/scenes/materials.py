@@ -308,8 +308,8 @@ def user_table_paths(environ=None) -> list[Path]:
     config = Path(env.get("XDG_CONFIG_HOME") or Path.home() / ".config")
     paths = []
     default = config / "ehd" / "materials.toml"
-    if default.is_file():
-        paths.append(default)
+    if os.path.lexists(default):  # anything there is read as the user's file, or refused with
+        paths.append(default)     # one line (a FIFO, a folder); only a missing one is skipped
     for item in env.get("EHD_MATERIALS", "").split(os.pathsep):
         if item.strip():
             paths.append(Path(item.strip()))  # listed explicitly: a missing one is an error
