@@ -13,8 +13,7 @@ from .errors import PathError
 
 __all__ = ["add_numerics_flags", "numerics_overrides", "format_value", "check_output_dir",
            "check_output_paths", "check_name_length", "accuracy_help", "check_accuracy", "saved_by_run",
-           "SAVED_BY_KEY", "SAVED_BY", "CONTACT_GROUPS", "unused_contact_groups", "INERT_RULES",
-           "inert_groups", "inert_message"]
+           "SAVED_BY_KEY", "SAVED_BY", "INERT_RULES", "inert_groups", "inert_message"]
 
 
 def accuracy_help(what: str = "preset") -> str:
@@ -65,8 +64,6 @@ def numerics_overrides(args) -> dict:
             "rtol": args.rtol, "max_steps": args.max_steps}
 
 
-# the groups that act only where rough surfaces touch (solver/physics.py: the asperity
-# stiffness is "not used without roughness", e_dry "acts only where the asperities touch")
 # Groups that act only when another group switches their piece of physics on: (the groups,
 # the group that switches them, when a group counts as set (None: away from its default), when
 # the switch is on for one value of it, why, what to give). A run or a sweep that sets them
@@ -90,7 +87,6 @@ INERT_RULES = (
      "belong{s} to the Dowson-Higginson density, and {ctl} is constant",
      "give {ctl} dowson-higginson"),
 )
-CONTACT_GROUPS = INERT_RULES[0][0]
 
 
 def inert_groups(values: dict) -> list[tuple]:
@@ -128,12 +124,6 @@ def inert_message(found, label) -> str:
                      + f": {fix.format(ctl=ctl)}, or leave "
                      + " and ".join(label(n).split()[0] for n in names) + " out")
     return "; ".join(parts)
-
-
-def unused_contact_groups(values: dict) -> list[str]:
-    """The ``CONTACT_GROUPS`` that ``values`` set while every roughness is 0 (``inert_groups``)."""
-    return [n for names, switch, _, _ in inert_groups(values) if switch == "roughness"
-            for n in names]
 
 
 def format_value(v, spec=".6g"):
