@@ -663,3 +663,25 @@ def test_a_kill_while_the_sweep_file_is_recorded_leaves_a_readable_store(ws, mon
                              progress=None)
     with open_results(ws / "s.zarr") as ds:
         assert int((ds.status.values == 1).sum()) == len(ST) * len(EPS)
+
+
+def test_the_store_state_survives_a_file_that_goes_while_it_is_walked(ws, monkeypatch):
+    """A file a sweep removes while ``ehd figures`` takes the store's state (a zarr temporary,
+    a re-layout's old store) raised FileNotFoundError: exit 70 in the second hostile run."""
+    import os as os_module
+
+    from pipeline.plots import stamp
+
+    real = os_module.lstat
+    gone = []
+
+    def vanishing(path, *a, **k):
+        if not gone and str(path).endswith("zarr.json") and "v_r" in str(path):
+            gone.append(path)
+            raise FileNotFoundError(path)
+        return real(path, *a, **k)
+
+    monkeypatch.setattr(stamp.os, "lstat", vanishing)
+    first = stamp.store_state(ws / "s.zarr")
+    monkeypatch.undo()
+    assert gone and first is not None and first != stamp.store_state(ws / "s.zarr")

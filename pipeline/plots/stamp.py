@@ -55,7 +55,11 @@ def store_state(store) -> str | None:
         for name in sorted(files) + sorted(d for d in dirs if os.path.islink(
                 os.path.join(folder, d))):
             path = os.path.join(folder, name)
-            st = os.lstat(path)
+            try:
+                st = os.lstat(path)
+            except FileNotFoundError:  # gone while a sweep writes (a temporary, a re-layout):
+                entries.append(f"{os.path.relpath(path, root)}|gone")  # a state no stamp
+                continue  # matches later, so the next ehd figures reads the store again
             entries.append(f"{os.path.relpath(path, root)}|{st.st_mode}|{st.st_size}|"
                            f"{st.st_ino}|{st.st_mtime_ns}|{st.st_ctime_ns}")
     h = hashlib.sha256(_code_key().encode())

@@ -115,17 +115,31 @@ def open_results(path, check: bool = True, **open_kwargs):
     """
     import xarray as xr
 
+    import time
+
+    from .integrity import POLL_SECONDS, READ_TRIES, _manifest_raw, _relayout_underway
+
     path = Path(path)
-    if check:
-        checked, damage = load_checked(path)
-        if damage:
-            raise StoreDamaged(f"store {str(path)!r} is damaged: "
-                               f"{damage.describe(checked, checked.attrs.get('fixed_physics'))}; "
-                               "run its sweep again (ehd sweep SWEEP_FILE) to repair it")
-    else:
-        read_root(path)
-    with zarr_warnings():
-        ds = xr.open_zarr(path, consolidated=True, **open_kwargs)
+    for attempt in range(READ_TRIES):
+        before = _manifest_raw(path)
+        if check:
+            checked, damage = load_checked(path)
+            if damage:
+                raise StoreDamaged(f"store {str(path)!r} is damaged: "
+                                   f"{damage.describe(checked, checked.attrs.get('fixed_physics'))}"
+                                   "; run its sweep again (ehd sweep SWEEP_FILE) to repair it")
+        else:
+            read_root(path)
+        try:
+            with zarr_warnings():
+                ds = xr.open_zarr(path, consolidated=True, **open_kwargs)
+            break
+        except Exception:  # noqa: BLE001 - a re-layout swapped the store after the check
+            if attempt + 1 < READ_TRIES and (_manifest_raw(path) != before
+                                             or _relayout_underway(path)):
+                time.sleep(POLL_SECONDS)
+                continue  # read again, checks included
+            raise
     n = pending_journal(path)
     if n:
         warnings.warn(f"{n} finished scenes of an interrupted sweep are in {_journal_path(path)} "
