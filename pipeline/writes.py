@@ -171,9 +171,33 @@ def _stamp(path: Path):
     return (st.st_mtime_ns, st.st_size, st.st_ino)
 
 
-# the files the code inside each open guarded_dir said it writes (``claim``), with their state
-# before; the innermost guarded_dir is last
-_CLAIMS: list[dict] = []
+class _Claims:
+    """What the code inside one open ``guarded_dir`` said it writes: each file with its state
+    before (None: it did not exist), and the folders that did not exist, made for them."""
+
+    def __init__(self, folder: Path):
+        self.files: dict = {}
+        self.folders = [p for p in (folder, *folder.parents) if not p.exists()]
+
+    def add(self, path: Path) -> None:
+        self.folders += [p for p in path.parents if not p.exists() and p not in self.folders]
+        self.files.setdefault(path, _stamp(path))
+
+    def undo(self) -> None:
+        """Remove every claimed file that was written, then the folders made for them that are
+        empty (a user's file inside keeps its folder)."""
+        for path, before in self.files.items():
+            if _stamp(path) != before and not (path.is_dir() and not path.is_symlink()):
+                _remove(path)
+        for path in sorted(self.folders, key=lambda p: -len(p.parts)):  # innermost first
+            try:
+                path.rmdir()
+            except OSError:
+                pass
+
+
+# the claims of each open guarded_dir; the innermost is last
+_CLAIMS: list[_Claims] = []
 
 
 def claim(path) -> None:
@@ -181,14 +205,8 @@ def claim(path) -> None:
     into a folder that ``guarded_dir`` guards: should the command fail, that file is removed if
     it was written, and the folders made for it if they are empty. Nothing else in the folder
     is ever touched (a file the user changed meanwhile stays). A no-op outside a guarded_dir."""
-    if not _CLAIMS:
-        return
-    path = Path(path).absolute()
-    claims = _CLAIMS[-1]
-    for folder in reversed((path.parent, *path.parent.parents)):
-        if folder not in claims and not folder.exists():
-            claims[folder] = None  # made for it
-    claims.setdefault(path, _stamp(path))
+    if _CLAIMS:
+        _CLAIMS[-1].add(Path(path).absolute())
 
 
 @contextmanager
@@ -201,23 +219,12 @@ def guarded_dir(folder, what: str):
     the user's included (a file edited in a subfolder of ``--plot DIR`` during the plot was
     deleted by a SIGTERM)."""
     folder = Path(folder).absolute()
-    claims: dict = {p: None for p in (folder, *folder.parents) if not p.exists()}
+    claims = _Claims(folder)
     _CLAIMS.append(claims)
     try:
         yield folder
     except BaseException as exc:
-        for path, before in claims.items():
-            if before is None and path.is_dir() and not path.is_symlink():
-                continue  # folders below, once emptied
-            if _stamp(path) != before:
-                _remove(path)
-        made = [p for p, before in claims.items() if before is None and p.is_dir()
-                and not p.is_symlink()]
-        for path in sorted(made, key=lambda p: -len(p.parts)):  # innermost first
-            try:
-                path.rmdir()  # only when empty: a user's file inside keeps it
-            except OSError:
-                pass
+        claims.undo()
         if isinstance(exc, OSError):
             _quiet_asyncio()
             raise write_error(exc, what, exc.filename or folder) from None

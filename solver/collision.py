@@ -191,8 +191,9 @@ def energy_violation(result) -> str:
 
 def check_energy(result):
     """An ok ``result`` that breaks the energy balance (``energy_violation``) becomes
-    ``"unphysical"`` (one whose closure is not finite, ``"nonfinite"``): its message says why, and its observables are withheld (NaN, flags None;
-    the cost counters and wall time are kept), so no caller can take them for a result."""
+    ``"unphysical"`` (one whose closure is not finite, ``"nonfinite"``): its message says why,
+    and its observables are withheld (NaN, flags None; the cost counters and wall time are
+    kept), so no caller can take them for a result."""
     if result.status != "ok":
         return result
     if not math.isfinite(result.energy_error):  # a non-finite balance is no balance at all

@@ -387,6 +387,18 @@ def _relayout_underway(path) -> bool:
     return path.with_name(path.name + ".old").exists()
 
 
+def manifest_token(path) -> bytes | None:
+    """What a reader takes before a read to tell afterwards whether a sweep changed the store
+    meanwhile (``changed_since``)."""
+    return _manifest_raw(path)
+
+
+def changed_since(path, token) -> bool:
+    """A sweep changed the store at ``path`` since ``manifest_token`` gave ``token``, or is
+    re-laying it out now: a read that failed in between is to be read again."""
+    return _manifest_raw(path) != token or _relayout_underway(path)
+
+
 def load_checked(path, read=None):
     """Load a sweep store, checking its files, metadata, manifest, coordinates and every chunk
     once, from one consistent state of the store.
@@ -436,8 +448,7 @@ def load_checked(path, read=None):
                 time.sleep(POLL_SECONDS)
             continue
         except Exception:  # noqa: BLE001 - a re-layout swaps the whole store under a read
-            if attempt + 1 < READ_TRIES and (_manifest_raw(path) != before
-                                             or _relayout_underway(path)):
+            if attempt + 1 < READ_TRIES and changed_since(path, before):
                 time.sleep(POLL_SECONDS)
                 continue  # read while a sweep changed it: read again
             raise

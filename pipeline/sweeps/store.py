@@ -117,11 +117,11 @@ def open_results(path, check: bool = True, **open_kwargs):
 
     import time
 
-    from .integrity import POLL_SECONDS, READ_TRIES, _manifest_raw, _relayout_underway
+    from .integrity import POLL_SECONDS, READ_TRIES, changed_since, manifest_token
 
     path = Path(path)
     for attempt in range(READ_TRIES):
-        before = _manifest_raw(path)
+        before = manifest_token(path)
         if check:
             checked, damage = load_checked(path)
             if damage:
@@ -135,8 +135,7 @@ def open_results(path, check: bool = True, **open_kwargs):
                 ds = xr.open_zarr(path, consolidated=True, **open_kwargs)
             break
         except Exception:  # noqa: BLE001 - a re-layout swapped the store after the check
-            if attempt + 1 < READ_TRIES and (_manifest_raw(path) != before
-                                             or _relayout_underway(path)):
+            if attempt + 1 < READ_TRIES and changed_since(path, before):
                 time.sleep(POLL_SECONDS)
                 continue  # read again, checks included
             raise
