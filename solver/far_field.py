@@ -182,6 +182,34 @@ class OuterFlow:
         s0 = self.mass_factor(self.x0_over_a)
         return (s0 + self.integral(self.start_over_a) / stokes) / self.mass_factor(self.start_over_a)
 
+    def arrival_speed(self, stokes_start: float) -> float:
+        """The speed at ``x0`` over the approach speed ``V`` at the outer start, the inverse of
+        ``approach_speed``: ``(s(start) - J(x0, start)/St_V) / s0`` with ``St_V = m V / (6 pi mu
+        a^2)``, the Stokes number of ``V``. At or below 0 the outer flow stops the spheres before
+        they reach ``x0`` (they stick without a film collision)."""
+        if not stokes_start > 0.0:
+            raise ValueError(f"stokes_start = {stokes_start!r}: must be > 0")
+        s_start = self.mass_factor(self.start_over_a)
+        return (s_start - self.integral(self.start_over_a) / stokes_start) \
+            / self.mass_factor(self.x0_over_a)
+
+    def stopping_gap(self, stokes_start: float) -> float:
+        """Where the spheres stop (``x/a``) when the approach speed at the outer start, of Stokes
+        number ``stokes_start``, is too slow to reach ``x0`` (``arrival_speed <= 0``): the gap
+        whose ``J(x, start)`` equals ``s(start) St_V``, by bisection in ``ln x`` to 1e-10."""
+        if self.arrival_speed(stokes_start) > 0.0:
+            raise ValueError("stopping_gap: the spheres reach x0 at this approach speed")
+        whole = self.integral(self.start_over_a)
+        budget = self.mass_factor(self.start_over_a) * stokes_start
+        lo, hi = math.log(self.x0_over_a), math.log(self.start_over_a)
+        while hi - lo > 1e-10:
+            mid = 0.5 * (lo + hi)
+            if whole - self.integral(math.exp(mid)) > budget:  # J(mid, start): still moving
+                lo = mid
+            else:
+                hi = mid
+        return math.exp(hi)
+
 
 DEFAULT = OuterFlow()
 

@@ -44,7 +44,7 @@ def test_the_readme_is_a_front_page():
     assert len(lines) < 200
     head = "\n".join(lines[:80])
     assert "[body1]" in head and "material = " in head  # a scene file
-    assert "dry DEM takes e_far" in head and "Which restitution to take" in head
+    assert "e for a dry DEM code (e_far)" in head and "Which restitution to take" in head
     assert "ehd export-dem" in head
     assert lines[3:5] == ["make sweep    # creates .venv, installs, runs the default sweep: "
                           "store results/paper.zarr + figures/",

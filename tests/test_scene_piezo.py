@@ -156,9 +156,10 @@ def test_switch_thresholds(table):
 
 
 def test_glycerol_example_switches_the_piezoviscous_film_on_by_itself(solves, capsys):
-    assert main(["scene", str(GLYCEROL), "--json", "--accuracy", "fast"]) == 0
+    assert main(["scene", str(GLYCEROL), "--json", "--accuracy", "fast", "--no-range"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert tuple(d) == RESULT_KEYS and d["status"] == "ok"
+    assert d["e_for_dem_range"] is None and d["range_drivers"] == []  # --no-range: none solved
     # decided on the classic film, then solved once more with the law; then once without each
     # piece it switched on (the sensitivity)
     (base, classic), (final, c) = solves[:2]
@@ -254,7 +255,7 @@ def test_fluid_without_alpha_at_a_low_peak_pressure_is_a_note(table):
 # ---- the overrides ------------------------------------------------------------------------------
 def test_forced_constant_viscosity_is_one_classic_solve(solves, capsys):
     assert main(["scene", str(GLYCEROL), "--json", "--accuracy", "fast", "--viscosity-law",
-                 "constant"]) == 0
+                 "constant", "--no-range"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert len(solves) == 1 and solves[0][0].classic
     assert d["viscosity_law"] == "constant" and d["beta"] == 0.0

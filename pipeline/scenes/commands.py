@@ -16,7 +16,8 @@ __all__ = ["register", "cmd_scene", "cmd_paper_figures", "load_scene", "format_r
 
 # flag dest -> (section or None for top level, key)
 _FLAG_FIELDS = {
-    "title": (None, "title"), "v0": (None, "v0"), "x0": (None, "x0"),
+    "title": (None, "title"), "v0": (None, "v0"), "approach_speed": (None, "approach_speed"),
+    "x0": (None, "x0"),
     "x0_over_a": (None, "x0_over_a"),
     "outer_start": (None, "outer_start"), "outer_start_over_a": (None, "outer_start_over_a"),
     "x_ref": (None, "x_ref"), "x_ref_over_a": (None, "x_ref_over_a"),
@@ -32,6 +33,8 @@ _FLAG_FIELDS = {
     "dowson_higginson_c2": ("fluid", "dowson_higginson_c2"),
     "asperity_contact": (None, "asperity_contact"), "e_dry": (None, "e_dry"),
 }
+# the scene's speed is v0 or approach_speed: one given by a flag replaces the other of the file
+_ONE_SPEED = {"v0": "approach_speed", "approach_speed": "v0"}
 _BODY_FLAGS = {"material": "material", "radius": "radius", "density": "density",
                "youngs_modulus": "youngs_modulus", "poisson_ratio": "poisson_ratio",
                "yield_strength": "yield_strength", "roughness": "roughness"}
@@ -92,6 +95,8 @@ def load_scene(path=None, flags: dict | None = None, materials=(), *, user_files
             body.pop("radius", None)
             continue
         section, key = _FLAG_FIELDS[dest]
+        if key in _ONE_SPEED:  # a speed given as a flag replaces the file's other speed
+            data.pop(_ONE_SPEED[key], None)
         target = data if section is None else data.setdefault(section, {})
         if not isinstance(target, dict):
             raise ValueError(f"{section} must be a table in the scene file")
@@ -131,6 +136,40 @@ def _physics_rows(d: dict) -> list[str]:
             if name not in _LAW_ROWS or d[_LAW_ROWS[name][0]] in _LAW_ROWS[name][1]]
 
 
+# the report's first lines: code kind -> (label, the result it takes)
+_ANSWER_ROWS = (("e_for_dem", "e for a dry DEM code", "e_far"),
+                ("e_for_cfd_dem", "e for a resolved CFD-DEM code", "e_wet"))
+
+
+def answer_lines(d: dict) -> list[str]:
+    """The report's first lines: the verdict, the e per code kind with its range and drivers,
+    and the two speeds (docs/scenes.md, "The answer and its range")."""
+    if d["verdict"] is None:
+        return ["verdict: none (the solve failed; see below)"]
+    lines = [f"verdict: the spheres {d['verdict'].replace('sticks', 'stick').replace('rebounds', 'rebound')}"]
+    for key, label, result in _ANSWER_ROWS:
+        value, span = d[key], d[f"{key}_range"]
+        if value is None:
+            lines.append(f"{label} ({result}): not computed (two unequal spheres)")
+            continue
+        spread = "" if span is None or span[0] == span[1] else \
+            f", range {span[0]:.3f} to {span[1]:.3f}"
+        lines.append(f"{label} ({result}): {value:.3f}{spread}")
+    shares = [f"{r['unknown']} {100 * r['share']:.0f} %" for r in d["range_drivers"]
+              if r["share"] > 0.0]
+    if shares:
+        lines.append(f"  range of the dry DEM e from: {', '.join(shares)} (one at a time; "
+                     "range_drivers in --json)")
+    approach = d["approach_speed_m_per_s"]
+    given = d["inputs"]["approach_speed_m_per_s"] is not None
+    lines.append(
+        f"speeds: approach {'-' if approach is None else _q(approach, 'm/s')} at the outer start "
+        f"{d['outer_start_over_a']:.3g} a ({'given' if given else 'what arrives at x0 with v0'}), "
+        f"v0 {_q(d['inputs']['v0_m_per_s'], 'm/s')} at x0 = {d['x0_over_a']:.3g} a "
+        f"({'through the outer flow' if given else 'given'})")
+    return lines
+
+
 def format_report(d: dict) -> str:
     """Human-readable report of ``SceneResult.to_dict()``."""
     from .checks import per_gpa
@@ -139,6 +178,7 @@ def format_report(d: dict) -> str:
     lines = []
     if d["title"]:
         lines.append(d["title"])
+    lines += answer_lines(d)
     for label in ("body1", "body2"):
         b = ins[label]
         shape = "plane wall" if b["wall"] else f"sphere, radius {_q(b['radius_m'], 'm')}"
@@ -153,6 +193,9 @@ def format_report(d: dict) -> str:
                  f"rho = {f['density_kg_per_m3']:g} kg/m^3{alpha})")
     lines.append(f"  v0 = {_q(ins['v0_m_per_s'], 'm/s')}, x0 = {_q(d['x0_m'], 'm')} "
                  f"(x0/a = {d['x0_over_a']:.3g})")
+    if d["inputs"]["v0_m_per_s"] == 0.0:  # run.stopped_result: no film collision
+        lines.append(f"note: {d['message']}")
+        return "\n".join(lines)
     rows = [
         ("reduced radius a", _q(d["reduced_radius_m"], "m")),
         ("reduced mass m", _q(d["reduced_mass_kg"], "kg")),
@@ -252,10 +295,16 @@ def cmd_scene(args) -> int:
     from ..cli_shared import check_output_paths, numerics_overrides
 
     check_output_paths(plot=args.plot)
+    if scene.stops_outside:  # the outer flow stops the spheres: no film collision to solve
+        from .run import stopped_result
+
+        d = stopped_result(scene)
+        print(json.dumps(d) if args.json else format_report(d))
+        return 0
     try:
         # profiles only for the figures: the pressure extremes come from the solver
         result = run_scene(scene, accuracy=args.accuracy, save_profiles=bool(args.plot),
-                           **numerics_overrides(args))
+                           ranges=not args.no_range, **numerics_overrides(args))
     except ValueError as exc:
         raise _usage_error(str(exc)) from None
     except ArithmeticError as exc:  # a numerical failure inside the solver: report, no traceback
@@ -424,7 +473,13 @@ def _build_scene(sub) -> None:
                    help="dry coefficient of restitution of the pair, in (0, 1] (default 1: "
                         "elastic; acts only where the asperities touch)")
     g = p.add_argument_group("approach")
-    g.add_argument("--v0", default=None, help="approach speed, e.g. '10 cm/s'")
+    g.add_argument("--approach-speed", dest="approach_speed", default=None,
+                   help="the speed far from the wall, at the outer start where the sphere has "
+                        "not yet slowed (the speed experiments report), e.g. '15 cm/s'; v0 is "
+                        "then what arrives at x0 through the outer flow")
+    g.add_argument("--v0", default=None,
+                   help="the speed at the film's start x0, e.g. '10 cm/s' (instead of "
+                        "--approach-speed)")
     g.add_argument("--x0", default=None, help="starting gap, e.g. '250 nm' (default 0.01 a)")
     g.add_argument("--x0-over-a", dest="x0_over_a", default=None, help="starting gap as x0/a")
     g.add_argument("--outer-start", dest="outer_start", default=None,
@@ -446,6 +501,9 @@ def _build_scene(sub) -> None:
                    help="print exactly one JSON object (keys in docs/scenes.md)")
     p.add_argument("--plot", metavar="DIR", default=None,
                    help="write the scene's figures (PNG and PDF) into DIR")
+    p.add_argument("--no-range", dest="no_range", action="store_true",
+                   help="skip the range's solves (one or two per unknown: roughness, cavitation "
+                        "onset, pressure-viscosity); e_for_dem_range and the others are then null")
     p.add_argument("--strict", action="store_true",
                    help="exit 1 when any validity check warns")
     p.set_defaults(func=cmd_scene)

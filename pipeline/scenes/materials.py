@@ -36,7 +36,7 @@ from .units import FieldSpec, UnitError, to_si
 
 __all__ = ["Solid", "FluidProps", "DryPair", "MaterialTable", "SOLID_FIELDS", "FLUID_FIELDS",
            "PRESSURE_FIELDS", "PRESSURE_PAIRS", "load_table", "user_table_paths", "MaterialError",
-           "check_pairs", "unknown_name"]
+           "check_pairs", "unknown_name", "ROUGHNESS_CLASSES", "roughness_class_value"]
 
 
 class MaterialError(UsageError, ValueError):
@@ -78,6 +78,25 @@ _TEXT_FIELDS = {"materials": ("description", "source"),
                 "fluids": ("description", "source", "pressure_source")}
 
 
+# Surface classes a body's roughness can be given as, instead of a value (docs/scenes.md,
+# "Surface roughness"): rms bands [m]. A class is solved at the band's geometric middle, and the
+# report's range spans the band. "polished": from optically polished or float glass (about 1 nm,
+# the glass entry of the materials table) to ISO 1302 roughness grade N2 (Ra 0.05 um, rms ~ 1.25
+# Ra for a Gaussian profile: ~60 nm); "as received": ISO 1302 grades N3-N7 (Ra 0.1-1.6 um:
+# ground, cold-rolled, fine-turned engineering surfaces, rms 0.125-2 um); "unknown": both.
+ROUGHNESS_CLASSES = {
+    "polished": (1e-9, 60e-9),
+    "as received": (0.125e-6, 2e-6),
+    "unknown": (1e-9, 2e-6),
+}
+
+
+def roughness_class_value(name: str) -> float:
+    """The rms roughness [m] a surface class is solved at: its band's geometric middle."""
+    lo, hi = ROUGHNESS_CLASSES[name]
+    return math.sqrt(lo * hi)
+
+
 @dataclass(frozen=True)
 class Solid:
     """Elastic properties of one body's material (SI)."""
@@ -88,6 +107,8 @@ class Solid:
     density: float | None  # kg/m^3 (None only for a wall given without one)
     yield_strength: float | None = None  # Pa, None = not known / not applicable
     roughness: float | None = None  # m, rms surface roughness; None = not known
+    # a surface class (ROUGHNESS_CLASSES) the roughness stands for ("": a value, or none given)
+    roughness_class: str = ""
     source: str = ""
     description: str = ""
     material: str = ""  # the named entry it comes from ("" for a solid given in full)

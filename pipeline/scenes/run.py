@@ -14,14 +14,16 @@ from solver.physics import Physics
 from .checks import (Check, cavitation_crosses, cavitation_reason, density_reason, density_switch,
                      model_reason, outcome_checks, premise_checks, pressure_checks, pressure_notes,
                      contact_switch, roughness_reason, viscosity_reason, viscosity_switch)
+from .answer import answer, stopped_answer
 from .scene import Scene
 
 __all__ = ["SceneResult", "run_scene", "RESULT_KEYS", "check_solvable", "dem_restitution",
-           "DEM_COUPLING"]
+           "DEM_COUPLING", "stopped_result"]
 
 # Keys of SceneResult.to_dict() (a contract for scripts using `ehd scene --json`; see docs/scenes.md)
 RESULT_KEYS = (
-    "title", "inputs", "reduced_radius_m", "reduced_mass_kg", "theta_per_Pa", "effective_modulus_Pa",
+    "title", "verdict", "e_for_dem", "e_for_dem_range", "e_for_cfd_dem", "e_for_cfd_dem_range",
+    "range_drivers", "approach_speed_m_per_s", "inputs", "reduced_radius_m", "reduced_mass_kg", "theta_per_Pa", "effective_modulus_Pa",
     "x0_m", "x0_over_a", "x1_m", *Physics.names(), "Re", "Re_x0_over_a", "sound_speed_m_per_s",
     "wave_parameter", "model", "model_reason", "cavitation_reason", "viscosity_reason",
     "density_reason", "roughness_reason", "e_dry_source", "cavitation_pressure_Pa",
@@ -57,6 +59,8 @@ class SceneResult:
     # stiffness 10x either way): {label: {"e_wet", "e_far", "v_r", "status"}}
     sensitivity: dict = field(default_factory=dict)
     outer: object = None  # the solver.far_field.OuterFlow e_far was read with (None: none)
+    # the verdict and the e per code kind with their ranges (answer.answer); {} until computed
+    answer: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         """All results (keys ``RESULT_KEYS``), SI with the unit in the key, non-finite as None."""
@@ -69,7 +73,11 @@ class SceneResult:
 
         ln_xe_m = c.ln_x_e_x1 + math.log(x1)
         out = {
-            "title": s.title, "inputs": s.inputs(),
+            "title": s.title, **self.answer,
+            # the speed at the outer start: given, or what arrives at x0 with v0
+            "approach_speed_m_per_s": s.approach_speed if s.approach_speed is not None else (
+                num(c.v_outer_start * s.v0) if self.outer else None),
+            "inputs": s.inputs(),
             "reduced_radius_m": num(s.reduced_radius), "reduced_mass_kg": num(s.reduced_mass),
             "theta_per_Pa": s.theta, "effective_modulus_Pa": s.effective_modulus,
             "x0_m": x0, "x0_over_a": x0 / s.reduced_radius, "x1_m": x1,
@@ -153,6 +161,31 @@ def dem_restitution(e_wet: float, e_far: float) -> dict:
     return out
 
 
+def stopped_result(scene: Scene) -> dict:
+    """``SceneResult.to_dict`` of a scene whose outer flow stops the spheres before ``x0``
+    (``Scene.stops_outside``): they stick without a film collision; nothing of the film is
+    computed (its keys are null)."""
+    outer = scene.outer_flow()
+    a = scene.reduced_radius
+    stop = outer.stopping_gap(scene.stokes_of(scene.approach_speed))
+    out = dict.fromkeys(RESULT_KEYS)
+    out.update(
+        title=scene.title, **stopped_answer(), approach_speed_m_per_s=scene.approach_speed,
+        inputs=scene.inputs(), reduced_radius_m=a, reduced_mass_kg=scene.reduced_mass,
+        theta_per_Pa=scene.theta, effective_modulus_Pa=scene.effective_modulus, x0_m=scene.x0,
+        x0_over_a=scene.x0 / a, status="ok",
+        message=(f"the outer flow stops the spheres at a gap of {stop:.3g} a, before the film's "
+                 f"start x0 = {scene.x0 / a:.3g} a: the approach speed "
+                 f"{scene.approach_speed:.4g} m/s is too slow for the outer resistance, so they "
+                 "stick without a film collision"),
+        v_r=0.0, e_wet=0.0, e_far=0.0, x_ref_m=scene.x_ref_distance,
+        x_ref_over_a=scene.x_ref_distance / a, outer_start_m=scene.outer_start_distance,
+        outer_start_over_a=scene.outer_start_distance / a,
+        outer_start_speed_m_per_s=scene.approach_speed, outer_geometry=scene.outer_geometry,
+        density_ratio=scene.density_ratio, sensitivity={}, warnings=[], notes=[])
+    return out
+
+
 def check_solvable(scene: Scene) -> Physics:
     """The scene's ``Physics``; SceneError, saying what to change, when a group lies outside
     the solver's range (``Scene.physics``)."""
@@ -160,7 +193,7 @@ def check_solvable(scene: Scene) -> Physics:
 
 
 def run_scene(scene: Scene, accuracy: str = "standard", sensitivity_solves: bool = True,
-              **overrides) -> SceneResult:
+              ranges: bool = False, **overrides) -> SceneResult:
     """Solve a scene and check it.
 
     The scene's automatic switches (``cavitation``, ``viscosity_law``, ``density_law`` "auto",
@@ -182,6 +215,10 @@ def run_scene(scene: Scene, accuracy: str = "standard", sensitivity_solves: bool
     sensitivity_solves : bool
         Solve the scene again without each piece of physics it switched on (``sensitivity``);
         False skips those solves (sweeps of scenes, exports).
+    ranges : bool
+        Solve the scene again at the ends of each unknown (``answer.answer``: the ranges of
+        ``e_for_dem`` and ``e_for_cfd_dem`` and their drivers, what ``ehd scene`` shows);
+        False: the central values only, their ranges null.
     **overrides
         Numerical settings passed to ``solver.collide``. Profiles are not saved unless
         ``save_profiles=True`` (only the figures need them).
@@ -253,9 +290,12 @@ def run_scene(scene: Scene, accuracy: str = "standard", sensitivity_solves: bool
                      "for equal masses only")
     if outer is not None and scene.fluid.density is None:
         notes.append("e_far without added mass: the fluid has no density")
-    return SceneResult(scene=scene, collision=c, warnings=warnings, notes=notes,
-                       peak_pressure=p_max, min_pressure=p_min, sensitivity=sensitivity,
-                       outer=outer, **reasons)
+    result = SceneResult(scene=scene, collision=c, warnings=warnings, notes=notes,
+                         peak_pressure=p_max, min_pressure=p_min, sensitivity=sensitivity,
+                         outer=outer, **reasons)
+    options = {k: v for k, v in overrides.items() if k not in ("outer", "save_profiles")}
+    result.answer = answer(result, accuracy, options, ranges=ranges)
+    return result
 
 
 # what switching one piece of physics off means in the physics groups

@@ -119,11 +119,21 @@ class Scene:
     # and where e_far reads the speeds; None: the defaults, 1 a and 0.1 a (docs/scenes.md)
     outer_start: float | None = None
     x_ref: float | None = None
+    # the approach speed [m/s] at the outer start when the scene gave it (``v0`` is then mapped
+    # from it through the outer flow, 0 when the outer flow stops the spheres before x0); None:
+    # the scene gave v0 (docs/scenes.md, "The approach speed")
+    approach_speed: float | None = None
 
     def __post_init__(self):
         # a forced law the fluid has no constants for is refused here, before anything is solved
         self._viscosity_law(self.viscosity_law)
         self._density_law(self.density_law)
+
+    @property
+    def stops_outside(self) -> bool:
+        """True when the outer flow stops the spheres before they reach ``x0`` (an approach speed
+        too slow for the outer resistance): they stick without a film collision."""
+        return self.v0 <= 0.0
 
     # ---- derived numbers (SI), docs/model.md---------------------------------------------------
     @property
@@ -153,8 +163,12 @@ class Scene:
     @property
     def stokes(self) -> float:
         """``St = m v0 / (6 pi mu a^2)``."""
+        return self.stokes_of(self.v0)
+
+    def stokes_of(self, speed: float) -> float:
+        """``m V / (6 pi mu a^2)``: the Stokes number of the speed ``V`` [m/s]."""
         a = self.reduced_radius
-        return self.reduced_mass * self.v0 / (6.0 * math.pi * self.fluid.viscosity * a * a)
+        return self.reduced_mass * speed / (6.0 * math.pi * self.fluid.viscosity * a * a)
 
     @property
     def eps(self) -> float:
@@ -428,7 +442,8 @@ class Scene:
                           "dowson_higginson_c1_per_Pa": f.dowson_higginson_c1,
                           "dowson_higginson_c2_per_Pa": f.dowson_higginson_c2,
                           "source": f.source, "pressure_source": f.pressure_source},
-                "v0_m_per_s": self.v0, "x0_m": self.x0}
+                "v0_m_per_s": self.v0, "approach_speed_m_per_s": self.approach_speed,
+                "x0_m": self.x0}
 
 
 

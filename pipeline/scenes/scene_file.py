@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import math
 
-from .materials import (FLUID_FIELDS, PRESSURE_FIELDS, SOLID_FIELDS, FluidProps, MaterialTable,
-                        Solid, check_pairs)
+from .materials import (FLUID_FIELDS, PRESSURE_FIELDS, ROUGHNESS_CLASSES, SOLID_FIELDS,
+                        FluidProps, MaterialTable, Solid, check_pairs, roughness_class_value)
 from .scene import (CAVITATION_CHOICES, DENSITY_CHOICES, ROUGHNESS_CHOICES, STANDARD_ATMOSPHERE,
                     VISCOSITY_CHOICES, Body, Scene, SceneError, _reduced)
 from .units import FieldSpec, format_quantity, to_si
@@ -24,13 +24,20 @@ _GAP = FieldSpec("[length]", "500 nm", si_unit="m")
 _RATIO = FieldSpec("", "0.01")
 _PRESSURE = FieldSpec("[pressure]", "101.325 kPa", si_unit="Pa")
 
-_TOP_KEYS = ("title", "v0", "x0", "x0_over_a", "outer_start", "outer_start_over_a", "x_ref",
+_TOP_KEYS = ("title", "v0", "approach_speed", "x0", "x0_over_a", "outer_start", "outer_start_over_a", "x_ref",
              "x_ref_over_a", "cavitation", "viscosity_law", "density_law", "asperity_contact",
              "e_dry", "body1", "body2", "fluid", "materials", "fluids")
 _BODY_KEYS = ("material", "radius", "wall", *SOLID_FIELDS)
 _FLUID_KEYS = ("name", "ambient_pressure", "cavitation_pressure", "tensile_strength",
                *FLUID_FIELDS)
 _TENSILE = FieldSpec("[pressure]", "10 MPa", si_unit="Pa")
+# The cavitation pressure of a liquid that gives no vapour pressure (a liquid by its numbers):
+# 0 Pa absolute, the least a liquid's vapour pressure can be. Every liquid of the materials table
+# has its vapour pressure at room temperature between 0 and 2.34 kPa (water), which moves
+# p_amb - p_cav at 1 atm by under 2.5 %; so a liquid given by numbers takes the same cavitation
+# switch as the named one (docs/scenes.md, "Cavitation"), and the report's range spans the onset
+# (gas-saturated to full tension)
+ASSUMED_CAVITATION_PRESSURE = 0.0
 # fluid.cavitation_pressure presets (docs/scenes.md, "Cavitation")
 CAVITATION_PRESETS = ("vapour", "gas-saturated")
 
@@ -72,10 +79,27 @@ def _body(data, label, table: MaterialTable) -> Body:
         base = table.solid(raw["material"], f"{label}.material")
     # a plane wall needs no density (its mass is infinite)
     optional = {"density"} if math.isinf(radius) else set()
+    raw, surface = _roughness_class(raw, label)
     values, name, source = _properties(raw, SOLID_FIELDS, base, label, "material", optional)
+    if surface:
+        values["roughness"] = roughness_class_value(surface)
     solid = Solid(name=name, source=source, description=base.description if base else "",
-                  material=base.material if base else "", **values)
+                  material=base.material if base else "", roughness_class=surface, **values)
     return Body(label=label, radius=radius, solid=solid)
+
+
+def _roughness_class(raw, label):
+    """``(raw without a class roughness, the class or "")``: a body's roughness given as a surface
+    class (``materials.ROUGHNESS_CLASSES``: "polished", "as received", "unknown") instead of a
+    value."""
+    given = raw.get("roughness")
+    if not isinstance(given, str) or any(ch.isdigit() for ch in given):
+        return raw, ""
+    name = " ".join(given.strip().lower().replace("_", " ").replace("-", " ").split())
+    if name not in ROUGHNESS_CLASSES:
+        raise SceneError(f"{label}.roughness must be an rms roughness (e.g. '0.3 um') or a surface "
+                         f"class, one of {list(ROUGHNESS_CLASSES)}, got {given!r}")
+    return {k: v for k, v in raw.items() if k != "roughness"}, name
 
 
 def _properties(raw, fields, base, label, kind, optional=frozenset()):
@@ -162,8 +186,10 @@ def _cavitation_pressure(raw, fluid: FluidProps, ambient: float):
                 raise SceneError(f"fluid.cavitation_pressure = 'vapour' but the fluid "
                                  f"{fluid.name!r} has no vapour_pressure: give fluid."
                                  "vapour_pressure, or the cavitation pressure itself")
-            return None, (f"unknown: the fluid {fluid.name!r} has no vapour_pressure (give "
-                          "fluid.cavitation_pressure or fluid.vapour_pressure)")
+            return ASSUMED_CAVITATION_PRESSURE, (
+                f"assumed: the fluid {fluid.name!r} gives no vapour pressure, so the "
+                f"{format_quantity(ASSUMED_CAVITATION_PRESSURE, 'Pa')} below which no liquid "
+                "holds still; give fluid.vapour_pressure or fluid.cavitation_pressure")
         p_cav, how = fluid.vapour_pressure, f"the vapour pressure of {fluid.name}"
     else:
         if isinstance(given, str) and not any(ch.isdigit() for ch in given):
@@ -247,9 +273,7 @@ def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
         laws[key] = data.get(key, "auto")
         if laws[key] not in choices:
             raise SceneError(f"{key} must be one of {list(choices)}, got {laws[key]!r}")
-    if "v0" not in data:
-        raise SceneError("missing the field 'v0' (approach speed, e.g. v0 = '10 cm/s')")
-    v0 = to_si(data["v0"], _SPEED, "v0")
+    v0, approach = _speeds(data)
     a = _reduced(body1.radius, body2.radius)
     if "x0" in data and "x0_over_a" in data:
         raise SceneError("give either x0 (a length) or x0_over_a (a ratio), not both")
@@ -286,8 +310,40 @@ def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
                              "and neither body has a roughness: give one (e.g. body1.roughness "
                              "= '0.3 um', --roughness1), or leave e_dry out")
         e_dry_source = "the scene's e_dry"
-    return Scene(title=title, body1=body1, body2=body2, fluid=fluid, v0=v0, x0=x0,
-                 ambient_pressure=ambient, cavitation_pressure=p_cav,
-                 cavitation_pressure_source=how, cavitation=cavitation,
-                 outer_start=outer_start, x_ref=x_ref, **laws,
-                 asperity_contact=contact, e_dry=e_dry, e_dry_source=e_dry_source)
+    scene = Scene(title=title, body1=body1, body2=body2, fluid=fluid,
+                  v0=approach if v0 is None else v0, x0=x0,
+                  ambient_pressure=ambient, cavitation_pressure=p_cav,
+                  cavitation_pressure_source=how, cavitation=cavitation,
+                  outer_start=outer_start, x_ref=x_ref, **laws,
+                  asperity_contact=contact, e_dry=e_dry, e_dry_source=e_dry_source)
+    return scene if approach is None else _from_approach(scene, approach)
+
+
+def _speeds(data):
+    """``(v0, approach_speed)`` [m/s] of the scene document: exactly one is given, the other
+    None (docs/scenes.md, "The approach speed")."""
+    if "v0" in data and "approach_speed" in data:
+        raise SceneError("give either v0 (the speed at the film's start x0) or approach_speed "
+                         "(the speed at the outer start, where the sphere has not yet slowed), "
+                         "not both")
+    if "approach_speed" in data:
+        return None, to_si(data["approach_speed"], _SPEED, "approach_speed")
+    if "v0" not in data:
+        raise SceneError("missing the speed: give approach_speed (the speed far from the wall, "
+                         "e.g. approach_speed = '15 cm/s') or v0 (the speed at the film's start "
+                         "x0, e.g. v0 = '10 cm/s')")
+    return to_si(data["v0"], _SPEED, "v0"), None
+
+
+def _from_approach(scene: Scene, approach: float) -> Scene:
+    """The scene with ``v0`` mapped from the approach speed at the outer start through the outer
+    flow (``far_field.OuterFlow.arrival_speed``); ``v0 = 0`` when the outer flow stops the
+    spheres before ``x0`` (``Scene.stops_outside``)."""
+    import dataclasses
+
+    outer = scene.outer_flow()  # built with v0 = the approach speed: St is that speed's
+    if outer is None:
+        raise SceneError("approach_speed needs the outer flow, modelled for a sphere and a wall "
+                         "or two equal spheres: give v0 (the speed at x0) for two unequal spheres")
+    v0 = approach * max(0.0, outer.arrival_speed(scene.stokes_of(approach)))
+    return dataclasses.replace(scene, v0=v0, approach_speed=approach)

@@ -1,0 +1,187 @@
+"""One answer per kind of code, with its range: the verdict, the e a dry DEM code and a resolved
+CFD-DEM code take, and how far each moves over what the scene does not know.
+
+docs/scenes.md, "The answer and its range". The solved scene gives the central values
+(``e_for_dem`` is ``e_far``, ``e_for_cfd_dem`` is ``e_wet``, ``DEM_COUPLING``). Each *unknown* the
+scene leaves open is a driver: the scene solved again (``run_scene`` with its automatic
+switches, no sensitivity) at the unknown's low and high end, one unknown at a time:
+
+- ``roughness``: each body whose roughness is not given as a value (none known, or a surface
+  class: ``materials.ROUGHNESS_CLASSES``) at its band's low and high end;
+- ``cavitation onset``: a liquid's cavitation pressure between gas-saturated (the ambient
+  pressure, Pi = 0) and full tension (the classic film, no floor);
+- ``pressure-viscosity``: a liquid without a pressure-viscosity coefficient at
+  ``ALPHA_UNKNOWN_HIGH`` (the automatic switch decides whether it matters);
+- ``reading distance`` (``e_for_dem`` only, no solve): ``e_far`` read from the same collision
+  at ``READING_BAND_OVER_A``, the distances experiments and DEM calibrations read speeds at.
+
+A range is the envelope of the central value and the drivers' values; a driver's ``share`` is
+its span over the sum of the drivers' spans (of ``e_for_dem``). The drivers are one at a time,
+not combined: two unknowns at their worst together can go beyond the range.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+from .materials import ROUGHNESS_CLASSES
+from .units import format_quantity
+
+__all__ = ["ALPHA_UNKNOWN_HIGH", "READING_BAND_OVER_A", "CODE_KINDS", "answer", "stopped_answer"]
+
+# The high end of a liquid's unknown pressure-viscosity coefficient [1/Pa]: 25 1/GPa, within the
+# 10-35 1/GPa of mineral oils (Hamrock, Schmid & Jacobson, Fundamentals of Fluid Film
+# Lubrication, 2nd ed. 2004, ch. 4; quoted from memory, not checked against the table), above
+# glycerol's ~6 1/GPa (materials table) and water's ~0; the low end is 0 (the constant viscosity).
+ALPHA_UNKNOWN_HIGH = 25e-9
+# Where a speed is read [x/a]: from 3 x0 (0.03 a) to one radius out, where a settling sphere has
+# not yet slowed (the outer start's default); e_far's default reading is 0.1 a
+READING_BAND_OVER_A = (0.03, 1.0)
+# code kind -> (JSON key stem, the result it takes); docs/scenes.md, "The approach from far away"
+CODE_KINDS = {"dem": ("e_for_dem", "e_far"), "cfd_dem": ("e_for_cfd_dem", "e_wet")}
+
+
+def _value(v):
+    return None if v is None or not math.isfinite(v) else float(v)
+
+
+def _solved(result) -> dict:
+    """``{"e_for_dem", "e_for_cfd_dem", "status"}`` of a ``SceneResult``."""
+    c = result.collision
+    if not c.ok:
+        return {"e_for_dem": None, "e_for_cfd_dem": None, "status": c.status}
+    e_far = float(c.e_far) if result.outer else math.nan
+    return {"e_for_dem": _value(e_far), "e_for_cfd_dem": _value(float(c.e_wet)), "status": "ok"}
+
+
+def _body_solid(scene, label, **changes):
+    body = getattr(scene, label)
+    return dataclasses.replace(body, solid=dataclasses.replace(body.solid, **changes))
+
+
+def _roughness_variants(scene):
+    """``(what, [(end, scene)])`` over the bodies whose roughness is not a given value (none
+    known: the "unknown" band; a surface class: its band), each at its band's low and high end."""
+    bodies = [(b, b.solid.roughness_class or "unknown") for b in (scene.body1, scene.body2)
+              if b.solid.roughness is None or b.solid.roughness_class]
+    if not bodies:
+        return None
+    what = "; ".join(f"{b.label} ({b.solid.name}) {cls}: "
+                     f"{format_quantity(ROUGHNESS_CLASSES[cls][0], 'm')} to "
+                     f"{format_quantity(ROUGHNESS_CLASSES[cls][1], 'm')} rms" for b, cls in bodies)
+    ends = []
+    for end, label in enumerate(("low", "high")):
+        changed = {b.label: _body_solid(scene, b.label, roughness=ROUGHNESS_CLASSES[cls][end])
+                   for b, cls in bodies}
+        ends.append((label, dataclasses.replace(scene, **changed)))
+    return what, ends
+
+
+def _cavitation_variants(scene):
+    if scene.cavitation_pressure is None or scene.cavitation != "auto":
+        return None
+    return ("the liquid's cavitation pressure: gas-saturated (the ambient pressure) to full "
+            "tension (no floor)",
+            [("gas-saturated", dataclasses.replace(
+                scene, cavitation_pressure=scene.ambient_pressure,
+                cavitation_pressure_source="gas-saturated (the range's low end)")),
+             ("full tension", dataclasses.replace(scene, cavitation="off"))])
+
+
+def _alpha_variants(scene):
+    f = scene.fluid
+    if f.mean_free_path is not None or f.pressure_viscosity is not None \
+            or scene.viscosity_law != "auto":
+        return None
+    fluid = dataclasses.replace(f, pressure_viscosity=ALPHA_UNKNOWN_HIGH)
+    return (f"the liquid's pressure-viscosity coefficient, not given: 0 to "
+            f"{ALPHA_UNKNOWN_HIGH * 1e9:g} 1/GPa",
+            [("alpha high", dataclasses.replace(scene, fluid=fluid))])
+
+
+_VARIANTS = (("roughness", _roughness_variants), ("cavitation onset", _cavitation_variants),
+             ("pressure-viscosity", _alpha_variants))
+
+
+def _reading_driver(result):
+    """``e_far`` read from the same collision at the ends of ``READING_BAND_OVER_A``."""
+    outer, c = result.outer, result.collision
+    if outer is None or not c.ok:
+        return None
+    lo = max(READING_BAND_OVER_A[0], outer.x0_over_a)
+    hi = min(READING_BAND_OVER_A[1], outer.start_over_a)
+    values = [outer.__class__(**{**outer.as_dict(), "x_ref_over_a": x}).restitution(
+        float(c.e_x0), c.physics.St) for x in (lo, hi)]
+    return {"unknown": "reading distance",
+            "detail": f"where the speeds are read: {lo:g} a to {hi:g} a (as solved: "
+                      f"{outer.x_ref_over_a:g} a)",
+            "e_for_dem": [min(values), max(values)], "e_for_cfd_dem": None, "status": "ok"}
+
+
+def _solve(run_scene, scene, accuracy, solve_options) -> dict:
+    """``_solved`` of one variant; a variant outside what the scene layer accepts (a roughness
+    above x0, say) is a driver end that could not be solved, with the reason."""
+    try:
+        result = run_scene(scene, accuracy, sensitivity_solves=False, **(solve_options or {}))
+    except ValueError as exc:
+        return {"e_for_dem": None, "e_for_cfd_dem": None, "status": f"not solved: {exc}"}
+    return _solved(result)
+
+
+def _envelope(central, values):
+    finite = [v for v in [central, *values] if v is not None]
+    return [min(finite), max(finite)] if finite else None
+
+
+def answer(result, accuracy: str = "standard", solve_options: dict | None = None, *,
+           ranges: bool = True) -> dict:
+    """The verdict, the e per code kind with its range and the range's drivers of a solved scene
+    (``run.SceneResult``); ``solve_options`` as ``run_scene``'s overrides. ``ranges`` False: the
+    central values only (ranges of one point, no drivers)."""
+    from .run import run_scene
+
+    central = _solved(result)
+    drivers = []
+    if result.collision.ok and ranges:
+        for name, variants in _VARIANTS:
+            found = variants(result.scene)
+            if found is None:
+                continue
+            what, ends = found
+            solved = [_solve(run_scene, s, accuracy, solve_options) for _, s in ends]
+            failed = [f"{end}: {r['status']}" for (end, _), r in zip(ends, solved)
+                      if r["status"] != "ok"]
+            drivers.append({
+                "unknown": name, "detail": what,
+                **{key: _envelope(central[key], [r[key] for r in solved])
+                   for key, _ in CODE_KINDS.values()},
+                "status": "ok" if not failed else "failed (" + ", ".join(failed) + ")"})
+        reading = _reading_driver(result)
+        if reading is not None:
+            drivers.append(reading)
+    return _assemble(central, drivers, computed=result.collision.ok and ranges)
+
+
+def _assemble(central, drivers, computed=True) -> dict:
+    spans = [(d["e_for_dem"][1] - d["e_for_dem"][0]) if d["e_for_dem"] else 0.0 for d in drivers]
+    total = sum(spans)
+    for d, span in zip(drivers, spans):
+        d["share"] = span / total if total > 0.0 else 0.0
+    out = {}
+    shown = central["e_for_dem"] if central["e_for_dem"] is not None else central["e_for_cfd_dem"]
+    out["verdict"] = None if shown is None else ("rebounds" if shown > 0.0 else "sticks")
+    for key, _ in CODE_KINDS.values():
+        out[key] = central[key]
+        ends = [v for d in drivers if d[key] for v in d[key]]
+        out[f"{key}_range"] = None if central[key] is None else _envelope(central[key], ends)
+        if not computed:
+            out[f"{key}_range"] = None
+    out["range_drivers"] = drivers
+    return out
+
+
+def stopped_answer() -> dict:
+    """The answer of a scene whose outer flow stops the spheres before ``x0``: they stick."""
+    return {"verdict": "sticks", "e_for_dem": 0.0, "e_for_dem_range": [0.0, 0.0],
+            "e_for_cfd_dem": 0.0, "e_for_cfd_dem_range": [0.0, 0.0], "range_drivers": []}

@@ -1,0 +1,174 @@
+"""The answer users bring a scene for (issue 26): the approach speed as an input, the same physics
+however the liquid is given, and the verdict with the e per code kind and its range."""
+
+import dataclasses
+import json
+import math
+
+import pytest
+
+from pipeline.cli import main
+from pipeline.scenes import answer as answer_module
+from pipeline.scenes.materials import ROUGHNESS_CLASSES, load_table, roughness_class_value
+from pipeline.scenes.run import RESULT_KEYS, run_scene
+from pipeline.scenes.scene import SceneError
+from pipeline.scenes.scene_file import scene_from_dict
+from solver.far_field import OuterFlow
+
+
+@pytest.fixture(scope="module")
+def table():
+    return load_table(user_files=False)
+
+
+def beads(**top):
+    """2 mm glass beads onto a steel plate in water (issue 26's first scene)."""
+    data = {"approach_speed": "0.15 m/s",
+            "body1": {"material": "glass", "radius": "1 mm"},
+            "body2": {"material": "steel", "wall": True},
+            "fluid": {"name": "water"}}
+    data.update(top)
+    return data
+
+
+# ---- the approach speed -----------------------------------------------------------------------
+def test_approach_speed_arrives_at_x0_with_the_v0_that_reads_back_as_it(table):
+    scene = scene_from_dict(beads(), table)
+    assert scene.approach_speed == 0.15 and 0.0 < scene.v0 < 0.15
+    # the mapping is the exact inverse of the outer flow's reading of v0 (one closed form each
+    # way: rounding only, 1e-12)
+    outer = scene.outer_flow()
+    assert outer.approach_speed(scene.stokes) * scene.v0 == pytest.approx(0.15, rel=1e-12)
+    d = run_scene(scene, accuracy="fast").to_dict()
+    assert d["approach_speed_m_per_s"] == 0.15
+    assert d["outer_start_speed_m_per_s"] == pytest.approx(0.15, rel=1e-12)
+    # a scene given that v0 reports the same approach speed
+    given_v0 = {k: v for k, v in beads().items() if k != "approach_speed"} | {"v0": scene.v0}
+    same = scene_from_dict(given_v0, table)
+    d_v0 = run_scene(same, accuracy="fast").to_dict()
+    assert d_v0["approach_speed_m_per_s"] == pytest.approx(0.15, rel=1e-12)
+    assert d_v0["e_far"] == d["e_far"]  # the same collision
+
+
+def test_an_approach_too_slow_for_the_outer_flow_stops_before_x0(table, capsys):
+    scene = scene_from_dict(beads(approach_speed="1 mm/s"), table)
+    assert scene.stops_outside and scene.v0 == 0.0
+    outer = scene.outer_flow()
+    st_v = scene.stokes_of(scene.approach_speed)
+    stop = outer.stopping_gap(st_v)
+    assert outer.x0_over_a < stop < outer.start_over_a
+    # where it stops, an outer flow starting there is just reached: arrival speed 0 (the
+    # bisection's 1e-10 in ln x moves the integral by ~1e-10 of its size)
+    at_stop = dataclasses.replace(outer, x0_over_a=stop, x_ref_over_a=stop)
+    assert abs(at_stop.arrival_speed(st_v)) < 1e-8
+    with pytest.raises(ValueError, match="reach x0"):
+        scene_from_dict(beads(), table).outer_flow().stopping_gap(
+            scene.stokes_of(0.15))
+    assert main(["scene", "--material1", "glass", "--radius1", "1 mm", "--material2", "steel",
+                 "--wall", "--fluid", "water", "--approach-speed", "1 mm/s", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert tuple(d) == RESULT_KEYS
+    assert d["verdict"] == "sticks" and d["e_for_dem"] == 0.0 and d["e_for_cfd_dem"] == 0.0
+    assert f"{stop:.3g} a" in d["message"] and d["closest_approach_nm"] is None
+
+
+def test_speed_input_errors_are_one_line(table, tmp_path, capsys):
+    with pytest.raises(SceneError, match="either v0 .* or approach_speed"):
+        scene_from_dict(beads(v0="0.1 m/s"), table)
+    with pytest.raises(ValueError, match="approach_speed"):
+        scene_from_dict(beads(approach_speed="-1 m/s"), table)
+    unequal = beads(body2={"material": "glass", "radius": "2 mm"})
+    with pytest.raises(SceneError, match="approach_speed needs the outer flow"):
+        scene_from_dict(unequal, table)
+    # a flag for one speed replaces the file's other speed
+    path = tmp_path / "s.toml"
+    path.write_text('v0 = "0.1 m/s"\n[body1]\nmaterial = "glass"\nradius = "1 mm"\n'
+                    '[body2]\nmaterial = "steel"\nwall = true\n[fluid]\nname = "water"\n')
+    assert main(["scene", str(path), "--approach-speed", "0", "--json"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "approach_speed" in err
+
+
+# ---- the liquid given by numbers --------------------------------------------------------------
+def test_a_liquid_by_its_numbers_is_switched_as_the_named_one(table):
+    named = {"name": "glycerol_water_50", "viscosity": "10.8 mPa s", "density": "1150 kg/m^3"}
+    numbers = {"viscosity": "10.8 mPa s", "density": "1150 kg/m^3"}
+    top = {"approach_speed": "0.3 m/s", "body1": {"material": "glass", "radius": "1 mm"},
+           "body2": {"material": "glass", "radius": "1 mm"}}
+    a = run_scene(scene_from_dict(top | {"fluid": named}, table), accuracy="fast")
+    b = run_scene(scene_from_dict(top | {"fluid": numbers}, table), accuracy="fast")
+    assert b.scene.cavitation_pressure == 0.0 and "assumed" in b.cavitation_reason
+    pa, pb = a.collision.physics, b.collision.physics
+    assert (pa.cavitation, pa.viscosity_law, pa.density_law, pa.smooth) == \
+        (pb.cavitation, pb.viscosity_law, pb.density_law, pb.smooth)
+    assert pa.cavitation != "off"
+    # the two differ only in p_cav (1.96 kPa named, 0 assumed: Pi 1.9 % apart), which moves
+    # e_far by far less than the 0.60 against 0.40 of the floor switched or not
+    assert b.collision.e_far == pytest.approx(a.collision.e_far, abs=0.02)
+
+
+# ---- the answer and its range -----------------------------------------------------------------
+def test_roughness_classes_parse_and_bad_ones_are_refused(table):
+    s = scene_from_dict(beads(body2={"material": "steel", "wall": True,
+                                     "roughness": "As-Received"}), table)
+    assert s.body2.solid.roughness_class == "as received"
+    lo, hi = ROUGHNESS_CLASSES["as received"]
+    assert s.body2.solid.roughness == pytest.approx(math.sqrt(lo * hi), rel=1e-15)
+    assert roughness_class_value("polished") < roughness_class_value("as received")
+    with pytest.raises(SceneError, match="surface class"):
+        scene_from_dict(beads(body2={"material": "steel", "wall": True,
+                                     "roughness": "shiny"}), table)
+
+
+def test_ranges_envelope_the_drivers_and_name_them(table):
+    scene = scene_from_dict(beads(), table)
+    r = run_scene(scene, accuracy="fast", ranges=True)
+    d = r.to_dict()
+    assert d["verdict"] == "rebounds" and d["e_for_dem"] == r.collision.e_far
+    assert d["e_for_cfd_dem"] == r.collision.e_wet
+    drivers = {x["unknown"]: x for x in d["range_drivers"]}
+    # steel has no roughness: the unknown band; water: the cavitation onset; water's alpha is
+    # known (0), so no pressure-viscosity driver
+    assert set(drivers) == {"roughness", "cavitation onset", "reading distance"}
+    assert "body2 (steel) unknown" in drivers["roughness"]["detail"]
+    for key in ("e_for_dem", "e_for_cfd_dem"):
+        lo, hi = d[f"{key}_range"]
+        ends = [v for x in drivers.values() if x[key] for v in x[key]]
+        assert lo == min(ends + [d[key]]) and hi == max(ends + [d[key]])
+    assert sum(x["share"] for x in drivers.values()) == pytest.approx(1.0, rel=1e-12)
+    # the reading distance: e_far of the same collision read at the band's ends
+    outer, c = r.outer, r.collision
+    reads = [dataclasses.replace(outer, x_ref_over_a=x).restitution(c.e_x0, c.physics.St)
+             for x in answer_module.READING_BAND_OVER_A]
+    assert drivers["reading distance"]["e_for_dem"] == [min(reads), max(reads)]
+    # full tension keeps more of the rebound than a gas-saturated floor
+    cav = drivers["cavitation onset"]["e_for_dem"]
+    assert cav[0] < cav[1]
+    # a roughness given as a number is known: no roughness driver
+    known = scene_from_dict(beads(body2={"material": "steel", "wall": True,
+                                         "roughness": "0.2 um"}), table)
+    names = [x["unknown"] for x in run_scene(known, accuracy="fast", ranges=True)
+             .to_dict()["range_drivers"]]
+    assert "roughness" not in names
+
+
+def test_report_leads_with_the_verdict_and_the_e_per_code(capsys):
+    assert main(["scene", "--material1", "glass", "--radius1", "1 mm", "--material2", "steel",
+                 "--wall", "--fluid", "water", "--approach-speed", "0.15 m/s",
+                 "--accuracy", "fast"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("verdict: the spheres rebound")
+    assert lines[1].startswith("e for a dry DEM code (e_far): ") and ", range " in lines[1]
+    assert lines[2].startswith("e for a resolved CFD-DEM code (e_wet): ")
+    assert any(line.startswith("speeds: approach 150 mm/s") for line in lines[:6])
+
+
+def test_no_range_skips_the_solves(monkeypatch, capsys):
+    calls = []
+    real = answer_module._solve
+    monkeypatch.setattr(answer_module, "_solve", lambda *a: calls.append(a) or real(*a))
+    assert main(["scene", "--material1", "glass", "--radius1", "1 mm", "--material2", "steel",
+                 "--wall", "--fluid", "water", "--v0", "0.15 m/s", "--accuracy", "fast",
+                 "--json", "--no-range"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert calls == [] and d["e_for_dem_range"] is None and d["verdict"] == "rebounds"
