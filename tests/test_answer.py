@@ -172,3 +172,63 @@ def test_no_range_skips_the_solves(monkeypatch, capsys):
                  "--json", "--no-range"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert calls == [] and d["e_for_dem_range"] is None and d["verdict"] == "rebounds"
+
+
+# ---- restitution curves in the e each code needs, along the approach speed ---------------------
+def test_a_path_in_approach_speed_keeps_each_scene_at_its_factor(table):
+    from pipeline.dem.export import path_value, scene_path
+
+    scene = scene_from_dict(beads(), table)
+    path = scene_path(scene, "approach_speed", [0.5, 1.0, 2.0])
+    for f, s in zip((0.5, 1.0, 2.0), path):
+        assert s.approach_speed == pytest.approx(0.15 * f, rel=1e-15)
+        # each mapped again through the outer flow (its St moves with the speed)
+        assert s.outer_flow().approach_speed(s.stokes) * s.v0 == pytest.approx(0.15 * f,
+                                                                               rel=1e-12)
+    # a scene given v0 has the approach speed its v0 reads back as
+    given_v0 = {k: v for k, v in beads().items() if k != "approach_speed"} | {"v0": path[1].v0}
+    assert path_value(scene_from_dict(given_v0, table), "approach_speed") == \
+        pytest.approx(0.15, rel=1e-12)
+    # along the size, the approach speed is kept and v0 mapped again
+    bigger = scene_path(scene, "radius", [2.0])[0]
+    assert bigger.approach_speed == 0.15 and bigger.v0 != scene.v0
+
+
+def test_thresholds_in_e_far_and_e_wet_bracket_the_change(table, tmp_path, capsys):
+    from pipeline.dem.export import scene_path
+    from pipeline.scenes.threshold import RTOL, sticking_threshold
+
+    scene = scene_from_dict(beads(approach_speed="0.05 m/s", body1={
+        "material": "glass", "radius": "100 um"}), table)
+    for key in ("e_far", "e_wet"):
+        t = sticking_threshold(scene, "approach_speed", "fast", start=0.5, stop=8.0, n=5,
+                               key=key)
+        assert t.St_c is not None and t.key == key
+        below, above = scene_path(scene, "approach_speed",
+                                  [t.bracket[0] * (1 - RTOL), t.bracket[1] * (1 + RTOL)])
+        assert getattr(run_scene(below, accuracy="fast").collision, key) == 0.0
+        assert getattr(run_scene(above, accuracy="fast").collision, key) > 0.0
+        assert t.value == pytest.approx(0.05 * t.factor, rel=1e-12)
+    # the dry DEM code's threshold lies above the CFD-DEM code's: the outer flow takes more
+    wet = sticking_threshold(scene, "approach_speed", "fast", start=0.5, stop=8.0, n=5)
+    far = sticking_threshold(scene, "approach_speed", "fast", start=0.5, stop=8.0, n=5,
+                             key="e_far")
+    assert far.St_c > wet.St_c
+    # the command: a factor too slow to reach x0 is listed as sticking, both thresholds printed
+    code = main(["restitution", "--accuracy", "fast", "--vary", "approach_speed", "--from",
+                 "0.02", "--to", "8", "--n", "4", "--threshold", "--plot",
+                 str(tmp_path / "fig"), _scene_file(tmp_path)])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "approach_speed x 0.02: sticks, the outer flow stops the spheres before x0" in out
+    assert "sticking threshold in e_far (dry DEM): St_c = " in out
+    assert "sticking threshold in e_wet (resolved CFD-DEM): St_c = " in out
+    assert (tmp_path / "fig" / "restitution.png").stat().st_size > 1000
+
+
+def _scene_file(tmp_path):
+    path = tmp_path / "beads.toml"
+    path.write_text('approach_speed = "0.05 m/s"\n[body1]\nmaterial = "glass"\n'
+                    'radius = "100 um"\n[body2]\nmaterial = "steel"\nwall = true\n'
+                    '[fluid]\nname = "water"\n')
+    return str(path)

@@ -212,7 +212,7 @@ def test_python_example_runs_from_a_copy_of_the_examples(tmp_path):
     p = subprocess.run([sys.executable, "examples/scene_in_python.py"], cwd=tmp_path,
                        capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stderr[-2000:]
-    assert "sticking threshold: St_c = " in p.stdout and "e_wet = " in p.stdout
+    assert "sticking threshold in e_wet (resolved CFD-DEM): St_c = " in p.stdout and "e_wet = " in p.stdout
 
 
 # ---- cited headings and links resolve (the site cuts docs/model.md into pages by heading) -------

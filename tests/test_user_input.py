@@ -584,7 +584,7 @@ def test_restitution_threshold_with_a_failed_solve_is_exit_1(tmp_path, capsys, m
                          "--threshold", "--out", "dem")
     assert code == 1, err
     one_error_line(err, "no sticking threshold", "failed (max_steps)", "step budget exhausted")
-    assert "sticking threshold: not found" in out and "sticks" in out
+    assert "sticking threshold in e_far (dry DEM): not found" in out and "sticks" in out
     assert (tmp_path / "dem" / "restitution.csv").exists()  # the rest was written
 
 

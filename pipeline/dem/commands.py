@@ -17,10 +17,12 @@ import numpy as np
 __all__ = ["register", "solve_path"]
 
 
-def solve_path(scene, vary: str, factors, accuracy: str = "standard", progress=None):
+def solve_path(scene, vary: str, factors, accuracy: str = "standard", progress=None,
+               ranges: bool = False):
     """Solve the scenes along a path (export.scene_path); scenes the solver refuses are skipped
-    with their reason. ``progress``: called with a line per scene once the path has taken more
-    than 2 s. Returns ``(results, skipped)``."""
+    with their reason, and so are scenes whose outer flow stops the spheres before ``x0`` (they
+    stick). ``progress``: called with a line per scene once the path has taken more than 2 s.
+    ``ranges``: each scene's ranges too (``run_scene``). Returns ``(results, skipped)``."""
     import time
 
     from pipeline.scenes.run import run_scene
@@ -31,11 +33,14 @@ def solve_path(scene, vary: str, factors, accuracy: str = "standard", progress=N
     results, skipped = [], []
     path = scene_path(scene, vary, factors)
     t0 = time.perf_counter()
-    for k, s in enumerate(path):
-        factor = s.v0 / scene.v0 if vary == "v0" else s.body1.radius / scene.body1.radius
+    for k, (factor, s) in enumerate(zip(factors, path)):
+        if s.stops_outside:  # no film collision: the outer flow stops them (they stick)
+            skipped.append(f"{vary} x {factor:.3g}: sticks, the outer flow stops the spheres "
+                           "before x0")
+            continue
         try:
             results.append(run_scene(s, accuracy=accuracy, save_profiles=False,
-                                      sensitivity_solves=False))
+                                      sensitivity_solves=False, ranges=ranges))
         except SceneError as exc:
             skipped.append(f"{vary} x {factor:.3g}: {exc}")
         elapsed = time.perf_counter() - t0
@@ -156,7 +161,7 @@ def cmd_restitution(args) -> int:
     from pipeline.cli import UsageError, check_output_dir
     from pipeline.cli_shared import check_accuracy
 
-    from .export import progress_to_stderr, scene_rows, write_export
+    from .export import progress_to_stderr, scene_path, scene_rows, write_export
 
     _progress = progress_to_stderr("restitution")
 
@@ -167,32 +172,44 @@ def cmd_restitution(args) -> int:
     if not (0 < args.start < np.inf and 0 < args.stop < np.inf and args.n >= 1):
         raise UsageError("--from and --to must be finite positive factors and --n >= 1")
     factors = np.geomspace(args.start, args.stop, args.n)
-    results, skipped = solve_path(scene, args.vary, factors, args.accuracy, progress=_progress)
+    try:
+        scene_path(scene, args.vary, factors[:1])  # a path the scene has (approach: an outer flow)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    results, skipped = solve_path(scene, args.vary, factors, args.accuracy, progress=_progress,
+                                  ranges=args.range)
     rows = scene_rows(results, f"{scene.body1.solid.name}-{scene.body2.solid.name} in "
                                f"{scene.fluid.name}, {args.vary} path")
     _print_rows(rows, skipped)
-    threshold = None
+    thresholds = []
     if args.threshold:
         from pipeline.scenes.threshold import format_threshold, sticking_threshold
 
-        threshold = sticking_threshold(scene, args.vary, args.accuracy, start=args.start,
-                                       stop=args.stop, n=args.n, results=results)
-        print(format_threshold(threshold))
+        # in the e of each kind of code: dry DEM (e_far, where there is an outer flow) and
+        # resolved CFD-DEM (e_wet)
+        keys = ("e_far", "e_wet") if scene.outer_flow() is not None else ("e_wet",)
+        for key in keys:
+            thresholds.append(sticking_threshold(scene, args.vary, args.accuracy,
+                                                 start=args.start, stop=args.stop, n=args.n,
+                                                 results=results, key=key))
+            print(format_threshold(thresholds[-1]))
     if args.plot:
         from pipeline.plots.restitution_plot import plot_restitution
         from pipeline.writes import guarded_dir
 
         with guarded_dir(args.plot, f"--plot {args.plot}"):  # both files or neither
-            paths = plot_restitution(results, args.vary, args.plot, threshold=threshold,
+            paths = plot_restitution(results, args.vary, args.plot, thresholds=thresholds,
                                      title=scene.title)
         print("figure: " + ", ".join(str(p) for p in paths))
     if args.out:
         paths = write_export(rows, args.out, args.scene, progress=_progress)
         print("wrote " + ", ".join(str(p) for p in paths))
-    if threshold is not None and threshold.failed:  # the rest is written; the threshold is not
+    failed = [t for t in thresholds if t.failed]
+    if failed:  # the rest is written; the threshold is not
         from pipeline.errors import EXIT_SCENE_FAILED, EhdError
 
-        raise EhdError(f"no sticking threshold: {threshold.note}", EXIT_SCENE_FAILED)
+        raise EhdError(f"no sticking threshold in {failed[0].key}: {failed[0].note}",
+                       EXIT_SCENE_FAILED)
     return 0
 
 
@@ -213,9 +230,9 @@ def register(sub) -> None:
 
     p = sub.add_parser("restitution", help="e(St) of a scene along a path in impact speed or size")
     p.add_argument("scene", help="scene file (TOML; see docs/scenes.md)")
-    p.add_argument("--vary", choices=("v0", "radius"), default="v0",
-                   help="what moves along the path: the impact speed v0 or both radii "
-                        "(default v0)")
+    p.add_argument("--vary", choices=("v0", "approach_speed", "radius"), default="v0",
+                   help="what moves along the path: the speed v0 at x0, the approach speed at "
+                        "the outer start (the speed far out), or both radii (default v0)")
     p.add_argument("--from", dest="start", type=float, default=0.1,
                    help="first factor on v0 or the radii (default 0.1)")
     p.add_argument("--to", dest="stop", type=float, default=10.0, help="last factor (default 10)")
@@ -225,8 +242,13 @@ def register(sub) -> None:
                    help="write e against St and the path's v0 or radius, the sticking threshold "
                         "marked, as DIR/restitution.png and .pdf")
     p.add_argument("--threshold", action="store_true",
-                   help="also find the sticking threshold St_c (and its v0 or radius) by "
-                        "bisection along the path")
+                   help="also find the sticking threshold St_c (and its speed or radius) by "
+                        "bisection along the path, in the e of a dry DEM code (e_far) and of a "
+                        "resolved CFD-DEM code (e_wet)")
+    p.add_argument("--range", action="store_true",
+                   help="with --plot: draw each e's range over what the scene does not know as "
+                        "a band (each scene solved again at the ends of each unknown, as ehd "
+                        "scene does: 2-6 more solves per point)")
     _add_solve_flags(p)
     p.set_defaults(func=cmd_restitution)
 

@@ -37,7 +37,8 @@ from .conventions import CONVENTIONS, store_stokes_numbers, stokes_numbers
 from .fits import LAWS
 from solver.far_field import DEFAULT as FAR_DEFAULT
 
-__all__ = ["CSV_FIELDS", "store_rows", "scene_rows", "scene_path", "write_export", "read_csv",
+__all__ = ["CSV_FIELDS", "store_rows", "scene_rows", "scene_path", "PATHS", "approach_speed_of",
+           "path_value", "write_export", "read_csv",
            "group_settings", "export_files", "write_files", "progress_to_stderr", "ST_BANDS",
            "PLACEHOLDERS"]
 
@@ -107,24 +108,57 @@ def _far(grid, cell):
 
 
 def scene_path(scene, vary: str, factors) -> list:
-    """Scenes along a path: ``v0`` or the radii (and ``x0``, the outer start and ``x_ref`` with
-    them, keeping their ratios to ``a``) times
-    each factor. eps moves along the path with v0 and size: that is the point."""
+    """Scenes along a path: ``v0``, the approach speed or the radii (and ``x0``, the outer start
+    and ``x_ref`` with them, keeping their ratios to ``a``) times each factor. eps moves along
+    the path with the speed and size: that is the point. A scene given its approach speed keeps
+    it along a path in size (``v0`` mapped again: ``scene_file.at_approach_speed``)."""
+    from pipeline.scenes.scene_file import at_approach_speed
+
     scenes = []
     for f in factors:
         if vary == "v0":
-            scenes.append(dataclasses.replace(scene, v0=scene.v0 * f))
+            scenes.append(dataclasses.replace(scene, v0=scene.v0 * f, approach_speed=None))
+        elif vary == "approach_speed":
+            scenes.append(at_approach_speed(scene, approach_speed_of(scene) * f))
         elif vary == "radius":
             b1 = dataclasses.replace(scene.body1, radius=scene.body1.radius * f)
             b2 = dataclasses.replace(scene.body2, radius=scene.body2.radius * f)
             # the outer start and x_ref scale with the radii too (None: their defaults in a)
             outer = {k: None if getattr(scene, k) is None else getattr(scene, k) * f
                      for k in ("outer_start", "x_ref")}
-            scenes.append(dataclasses.replace(scene, body1=b1, body2=b2, x0=scene.x0 * f,
-                                              **outer))
+            scaled = dataclasses.replace(scene, body1=b1, body2=b2, x0=scene.x0 * f, **outer)
+            if scene.approach_speed is not None:
+                scaled = at_approach_speed(scaled, scene.approach_speed)
+            scenes.append(scaled)
         else:
-            raise ValueError(f"vary must be 'v0' or 'radius', got {vary!r}")
+            raise ValueError(f"vary must be one of {list(PATHS)}, got {vary!r}")
     return scenes
+
+
+# what can move along a path (``ehd restitution --vary``) -> what the path's axis shows
+PATHS = {"v0": ("impact speed v0", "m/s"), "approach_speed": ("approach speed", "m/s"),
+         "radius": ("radius of body1", "m")}
+
+
+def approach_speed_of(scene) -> float:
+    """The scene's approach speed at the outer start [m/s]: given, or what arrives at ``x0``
+    with its ``v0`` (``OuterFlow.approach_speed``); refused for two unequal spheres."""
+    from pipeline.scenes.scene import SceneError
+
+    if scene.approach_speed is not None:
+        return scene.approach_speed
+    outer = scene.outer_flow()
+    if outer is None:
+        raise SceneError("--vary approach_speed needs the outer flow, modelled for a sphere "
+                         "and a wall or two equal spheres: vary v0 for two unequal spheres")
+    return outer.approach_speed(scene.stokes) * scene.v0
+
+
+def path_value(scene, vary: str) -> float:
+    """The path's quantity of a scene [SI]: ``v0``, the approach speed, or body1's radius."""
+    if vary == "radius":
+        return scene.body1.radius
+    return scene.v0 if vary == "v0" else approach_speed_of(scene)
 
 
 def scene_rows(results, group: str) -> list[dict]:

@@ -30,11 +30,12 @@ from .units import format_quantity
 
 __all__ = ["ALPHA_UNKNOWN_HIGH", "READING_BAND_OVER_A", "CODE_KINDS", "answer", "stopped_answer"]
 
-# The high end of a liquid's unknown pressure-viscosity coefficient [1/Pa]: 25 1/GPa, within the
-# 10-35 1/GPa of mineral oils (Hamrock, Schmid & Jacobson, Fundamentals of Fluid Film
-# Lubrication, 2nd ed. 2004, ch. 4; quoted from memory, not checked against the table), above
-# glycerol's ~6 1/GPa (materials table) and water's ~0; the low end is 0 (the constant viscosity).
-ALPHA_UNKNOWN_HIGH = 25e-9
+# The high end of a liquid's unknown pressure-viscosity coefficient [1/Pa]: 20 1/GPa, the lowest
+# of the mineral oils in Stachowiak & Batchelor, Engineering Tribology, Table 2.3 (20-42 1/GPa;
+# checks.ALPHA_KNOWN_LIQUID): a liquid that is not an oil lies below it (glycerol 5.9 1/GPa,
+# water 0, the materials table), an oil should give its own; the low end is 0 (the constant
+# viscosity, what the scene solves).
+ALPHA_UNKNOWN_HIGH = 20e-9
 # Where a speed is read [x/a]: from 3 x0 (0.03 a) to one radius out, where a settling sphere has
 # not yet slowed (the outer start's default); e_far's default reading is 0.1 a
 READING_BAND_OVER_A = (0.03, 1.0)
@@ -95,7 +96,7 @@ def _alpha_variants(scene):
             or scene.viscosity_law != "auto":
         return None
     fluid = dataclasses.replace(f, pressure_viscosity=ALPHA_UNKNOWN_HIGH)
-    return (f"the liquid's pressure-viscosity coefficient, not given: 0 to "
+    return (f"the liquid's pressure-viscosity coefficient, not given: 0 (as solved) to "
             f"{ALPHA_UNKNOWN_HIGH * 1e9:g} 1/GPa",
             [("alpha high", dataclasses.replace(scene, fluid=fluid))])
 

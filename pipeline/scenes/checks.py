@@ -319,7 +319,8 @@ def viscosity_reason(scene: Scene, physics, base_p_max: float | None, *, forced:
         return why
     if alpha is None:
         return (f"{label}: {f.name} has no pressure-viscosity coefficient (fluid."
-                "pressure_viscosity), so the viscosity law is not switched")
+                "pressure_viscosity), so 0 is assumed and the viscosity law is not switched (the "
+                "range of ehd scene spans 0 to 20 1/GPa)")
     if alpha == 0.0:
         return (f"{label}: the pressure-viscosity coefficient of {f.name} is 0, so the viscosity "
                 "does not depend on the pressure")

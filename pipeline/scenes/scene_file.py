@@ -14,7 +14,7 @@ from .scene import (CAVITATION_CHOICES, DENSITY_CHOICES, ROUGHNESS_CHOICES, STAN
                     VISCOSITY_CHOICES, Body, Scene, SceneError, _reduced)
 from .units import FieldSpec, format_quantity, to_si
 
-__all__ = ["scene_from_dict", "DEFAULT_X0_OVER_A"]
+__all__ = ["scene_from_dict", "DEFAULT_X0_OVER_A", "at_approach_speed"]
 
 DEFAULT_X0_OVER_A = 0.01  # docs/model.md "Setting": the close stage starts at x0 ~ 0.01 a
 
@@ -187,9 +187,9 @@ def _cavitation_pressure(raw, fluid: FluidProps, ambient: float):
                                  f"{fluid.name!r} has no vapour_pressure: give fluid."
                                  "vapour_pressure, or the cavitation pressure itself")
             return ASSUMED_CAVITATION_PRESSURE, (
-                f"assumed: the fluid {fluid.name!r} gives no vapour pressure, so the "
-                f"{format_quantity(ASSUMED_CAVITATION_PRESSURE, 'Pa')} below which no liquid "
-                "holds still; give fluid.vapour_pressure or fluid.cavitation_pressure")
+                f"assumed {format_quantity(ASSUMED_CAVITATION_PRESSURE, 'Pa')}: the fluid "
+                f"{fluid.name!r} gives no vapour pressure, and a liquid's at room temperature is "
+                "0-2.3 kPa; give fluid.vapour_pressure or fluid.cavitation_pressure")
         p_cav, how = fluid.vapour_pressure, f"the vapour pressure of {fluid.name}"
     else:
         if isinstance(given, str) and not any(ch.isdigit() for ch in given):
@@ -316,7 +316,7 @@ def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
                   cavitation_pressure_source=how, cavitation=cavitation,
                   outer_start=outer_start, x_ref=x_ref, **laws,
                   asperity_contact=contact, e_dry=e_dry, e_dry_source=e_dry_source)
-    return scene if approach is None else _from_approach(scene, approach)
+    return scene if approach is None else at_approach_speed(scene, approach)
 
 
 def _speeds(data):
@@ -335,7 +335,7 @@ def _speeds(data):
     return to_si(data["v0"], _SPEED, "v0"), None
 
 
-def _from_approach(scene: Scene, approach: float) -> Scene:
+def at_approach_speed(scene: Scene, approach: float) -> Scene:
     """The scene with ``v0`` mapped from the approach speed at the outer start through the outer
     flow (``far_field.OuterFlow.arrival_speed``); ``v0 = 0`` when the outer flow stops the
     spheres before ``x0`` (``Scene.stops_outside``)."""

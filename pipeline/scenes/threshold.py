@@ -1,7 +1,10 @@
 """The sticking threshold of a scene's materials: the impact Stokes number (and speed, or size)
-below which its spheres stick (``e_wet = 0``: they never leave the lubrication region), found
-along the same path as ``ehd restitution`` (``v0`` or both radii times a factor; eps moves with
-them) by bisection between a sticking and a rebounding scene.
+below which its spheres stick, found along the same path as ``ehd restitution`` (``v0``, the
+approach speed or both radii times a factor; eps moves with them) by bisection between a
+sticking and a rebounding scene. Sticking is read in the e of a kind of code: ``e_wet = 0`` (a
+resolved CFD-DEM code: they never leave the lubrication region) or ``e_far = 0`` (a dry DEM
+code: the outer flow stops them before they are back at ``x_ref``); a scene whose outer flow
+stops the spheres before ``x0`` sticks in both.
 
 ``ehd restitution SCENE --threshold`` prints it (``--plot`` marks it); from Python::
 
@@ -26,51 +29,64 @@ RTOL = 1e-3  # the bracket's final relative width: below the presets' errors on 
 class Threshold:
     """``St_c`` (the bracket's geometric middle) and the path's quantity there."""
 
-    vary: str  # "v0" or "radius"
+    vary: str  # "v0", "approach_speed" or "radius"
     St_c: float | None  # None: no change from sticking to rebounding on the path (``note``)
-    factor: float | None  # on the scene's v0 or radii
-    value: float | None  # v0 [m/s] or body1's radius [m] at St_c
+    factor: float | None  # on the scene's v0, approach speed or radii
+    value: float | None  # v0 [m/s], the approach speed [m/s] or body1's radius [m] at St_c
     unit: str
     bracket: tuple  # (sticking factor, rebounding factor)
     solves: int
     note: str = ""
     failed: bool = False  # a solve the bisection needed failed (``note`` says which and why)
+    key: str = "e_wet"  # the e whose 0 is sticking: "e_wet" or "e_far"
+    approach_speed: float | None = None  # the approach speed at St_c [m/s] (None: no outer flow)
 
 
 class SolveFailed(ValueError):
     """A solve along the path failed (its status and message)."""
 
 
-def _sticks(scene, vary, factor, accuracy):
+def sticks(result, key: str) -> bool:
+    """Whether a solved path scene (a ``SceneResult``, or None: stopped before ``x0``) sticks
+    in ``key``."""
+    return result is None or getattr(result.collision, key) == 0.0
+
+
+def _sticks(scene, vary, factor, accuracy, key):
     from pipeline.dem.export import scene_path
 
     from .run import run_scene
 
-    r = run_scene(scene_path(scene, vary, [factor])[0], accuracy=accuracy, save_profiles=False,
-                   sensitivity_solves=False)
+    at = scene_path(scene, vary, [factor])[0]
+    if at.stops_outside:
+        return True
+    r = run_scene(at, accuracy=accuracy, save_profiles=False, sensitivity_solves=False)
     if not r.collision.ok:
         raise SolveFailed(f"the solve at {vary} x {factor:.4g} failed ({r.collision.status}): "
                           f"{r.collision.message}")
-    return r.collision.e_wet == 0.0, r.scene.stokes
+    return sticks(r, key)
 
 
 def sticking_threshold(scene, vary: str = "v0", accuracy: str = "standard", *,
                        start: float = 0.1, stop: float = 10.0, n: int = 9, results=None,
-                       rtol: float = RTOL) -> Threshold:
+                       rtol: float = RTOL, key: str = "e_wet") -> Threshold:
     """Bisect the path ``scene_path(scene, vary, factors)`` for the change from sticking to
     rebounding.
 
     Parameters
     ----------
     scene : pipeline.scenes.scene.Scene
-    vary : {"v0", "radius"}
+    vary : {"v0", "approach_speed", "radius"}
     start, stop, n : float, float, int
         The first bracket is looked for on ``n`` log-spaced factors in ``[start, stop]``
         (``ehd restitution``'s ``--from``, ``--to``, ``--n``).
-    results : list of SceneResult, optional
-        Those factors already solved (in order; ``ehd restitution`` passes its rows).
+    results : list of SceneResult or None, optional
+        Those factors already solved (in order, None for a scene stopped before ``x0``;
+        ``ehd restitution`` passes its rows).
     rtol : float
         Stop when the bracket's factors differ by less than this, relatively.
+    key : {"e_wet", "e_far"}
+        The e whose 0 is sticking (resolved CFD-DEM or dry DEM).
 
     Returns
     -------
@@ -82,59 +98,72 @@ def sticking_threshold(scene, vary: str = "v0", accuracy: str = "standard", *,
     """
     import numpy as np
 
+    from pipeline.dem.export import PATHS, path_value
+
     factors = [float(f) for f in np.geomspace(start, stop, n)]
     solves = 0
-    unit = "m/s" if vary == "v0" else "m"
+    unit = PATHS[vary][1]
     if results is not None and len(results) == n:
-        outcome = [(f, r.collision.e_wet == 0.0) for f, r in zip(factors, results)
-                   if r.collision.ok]
+        outcome = [(f, sticks(r, key)) for f, r in zip(factors, results)
+                   if r is None or r.collision.ok]
     else:
         outcome = []
         for f in factors:
             solves += 1
             try:
-                outcome.append((f, _sticks(scene, vary, f, accuracy)[0]))
+                outcome.append((f, _sticks(scene, vary, f, accuracy, key)))
             except SolveFailed:
                 continue
-    base = scene.v0 if vary == "v0" else scene.body1.radius
+    common = dict(vary=vary, unit=unit, key=key)
     # St grows with v0 and with size (St ~ v0 a): the first rebounding factor after a sticking one
     change = next((i for i in range(1, len(outcome))
                    if outcome[i - 1][1] and not outcome[i][1]), None)
     if change is None:
-        sticks = [stuck for _, stuck in outcome]
-        what = "rebound" if not any(sticks) else "stick" if all(sticks) else "alternate"
+        stuck_all = [stuck for _, stuck in outcome]
+        what = "rebound" if not any(stuck_all) else "stick" if all(stuck_all) else "alternate"
         if not outcome:
             what = "fail to solve"
-        return Threshold(vary, None, None, None, unit, (), solves,
+        return Threshold(St_c=None, factor=None, value=None, bracket=(), solves=solves,
                          note=f"the spheres {what} at every {vary} from {start:g} to {stop:g} "
-                              f"times the scene's; widen --from/--to")
+                              f"times the scene's; widen --from/--to", **common)
     lo, hi = outcome[change - 1][0], outcome[change][0]
     while hi / lo - 1.0 > rtol:
         mid = math.sqrt(lo * hi)
         solves += 1
         try:
-            stuck, _ = _sticks(scene, vary, mid, accuracy)
+            stuck = _sticks(scene, vary, mid, accuracy, key)
         except SolveFailed as exc:
-            return Threshold(vary, None, None, None, unit, (lo, hi), solves, failed=True,
-                             note=f"between {vary} x {lo:.4g} (sticks) and x {hi:.4g} "
-                                  f"(rebounds) {exc}")
+            return Threshold(St_c=None, factor=None, value=None, bracket=(lo, hi), solves=solves,
+                             failed=True, note=f"between {vary} x {lo:.4g} (sticks) and x "
+                                                f"{hi:.4g} (rebounds) {exc}", **common)
         lo, hi = (mid, hi) if stuck else (lo, mid)
     factor = math.sqrt(lo * hi)
     from pipeline.dem.export import scene_path
 
     at = scene_path(scene, vary, [factor])[0]
-    return Threshold(vary, at.stokes, factor, base * factor, unit, (lo, hi), solves)
+    approach = None if at.outer_flow() is None else path_value(at, "approach_speed")
+    return Threshold(St_c=at.stokes, factor=factor, value=path_value(at, vary),
+                     bracket=(lo, hi), solves=solves, approach_speed=approach, **common)
+
+
+# the e a threshold is read in -> the code kind it is for
+CODE_OF = {"e_wet": "resolved CFD-DEM", "e_far": "dry DEM"}
 
 
 def format_threshold(t: Threshold) -> str:
     """One line for the command line."""
+    head = f"sticking threshold in {t.key} ({CODE_OF[t.key]})"
     if t.failed:
-        return f"sticking threshold: not found: {t.note}"
+        return f"{head}: not found: {t.note}"
     if t.St_c is None:
-        return f"sticking threshold: not on this path ({t.note})"
+        return f"{head}: not on this path ({t.note})"
+    from pipeline.dem.export import PATHS
+
     from .units import format_quantity
 
-    what = "impact speed v0" if t.vary == "v0" else "radius of body1"
-    return (f"sticking threshold: St_c = {t.St_c:.4g} ({what} {format_quantity(t.value, t.unit)}"
-            f", {t.factor:.4g} x the scene's): below it the spheres stick, above it they "
-            f"rebound (bisected to {RTOL:g} in {t.solves} solves)")
+    approach = "" if t.approach_speed is None or t.vary == "approach_speed" else \
+        f", approach speed {format_quantity(t.approach_speed, 'm/s')}"
+    return (f"{head}: St_c = {t.St_c:.4g} ({PATHS[t.vary][0]} "
+            f"{format_quantity(t.value, t.unit)}{approach}, {t.factor:.4g} x the scene's): below "
+            f"it the spheres stick, above it they rebound (bisected to {RTOL:g} in {t.solves} "
+            "solves)")
