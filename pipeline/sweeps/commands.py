@@ -47,9 +47,13 @@ def register(sub) -> None:
     where.add_argument("--scheduler-file", metavar="FILE", default=None,
                        help="run on the dask scheduler described by FILE (dask scheduler "
                             "--scheduler-file FILE)")
-    where.add_argument("--executor", choices=("processes", "threads", "serial"), default=None,
-                       help="local executor (default processes: a dask LocalCluster, one worker "
-                            "process per core)")
+    where.add_argument("--executor", choices=("auto", "threads", "processes", "serial"),
+                       default=None,
+                       help="local executor: threads (one per core in this process), processes "
+                            "(a dask LocalCluster, one worker process per core: a crash of one "
+                            "is a failed scene, not the end of the sweep; 3-5 s of CPU each to "
+                            "start), serial; default auto: threads below 2000 scenes to "
+                            "compute, processes from there")
     p.add_argument("--workers", metavar="N", type=_positive_int, default=None,
                    help="local workers (default: all usable cores); with --scheduler/"
                         "--scheduler-file: wait for N workers before starting")
@@ -86,9 +90,10 @@ def cmd_sweep(args) -> int:
     from ..shipped import resolve_sweep
     from .config import load_sweep
     from .run import run_sweep
+    from .runners import DEFAULT_RUNNER
 
     sweep = load_sweep(resolve_sweep(args.sweep_file))  # ConfigError: one line, exit 2 (pipeline/errors.py)
-    summary = run_sweep(sweep, store=args.store, runner=args.executor or "processes",
+    summary = run_sweep(sweep, store=args.store, runner=args.executor or DEFAULT_RUNNER,
                         workers=args.workers, address=args.scheduler,
                         scheduler_file=args.scheduler_file, retry_failed=args.retry_failed,
                         wait_workers=args.wait_workers, add_sweep=args.add_sweep,

@@ -18,7 +18,8 @@ from ..errors import EXIT_OK, EXIT_SWEEP_FAILED
 from .config import format_physics
 from .layout import MODEL_CODES, STATUS_CODES
 from .progress import Progress
-from .runners import check_runner, open_runner, probe_scheduler
+from .runners import (DEFAULT_RUNNER, check_runner, choose_runner, open_runner,
+                      probe_scheduler)
 from .store import SweepStore
 from .tasks import MasterSolve, solve_scene, warm
 
@@ -95,7 +96,7 @@ class Summary:
         return "\n".join(lines)
 
 
-def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: int | None = None,
+def run_sweep(sweep, *, store=None, runner: str | None = DEFAULT_RUNNER, workers: int | None = None,
               address: str | None = None, scheduler_file: str | None = None,
               retry_failed: bool = False, solve=solve_scene, warm_up: bool | None = None,
               progress=sys.stderr, flush_seconds: float | None = None,
@@ -109,8 +110,9 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
         Grid, numerics, store location.
     store : path, optional
         Store location overriding ``sweep.store``.
-    runner : {"processes", "threads", "serial"}
-        Local executor (ignored with ``address``/``scheduler_file``).
+    runner : {"auto", "threads", "processes", "serial"}
+        Local executor (ignored with ``address``/``scheduler_file``; runners.py says which to
+        take).
     workers : int, optional
         Local workers (default: usable cores); with a scheduler, workers to wait for.
     address, scheduler_file : str, optional
@@ -198,7 +200,8 @@ def run_sweep(sweep, *, store=None, runner: str | None = "processes", workers: i
 
                 compile_notice(progress)
             try:
-                with open_runner(runner, workers, address, None, warm=warm_fn,
+                with open_runner(choose_runner(runner, len(jobs)), workers, address, None,
+                                 warm=warm_fn,
                                  stream=progress, **runner_kw) as run:
                     summary.runner = run.description
                     if progress is not None:

@@ -5,9 +5,17 @@ Every runner offers the same thing, ``run.unordered(fn, jobs)``: an iterator of
 whatever runs the scenes:
 
 - ``serial``: in this process, one scene after another (tests, debugging);
-- ``threads``: a dask LocalCluster of threads in this process (the solver's time loop is compiled
-  ``nogil``, so threads run scenes side by side);
-- ``processes`` (default): a dask LocalCluster of worker processes, one thread each;
+- ``threads``: a pool of threads in this process (``concurrent.futures``; the solver's compiled
+  pieces release the GIL, so threads run scenes side by side), which loads nothing more than a
+  serial sweep does: the paper sweep costs about as much CPU as ``serial`` and half its wall
+  time on 2 cores (benchmarks/sweep.md, "Executors");
+- ``processes``: a dask LocalCluster of worker processes, one thread each: a scene that crashes
+  its process (a segfault in compiled code) is stored as failed and the sweep goes on, where it
+  would end a sweep of threads (the journal keeps what was finished); each worker imports and
+  loads the compiled solver once, 3-5 s of CPU;
+- ``auto`` (default, ``choose_runner``): threads for a sweep of fewer than
+  ``AUTO_PROCESSES_FROM`` scenes to compute, processes from there, where their start-up is a
+  small part of the work and a crash costs the most;
 - an existing dask.distributed scheduler (``address`` or ``scheduler_file``), e.g. on SLURM.
 
 dask futures go through ``client.get_executor()``, a standard ``concurrent.futures`` executor, and
@@ -32,10 +40,24 @@ from contextlib import contextmanager
 from ..errors import SchedulerError, SchedulerLost
 
 __all__ = ["open_runner", "check_runner", "check_seconds", "check_address", "probe_scheduler",
-           "scheduler_address", "CONNECT_SECONDS", "default_workers", "max_local_workers", "RUNNERS", "Runner",
+           "scheduler_address", "CONNECT_SECONDS", "default_workers", "max_local_workers", "RUNNERS",
+           "DEFAULT_RUNNER", "AUTO_PROCESSES_FROM", "choose_runner", "Runner",
            "RunnerError", "WorkerSetup", "WAIT_WORKERS_SECONDS"]
 
-RUNNERS = ("processes", "threads", "serial")
+RUNNERS = ("auto", "threads", "processes", "serial")
+DEFAULT_RUNNER = "auto"
+# From this many scenes to compute, "auto" takes processes: the paper sweep's 448 scenes take
+# about 10 s of solver CPU, so 2000 such take ~45 s, against which the workers' start-up (3-5 s
+# of CPU each, benchmarks/sweep.md) is under a fifth on 2 cores
+AUTO_PROCESSES_FROM = 2000
+
+
+def choose_runner(kind: str, scenes: int) -> str:
+    """The local executor ``kind`` stands for with ``scenes`` to compute: "auto" is threads
+    below ``AUTO_PROCESSES_FROM`` scenes and processes from there; any other kind is itself."""
+    if kind != "auto":
+        return kind
+    return "processes" if scenes >= AUTO_PROCESSES_FROM else "threads"
 WAIT_WORKERS_SECONDS = 60.0  # how long a sweep waits for --workers N on an existing scheduler
 CONNECT_SECONDS = 30.0  # how long a sweep tries to reach an existing scheduler
 
@@ -111,7 +133,7 @@ def check_address(address: str) -> str:
     return address
 
 
-def check_runner(kind: str | None = "processes", workers: int | None = None,
+def check_runner(kind: str | None = DEFAULT_RUNNER, workers: int | None = None,
                  address: str | None = None, scheduler_file: str | None = None,
                  connect_seconds: float | None = None,
                  wait_workers: float | None = None) -> str | None:
@@ -317,7 +339,7 @@ def _quiet_dask(names=_NOISY, level: int = logging.CRITICAL + 1) -> None:
 
 
 @contextmanager
-def open_runner(kind: str | None = "processes", workers: int | None = None,
+def open_runner(kind: str | None = DEFAULT_RUNNER, workers: int | None = None,
                 address: str | None = None, scheduler_file: str | None = None, warm=None,
                 wait_workers: float = WAIT_WORKERS_SECONDS, stream=None,
                 connect_seconds: float = CONNECT_SECONDS):
@@ -325,8 +347,9 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
 
     Parameters
     ----------
-    kind : {"processes", "threads", "serial"} or None
-        Local executor; ignored when ``address`` or ``scheduler_file`` is given.
+    kind : {"threads", "processes", "serial"} or None
+        Local executor (``choose_runner`` resolves "auto" first); ignored when ``address`` or
+        ``scheduler_file`` is given.
     workers : int, optional
         Local: worker processes (or threads); default all usable cores, at most
         :func:`max_local_workers`. Existing scheduler: wait until this many workers are connected
@@ -344,6 +367,10 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
         warm()  # compile once, here: writes the on-disk numba cache the workers will load
     if local and kind == "serial":
         yield Runner("serial (this process)")
+        return
+    if local and kind == "threads":
+        with _thread_runner(workers or default_workers()) as run:
+            yield run
         return
 
     from dask.distributed import Client, LocalCluster
@@ -375,12 +402,10 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
         return
 
     n = workers or default_workers()
-    processes = kind == "processes"
     # no dashboard; the scheduler still serves a small HTTP endpoint, on port 8787 unless told
     # otherwise, and warns when another cluster holds that port: use a free local port instead
     with _workers_ignore_sigint():
-        cluster = LocalCluster(n_workers=n if processes else 1,
-                               threads_per_worker=1 if processes else n, processes=processes,
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                dashboard_address=None,
                                # a task cancelled on Ctrl-C is logged as a warning per worker
                                silence_logs=logging.ERROR,
@@ -392,7 +417,7 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
         _close_quietly(cluster)
         raise
     try:
-        yield _dask_runner(client, f"local {'processes' if processes else 'threads'} x{n}", warm)
+        yield _dask_runner(client, f"local processes x{n}", warm)
     except BaseException:
         # interrupted or failed: dask would log the tracebacks of every comm it closes
         _quiet_dask()
@@ -402,6 +427,20 @@ def open_runner(kind: str | None = "processes", workers: int | None = None,
     else:
         client.close()
         cluster.close()
+
+
+@contextmanager
+def _thread_runner(n: int):
+    """A pool of ``n`` threads in this process. On the way out by an exception (Ctrl-C, SIGTERM,
+    a lost store) the scenes not started are cancelled and the running ones finish (seconds at
+    most) before this returns; their results are not stored."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    pool = ThreadPoolExecutor(max_workers=n, thread_name_prefix="ehd-scene")
+    try:
+        yield Runner(f"local threads x{n}", executor=pool)
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 @contextmanager
