@@ -232,3 +232,17 @@ def _scene_file(tmp_path):
                     'radius = "100 um"\n[body2]\nmaterial = "steel"\nwall = true\n'
                     '[fluid]\nname = "water"\n')
     return str(path)
+
+
+def test_a_rough_scene_ranges_over_the_asperity_stiffness_from_its_sensitivity(table):
+    from pathlib import Path
+
+    from pipeline.scenes.commands import load_scene
+
+    air = Path(__file__).resolve().parent.parent / "examples" / "glass_bead_wall_air.toml"
+    r = run_scene(load_scene(str(air)), accuracy="fast", ranges=True)
+    assert not r.collision.physics.smooth  # the example switches the asperity contact on
+    (driver,) = [d for d in r.answer["range_drivers"] if d["unknown"] == "asperity stiffness"]
+    rows = [r.sensitivity[k] for k in answer_module.STIFFNESS_LABELS]
+    wet = [x["e_wet"] for x in rows] + [float(r.collision.e_wet)]
+    assert driver["e_for_cfd_dem"] == [min(wet), max(wet)]

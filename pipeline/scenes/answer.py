@@ -12,6 +12,8 @@ switches, no sensitivity) at the unknown's low and high end, one unknown at a ti
   pressure, Pi = 0) and full tension (the classic film, no floor);
 - ``pressure-viscosity``: a liquid without a pressure-viscosity coefficient at
   ``ALPHA_UNKNOWN_HIGH`` (the automatic switch decides whether it matters);
+- ``asperity stiffness`` (a rough scene): 10x stiffer and softer, the sensitivity's solves
+  (``run._sensitivity``: the least known input of the asperity contact), not solved again;
 - ``reading distance`` (``e_for_dem`` only, no solve): ``e_far`` read from the same collision
   at ``READING_BAND_OVER_A``, the distances experiments and DEM calibrations read speeds at.
 
@@ -105,6 +107,25 @@ _VARIANTS = (("roughness", _roughness_variants), ("cavitation onset", _cavitatio
              ("pressure-viscosity", _alpha_variants))
 
 
+# the sensitivity's labels of the asperity layer's stiffness (run._sensitivity)
+STIFFNESS_LABELS = ("asperities 10x stiffer", "asperities 10x softer")
+
+
+def _stiffness_driver(result):
+    """The asperity layer 10x stiffer and softer, from the sensitivity's solves (None: not a
+    rough scene, or no sensitivity solved)."""
+    rows = [result.sensitivity[k] for k in STIFFNESS_LABELS if k in result.sensitivity]
+    if not rows:
+        return None
+    central = _solved(result)
+    failed = [f"{k}: {r['status']}" for k, r in zip(STIFFNESS_LABELS, rows) if r["status"] != "ok"]
+    return {"unknown": "asperity stiffness",
+            "detail": "the asperity layer's stiffness 10x stiffer to 10x softer",
+            "e_for_dem": _envelope(central["e_for_dem"], [r["e_far"] for r in rows]),
+            "e_for_cfd_dem": _envelope(central["e_for_cfd_dem"], [r["e_wet"] for r in rows]),
+            "status": "ok" if not failed else "failed (" + ", ".join(failed) + ")"}
+
+
 def _reading_driver(result):
     """``e_far`` read from the same collision at the ends of ``READING_BAND_OVER_A``."""
     outer, c = result.outer, result.collision
@@ -158,6 +179,9 @@ def answer(result, accuracy: str = "standard", solve_options: dict | None = None
                 **{key: _envelope(central[key], [r[key] for r in solved])
                    for key, _ in CODE_KINDS.values()},
                 "status": "ok" if not failed else "failed (" + ", ".join(failed) + ")"})
+        stiffness = _stiffness_driver(result)
+        if stiffness is not None:
+            drivers.append(stiffness)
         reading = _reading_driver(result)
         if reading is not None:
             drivers.append(reading)

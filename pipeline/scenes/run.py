@@ -14,7 +14,7 @@ from solver.physics import Physics
 from .checks import (Check, cavitation_crosses, cavitation_reason, density_reason, density_switch,
                      model_reason, outcome_checks, premise_checks, pressure_checks, pressure_notes,
                      contact_switch, roughness_reason, viscosity_reason, viscosity_switch)
-from .answer import answer, stopped_answer
+from .answer import STIFFNESS_LABELS, answer, stopped_answer
 from .scene import Scene
 
 __all__ = ["SceneResult", "run_scene", "RESULT_KEYS", "check_solvable", "dem_restitution",
@@ -321,7 +321,7 @@ def _sensitivity(c, base, accuracy, overrides) -> dict:
         if on(final) and not on(base):
             variants[label] = final.replace(**off)
     if not final.smooth:
-        for factor, label in ((10.0, "asperities 10x stiffer"), (0.1, "asperities 10x softer")):
+        for factor, label in zip((10.0, 0.1), STIFFNESS_LABELS):
             variants[label] = final.replace(asperity_stiffness=final.asperity_stiffness * factor)
     out = {}
     for label, physics in variants.items():
