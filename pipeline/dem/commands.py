@@ -10,6 +10,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -70,6 +71,43 @@ def _print_rows(rows, skipped):
         print(f"skipped: {s}")
 
 
+def check_rows(rows, kind: str, source: str) -> None:
+    """UsageError unless every finished row has the e ``--for kind`` realises."""
+    from pipeline.cli import UsageError
+
+    from .conventions import DEM_KINDS
+    from .export import missing_e
+
+    missing = missing_e(rows, kind)
+    if not missing:
+        return
+    col = DEM_KINDS[kind].e_column
+    why = ("two unequal spheres have no e_far yet (the outer flow is modelled for a sphere and "
+           "a wall or two equal spheres)" if missing[0]["geometry"] == "sphere-sphere"
+           else "the rows have none")
+    raise UsageError(f"{source}: --for {kind} realises {col}, but {len(missing)} of {len(rows)} "
+                     f"rows have no {col}: {why}; export the resolved CFD-DEM e_wet with "
+                     "--for cfd-dem")
+
+
+def check_rows_between(scene, rows, fit_range, accuracy, progress):
+    """Rows of scenes solved at the ends of ``fit_range`` (our St) and halfway (geometric)
+    between the path's rows inside it: the law is checked there, never fitted (role "check").
+    Returns ``(rows, skipped)``."""
+    from .export import scene_rows
+
+    lo, hi = fit_range
+    st = sorted(r["St"] for r in rows)
+    factors = {f / scene.stokes for f in (lo, hi) if f > 0.0 and min(
+        abs(f / x - 1.0) for x in st) > 1e-6}
+    factors |= {math.sqrt(a * b) / scene.stokes for a, b in zip(st[:-1], st[1:])
+                if lo <= math.sqrt(a * b) <= hi}
+    if not factors:
+        return [], []
+    results, skipped = solve_path(scene, "v0", sorted(factors), accuracy, progress=progress)
+    return scene_rows(results, rows[0]["group"], role="check"), skipped
+
+
 def _fit_range(args):
     from pipeline.cli import UsageError
 
@@ -93,17 +131,34 @@ def _check_density_ratio(value: float) -> None:
         raise UsageError(f"--density-ratio {value:g}: {exc}") from None
 
 
+def _num(v) -> float:
+    return math.nan if v == "" else float(v)
+
+
+def _check_kind(kind: str) -> None:
+    from pipeline.cli import UsageError
+
+    from .conventions import DEM_KINDS
+
+    if kind not in DEM_KINDS:
+        raise UsageError(f"--for {kind!r}: give one of {', '.join(DEM_KINDS)} (dry: LIGGGHTS or "
+                         "YADE without fluid coupling; cfd-dem: resolved CFD-DEM)")
+
+
 def cmd_export_dem(args) -> int:
     from pipeline.cli import UsageError, check_output_dir
     from pipeline.cli_shared import check_accuracy
 
-    from .export import export_files, progress_to_stderr, scene_rows, store_rows, write_files
+    from .conventions import DEM_KINDS
+    from .export import (InvalidExport, export_files, progress_to_stderr, scene_rows, store_rows,
+                         write_files)
 
     _progress = progress_to_stderr("export-dem")
 
     check_output_dir("--out", args.out)  # before any solve
     check_accuracy(args.accuracy)
     fit_range = _fit_range(args)
+    _check_kind(args.kind)
     _check_density_ratio(args.density_ratio)
     if args.n < 1:
         raise UsageError(f"--n {args.n}: give a whole number of speeds >= 1")
@@ -133,16 +188,29 @@ def cmd_export_dem(args) -> int:
         results, skipped = solve_path(scene, "v0", factors, args.accuracy, progress=_progress)
         rows = scene_rows(results, f"{scene.body1.solid.name}-{scene.body2.solid.name} in "
                                    f"{scene.fluid.name}")
-        for s in skipped:
-            print(f"skipped: {s}")
         if not rows:
+            for s in skipped:
+                print(f"skipped: {s}")
             raise UsageError(f"{args.path}: the solver refused every speed of the path "
                              "(skipped lines above); change the scene")
-    if not any(r["e_wet"] > 0.0 for r in rows):
-        raise UsageError(f"{args.path}: no collision rebounds (every e_wet is 0): nothing to fit; "
+        check_rows(rows, args.kind, args.path)  # before the solves between the rows
+        if fit_range:
+            extra, more = check_rows_between(scene, rows, fit_range, args.accuracy, _progress)
+            rows, skipped = sorted(rows + extra, key=lambda r: r["St"]), skipped + more
+        for s in skipped:
+            print(f"skipped: {s}")
+    check_rows(rows, args.kind, args.path)
+    col = DEM_KINDS[args.kind].e_column
+    if not any(_num(r[col]) > 0.0 for r in rows):
+        raise UsageError(f"{args.path}: no collision rebounds (every {col} is 0): nothing to fit; "
                          "export a store or scene that reaches higher St")
-    files = export_files(rows, str(path), fit_range=fit_range, density_ratio=args.density_ratio,
-                         progress=_progress)
+    try:
+        files = export_files(rows, str(path), fit_range=fit_range,
+                             density_ratio=args.density_ratio, progress=_progress,
+                             kind=args.kind, allow_invalid=args.allow_invalid)
+    except InvalidExport as exc:
+        raise UsageError(f"{args.path}: {exc}; nothing written: change the scene, or export "
+                         "anyway with --allow-invalid (every file then says so)") from None
     if not any(name.startswith("liggghts_") for name in files):
         raise UsageError(f"{args.path}: no group has 3 rebounding collisions"
                          + (" in --fit-range" if fit_range else "") + ": nothing to fit; "
@@ -163,6 +231,7 @@ def cmd_restitution(args) -> int:
     check_output_dir("--out", args.out)  # before any solve
     check_output_dir("--plot", args.plot)
     check_accuracy(args.accuracy)
+    _check_kind(args.kind)
     scene = _scene(args.scene, args.materials)
     if not (0 < args.start < np.inf and 0 < args.stop < np.inf and args.n >= 1):
         raise UsageError("--from and --to must be finite positive factors and --n >= 1")
@@ -187,7 +256,15 @@ def cmd_restitution(args) -> int:
                                      title=scene.title)
         print("figure: " + ", ".join(str(p) for p in paths))
     if args.out:
-        paths = write_export(rows, args.out, args.scene, progress=_progress)
+        from .export import InvalidExport
+
+        check_rows(rows, args.kind, args.scene)
+        try:
+            paths = write_export(rows, args.out, args.scene, progress=_progress, kind=args.kind,
+                                 allow_invalid=args.allow_invalid)
+        except InvalidExport as exc:
+            raise UsageError(f"{args.scene}: {exc}; --out not written: change the scene, or "
+                             "export anyway with --allow-invalid") from None
         print("wrote " + ", ".join(str(p) for p in paths))
     if threshold is not None and threshold.failed:  # the rest is written; the threshold is not
         from pipeline.errors import EXIT_SCENE_FAILED, EhdError
@@ -206,8 +283,11 @@ def register(sub) -> None:
     p.add_argument("--n", type=int, default=13,
                    help="scenes only: speeds, log-spaced from 0.1 to 10 v0 (default 13)")
     p.add_argument("--fit-range", nargs=2, type=float, default=None, metavar=("LO", "HI"),
-                   help="fit and calibrate only on rows with LO <= St <= HI (our St: where your "
-                        "collisions are); errors are still reported on every row")
+                   help="fit and calibrate only on rows with LO <= St <= HI (our St, at v0: where "
+                        "your collisions are); a scene also solves scenes at LO, HI and halfway "
+                        "between its rows there, to state the law's error over the whole range "
+                        "(never fitted on); errors are still reported on every row")
+    _add_export_flags(p)
     _add_solve_flags(p)
     p.set_defaults(func=cmd_export_dem)
 
@@ -220,15 +300,31 @@ def register(sub) -> None:
                    help="first factor on v0 or the radii (default 0.1)")
     p.add_argument("--to", dest="stop", type=float, default=10.0, help="last factor (default 10)")
     p.add_argument("--n", type=int, default=9, help="points, log-spaced (default 9)")
-    p.add_argument("--out", default=None, help="also write the DEM export into this folder")
+    p.add_argument("--out", default=None, help="also write the DEM export into this folder "
+                   "(as export-dem: --for and --allow-invalid apply)")
     p.add_argument("--plot", metavar="DIR", default=None,
                    help="write e against St and the path's v0 or radius, the sticking threshold "
                         "marked, as DIR/restitution.png and .pdf")
     p.add_argument("--threshold", action="store_true",
                    help="also find the sticking threshold St_c (and its v0 or radius) by "
                         "bisection along the path")
+    _add_export_flags(p)
     _add_solve_flags(p)
     p.set_defaults(func=cmd_restitution)
+
+
+def _add_export_flags(p) -> None:
+    """``--for`` and ``--allow-invalid``: which e the exported laws realise, and whether rows
+    that all fail the validity checks may still be exported."""
+    p.add_argument("--for", dest="kind", default="dry", metavar="{dry,cfd-dem}",
+                   help="the kind of DEM code: dry (default; LIGGGHTS or YADE without fluid "
+                        "coupling) realises e_far, the whole loss the fluid causes, at the "
+                        "approach speed at x_ref; cfd-dem (resolved CFD-DEM) realises e_wet at "
+                        "v0. Two unequal spheres have no e_far yet: use cfd-dem")
+    p.add_argument("--allow-invalid", action="store_true",
+                   help="export even when every row of a group fails a validity check (e.g. "
+                        "a film thinner than a gas's mean free path); every snippet and the "
+                        "JSON then say so. Without it such an export is refused (exit 2)")
 
 
 def _add_solve_flags(p) -> None:

@@ -45,20 +45,26 @@ def _dt(v, pair, steps) -> float:
     return math.pi * math.sqrt((0.5 if pair else 1.0) * mass / (v["young"] * v["radius"])) / steps
 
 
-def snippet(y: dict, *, geometry: str, values: dict, placeholders: bool, steps: int) -> str:
+def snippet(y: dict, *, geometry: str, values: dict, placeholders: bool, steps: int,
+            header: tuple = ()) -> str:
     """Two blocks: the materials and time step (before the bodies) and, where walls occur, the
     wall mass (after them). ``values``: density, radius, young, poisson, viscosity (the scene's,
-    or example values marked REPLACE for a store)."""
+    or example values marked REPLACE for a store). ``header``: comment lines (without ``#``)
+    after the title: the e realised, its physics."""
     rep = "  # REPLACE: " if placeholders else "  # the scene's "
     walls = geometry in ("sphere-wall", "either")
     pair = geometry in ("sphere-sphere", "either")
     v = values
     lines = [
         "# ==== ehd-collision wet restitution for YADE 2023.02a: ViscElMat lubrication ====",
+        *(f"# {line}" for line in header),
         f"# Geometry: {'sphere-wall and sphere-sphere' if geometry == 'either' else geometry}."
         " BLOCK 1 before the bodies; bodies: sphere(..., material=ehd_mat)"
         + (" and the second sphere material=ehd_mat2" if "radius2" in v else "")
         + (", walls: wall(..., material=ehd_wall_mat)" if walls else "") + ".",
+        *(["# Walls: utils.wall only. Facets (geom.facetBox, meshes) enter the lubrication law as a",
+           "# sphere of radius 2R and realise e up to 0.27 too high: block 2 stops a run that has them."]
+          if walls else []),
         "# Engines: InteractionLoop([Ig2_Sphere_Sphere_ScGeom()" + (", Ig2_Wall_Sphere_ScGeom()" if walls else "")
         + "], [Ip2_ViscElMat_ViscElMat_ViscElPhys()], [Law2_ScGeom_ViscElPhys_Basic()]).",
         f"# Law at impact: e = max(1e-3, en (1 - ln(a/roughnessScale) / St_yade)), {y['convention']}.",
@@ -129,6 +135,9 @@ def snippet(y: dict, *, geometry: str, values: dict, placeholders: bool, steps: 
             "# YADE counts a massless wall with the sphere's mass (e ~0.1 too high): give walls a",
             f"# mass {WALL_MASS_FACTOR:.0e} times the sphere's (they stay fixed; only the contact law sees it)",
             "for ehd_b in O.bodies:",
+            "    if isinstance(ehd_b.shape, Facet):",
+            "        raise RuntimeError('ehd-collision: facet walls realise e up to 0.27 too high "
+            "with this law; use utils.wall')",
             "    if not isinstance(ehd_b.shape, Sphere) and ehd_b.state.mass == 0:",
             f"        ehd_b.state.mass = {WALL_MASS_FACTOR:.0e} * ehd_mass",
         ]
