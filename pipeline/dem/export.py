@@ -548,7 +548,8 @@ def _snippets(name, grp, s, store: bool, density_ratio: float) -> dict:
         lig["atom_types"] = types
     files[f"liggghts_{tag}.in"] = lig_text
     if walls:
-        files[f"liggghts_{tag}_wall.in"] = liggghts.wall_snippet(wall_type, placeholders=store)
+        files[f"liggghts_{tag}_wall.in"] = liggghts.wall_snippet(wall_type, placeholders=store,
+                                                                 header=header)
         files[f"openfoam_{tag}.txt"] = openfoam.snippet(s, store=store, header=header)
     files[f"yade_{tag}.py"] = yade.snippet(s["yade"], geometry=geometry, values=yv,
                                            placeholders=store, steps=liggghts.STEPS_PER_CONTACT,

@@ -323,11 +323,13 @@ def _example_dt(v) -> float:
     return tc / STEPS_PER_CONTACT
 
 
-def wall_snippet(wall_type: int, *, placeholders: bool) -> str:
+def wall_snippet(wall_type: int, *, placeholders: bool, header: tuple = ()) -> str:
     """The wall line (paste after the snippet): the same model and keywords in fix wall/gran;
-    the model keywords (``viscous on``) after the wall's own arguments, as LIGGGHTS requires."""
+    the model keywords (``viscous on``) after the wall's own arguments, as LIGGGHTS requires.
+    ``header``: as ``snippet``'s."""
     return "\n".join([
         "# ==== ehd-collision: walls (paste after the particle block) ====",
+        *(f"# {line}" for line in header),
         "# the wall's material is atom type %d; the same law (meff, reff = the sphere's)" % wall_type,
         "variable ehd_wall_z equal 0.0  # REPLACE: the wall's position (or use your mesh walls with "
         "the same 'model hooke tangential history' and 'viscous on' after 'meshes ...')",

@@ -61,8 +61,10 @@ def calibrate(st_l, e, e_max0, c0, weights=None, e_cap=1.0):
     return em, c, float(np.max(np.abs(law(st_l, em, c) - e)))
 
 
-def snippet(s: dict, *, store: bool) -> str:
-    """The controlDict line and the kinematicCloudProperties entries of group settings ``s``."""
+def snippet(s: dict, *, store: bool, header: tuple = ()) -> str:
+    """The controlDict line and the kinematicCloudProperties entries of group settings ``s``;
+    ``header``: comment lines (without ``//``) after the title: the e realised, its physics."""
+    head = "".join(f"// {line}\n" for line in header)
     o = s["openfoam"]
     rep = "  // REPLACE: " if store else "  // "
     if not store:
@@ -73,7 +75,7 @@ def snippet(s: dict, *, store: bool) -> str:
         rho_note = (f"REPLACE: {o['density_ratio']:.3g} (the export's rho_f/rho_p) x your "
                     "particle density, as in the fit's St_L")
     return f"""// ehd-collision wet restitution for OpenFOAM: patchInteractionModel localInteractionHW
-// Library: {LIBRARY} (third party; build it for your OpenFOAM).
+{head}// Library: {LIBRARY} (third party; build it for your OpenFOAM).
 // Law applied at impact: St_L = (rho_p + rhoF/2) Un d / (9 muP),  e = e exp(-coeffStc/St_L),
 // the parcel sticks where ln e < -5.3 (hard-coded in the library: eCutoffLog is not used).
 // Walls only (a patch interaction). Largest error of this law against the model, every row:
