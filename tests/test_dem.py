@@ -517,18 +517,19 @@ def test_fit_range_states_the_error_between_the_rows_too(tmp_path):
     # a scene: besides the path's rows, scenes at the range's ends and halfway between its rows
     # are solved, never fitted, and every realised error includes them
     out = tmp_path / "o"
+    # the path's St: 1.1-110 at 7 speeds, 23.7, 51 and 110 inside the range
     assert main(["export-dem", EXAMPLE, "--accuracy", "fast", "--n", "7", "--fit-range", "20",
-                 "110", "--for", "cfd-dem", "--out", str(out)]) == 0
+                 "120", "--for", "cfd-dem", "--out", str(out)]) == 0
     rows = read_csv(out / "restitution.csv")
     check = [r for r in rows if r["role"] == "check"]
-    fit = [r for r in rows if r["role"] == "fit" and 20 <= r["St"] <= 110]
-    assert {round(r["St"], 6) for r in check} >= {20.0}  # the low end (110 is a path row)
-    assert len(check) == len(fit)  # the low end and one between each pair of path rows
+    fit = [r for r in rows if r["role"] == "fit" and 20 <= r["St"] <= 120]
+    assert len(fit) == 3 and {20.0, 120.0} <= {round(r["St"], 9) for r in check}
+    assert len(check) == len(fit) + 1  # both ends and one between each pair of path rows
     (group,) = json.loads((out / "restitution.json").read_text())["groups"].values()
     assert group["fit_range"]["n"] == len(fit) and group["fit_range"]["n_check"] == len(check)
     assert group["fits"]["St"]["threshold"]["n"] <= len(fit)  # never fitted on the checks
     lig = group["liggghts"]
-    in_range = [r for r in rows if 20 <= r["St"] <= 110]
+    in_range = [r for r in rows if 20 <= r["St"] <= 120]
     st = np.array([r["St"] for r in in_range])
     e = np.array([r["e_wet"] for r in in_range])
     err = np.abs(liggghts.replica_many(st, lig["MaximumRestitution"], lig["CriticalStokes"]) - e)

@@ -3,7 +3,10 @@
 
 - ``export-dem``: from a sweep store (``.zarr``: every ok scene, grouped by eps) or a scene file
   (solved along its impact speed, ``v0`` times 0.1 to 10), write ``restitution.csv``,
-  ``restitution.json`` and the LIGGGHTS, OpenFOAM and YADE snippets into ``--out``.
+  ``restitution.json`` and the LIGGGHTS, OpenFOAM and YADE snippets into ``--out``; ``--for``
+  picks the e the laws realise (``conventions.DEM_KINDS``), ``--allow-invalid`` exports rows
+  that all fail the validity checks, ``--fit-range`` (a scene) solves check scenes between the
+  rows.
 - ``restitution``: e(St) of a scene file along a path in impact speed or size (eps moves with
   both), printed as a table; ``--out`` writes the same export.
 """

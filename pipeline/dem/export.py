@@ -15,6 +15,11 @@ Snippets per group (``<tag>`` from the group name):
 
 A store's snippets carry example values (glass in water) marked ``REPLACE``; a scene's carry the
 scene's values, and only what the model does not know (friction, wall position) is marked.
+
+Which e the laws realise, and at which speed, is the export's ``kind`` (``--for``;
+``conventions.DEM_KINDS``): dry DEM ``e_far`` at the approach speed at ``x_ref``, resolved
+CFD-DEM ``e_wet`` at ``v0``. Every JSON group and snippet header names it, the film physics of
+the rows and their validity (``validity``); no law's e_max exceeds the pair's ``e_dry``.
 """
 
 from __future__ import annotations

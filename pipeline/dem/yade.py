@@ -19,7 +19,10 @@ mean of ``2 young R`` of the two bodies. So
   sphere's and the dashpot too weak (measured: e 0.05-0.1 too high against a wall); the snippet
   gives walls a mass 1e6 times the sphere's (reduced mass = the sphere's to 1e-6);
 - ``<rho>`` averages the wall material's density in: the snippet's wall material has density 0
-  (conventions: ``St_yade`` is then 4.5 St for both geometries).
+  (conventions: ``St_yade`` is then 4.5 St for both geometries);
+- facet walls (``geom.facetBox``, meshes) enter the law through ``Ig2_Facet_Sphere_ScGeom`` as a
+  sphere of radius 2R (measured in yade 2023.02a: e up to 0.27 too high): the snippet states
+  ``utils.wall`` only and its block 2 stops a run that has facets.
 """
 
 from __future__ import annotations
