@@ -327,7 +327,8 @@ def test_fit_range_fits_only_there_and_reports_every_row(tmp_path):
     g_all = json.loads((out_all / "restitution.json").read_text())["groups"]["eps=0.01"]
     g_near = json.loads((out_near / "restitution.json").read_text())["groups"]["eps=0.01"]
     assert g_near["fit_range"]["n"] == 3 and g_near["fits"]["St"]["threshold"]["n"] <= 3
-    rows = [r for r in read_csv(out_all / "restitution.csv") if 10 <= r["St"] <= 30]
+    # the range's rows and its check scenes (below): what the stated error covers
+    rows = [r for r in read_csv(out_near / "restitution.csv") if 10 <= r["St"] <= 30]
     st, e = np.array([r["St"] for r in rows]), np.array([r["e_wet"] for r in rows])
 
     def lig_err(g):
@@ -338,8 +339,13 @@ def test_fit_range_fits_only_there_and_reports_every_row(tmp_path):
     # calibrated where the collisions are: better there than the calibration over every row
     assert lig_err(g_near) == pytest.approx(g_near["liggghts"]["realised_max_error_fit_range"])
     assert lig_err(g_near) < lig_err(g_all)
+    # checked between the rows too: scenes solved halfway between 10, 15 and 30 (the ends are
+    # rows), never fitted
+    check = [r for r in read_csv(out_near / "restitution.csv") if r["role"] == "check"]
+    assert [r["St"] for r in check] == pytest.approx([math.sqrt(150.0), math.sqrt(450.0)])
+    assert g_near["fit_range"]["n_check"] == 2 and "checked" in g_near["fit_range"]["between_rows"]
     for code in ("liggghts", "openfoam", "yade"):  # errors still reported on every row
-        assert sum(b["n"] for b in g_near[code]["realised_error_by_St"]) == 6
+        assert sum(b["n"] for b in g_near[code]["realised_error_by_St"]) == 6 + 2
     assert main(["export-dem", str(store), "--out", str(out_near), "--fit-range", "30", "10"]) == 2
 
 

@@ -95,20 +95,48 @@ def check_rows(rows, kind: str, source: str) -> None:
 
 def check_rows_between(scene, rows, fit_range, accuracy, progress):
     """Rows of scenes solved at the ends of ``fit_range`` (our St) and halfway (geometric)
-    between the path's rows inside it: the law is checked there, never fitted (role "check").
-    Returns ``(rows, skipped)``."""
-    from .export import scene_rows
+    between the path's rows inside it (``export.check_stokes``): the law is checked there,
+    never fitted (role "check"). Returns ``(rows, skipped)``."""
+    from .export import check_stokes, scene_rows
 
-    lo, hi = fit_range
-    st = sorted(r["St"] for r in rows)
-    factors = {f / scene.stokes for f in (lo, hi) if f > 0.0 and min(
-        abs(f / x - 1.0) for x in st) > 1e-6}
-    factors |= {math.sqrt(a * b) / scene.stokes for a, b in zip(st[:-1], st[1:])
-                if lo <= math.sqrt(a * b) <= hi}
+    factors = [x / scene.stokes for x in check_stokes([r["St"] for r in rows], *fit_range)]
     if not factors:
         return [], []
-    results, skipped = solve_path(scene, "v0", sorted(factors), accuracy, progress=progress)
+    results, skipped = solve_path(scene, "v0", factors, accuracy, progress=progress)
     return scene_rows(results, rows[0]["group"], role="check"), skipped
+
+
+def store_check_rows(ds, rows, fit_range, density_ratio, progress):
+    """As ``check_rows_between`` for a store: each group's check scenes solved with the store's
+    physics and numerics (``pipeline.sweeps.tasks.solve_scene``, the solver a sweep runs; a
+    fast-path store's rows came from its master curve, within its measured error of this).
+    Returns ``(rows, skipped)``."""
+    from dataclasses import fields
+
+    from pipeline.sweeps.config import physics_from_json
+    from pipeline.sweeps.tasks import solve_scene
+    from solver.settings import Numerics
+
+    from .export import check_stokes, store_groups, store_row
+
+    names = {f.name for f in fields(Numerics)} - {"save_profiles"}
+    numerics = {k: v for k, v in dict(ds.attrs.get("numerics", {})).items() if k in names}
+    accuracy = ds.attrs.get("accuracy", "standard")
+    out, skipped = [], []
+    for label, raw, _ in store_groups(ds):
+        physics = physics_from_json(raw)
+        for eps in ds["eps"].values:
+            group = [r for r in rows if r["group"] == f"eps={float(eps):.3g}{label}"]
+            for st in check_stokes([r["St"] for r in group], *fit_range) if group else ():
+                rec = solve_scene({**physics, "St": st, "eps": float(eps)}, accuracy, numerics)
+                if rec["status"] != "ok":
+                    skipped.append(f"St {st:.4g} eps {float(eps):.3g}{label}: {rec['message']}")
+                    continue
+                out.append(store_row(st, float(eps), label, raw, rec,
+                                     ds.attrs.get("solver_version", ""), density_ratio, "check"))
+                if progress:
+                    progress(f"check scene St {st:.4g} eps {float(eps):.3g}{label} solved")
+    return out, skipped
 
 
 def _fit_range(args):
@@ -185,6 +213,12 @@ def cmd_export_dem(args) -> int:
         if not rows:
             raise UsageError(f"{args.path}: no finished (ok) scene in the store; run "
                              "ehd sweep on it first (ehd status shows what is done)")
+        check_rows(rows, args.kind, args.path)  # before the solves between the rows
+        if fit_range:
+            extra, skipped = store_check_rows(ds, rows, fit_range, args.density_ratio, _progress)
+            rows = sorted(rows + extra, key=lambda r: (r["group"], r["St"]))
+            for s in skipped:
+                print(f"skipped: {s}")
     else:
         scene = _scene(str(path), args.materials)
         factors = np.geomspace(0.1, 10.0, args.n)
@@ -277,8 +311,9 @@ def cmd_restitution(args) -> int:
 
 
 def register(sub) -> None:
-    p = sub.add_parser("export-dem", help="wet restitution e(St) for DEM codes: CSV, fits, "
-                                          "LIGGGHTS / OpenFOAM / YADE settings")
+    p = sub.add_parser("export-dem", help="restitution laws for DEM codes (--for dry: e_far; "
+                                          "cfd-dem: e_wet): CSV, fits, LIGGGHTS / OpenFOAM / "
+                                          "YADE settings")
     p.add_argument("path", metavar="STORE_OR_SCENE", help="a sweep store (.zarr) or a scene file")
     p.add_argument("--out", default="dem_export", help="output folder (default dem_export)")
     p.add_argument("--density-ratio", type=float, default=0.0,

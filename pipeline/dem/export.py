@@ -45,7 +45,7 @@ from solver.far_field import DEFAULT as FAR_DEFAULT
 __all__ = ["CSV_FIELDS", "store_rows", "scene_rows", "scene_path", "write_export", "read_csv",
            "group_settings", "export_files", "write_files", "progress_to_stderr", "ST_BANDS",
            "PLACEHOLDERS", "ref_speed_ratio", "realised_physics", "validity", "snippet_header",
-           "InvalidExport", "missing_e"]
+           "InvalidExport", "missing_e", "store_groups", "store_row", "check_stokes"]
 
 CSV_FIELDS = (
     "group", "geometry", "material1", "material2", "fluid", "radius1_m", "radius2_m",
@@ -75,43 +75,67 @@ def _blank():
 def store_rows(ds, density_ratio: float = 0.0) -> list[dict]:
     """One row per ok scene of a sweep store with (St, eps) axes; groups are the eps values
     (and the values of any further axis, e.g. ``eps=0.0001 Pi=0.1``)."""
-    import itertools
-
     solver_version = ds.attrs.get("solver_version", "")
-    fixed = dict(ds.attrs.get("fixed_physics", {}))
     extra = [d for d in ds["status"].dims if d not in ("eps", "St")]
-    st_values, eps_values = ds["St"].values, ds["eps"].values
     # whole arrays at once (a .sel per cell took 16 s for 448 scenes)
     # e_far: stores made before it existed lack it (the column stays empty)
     grid = {k: np.asarray(ds[k].transpose("eps", "St", *extra).values)
             for k in ("status", "e_wet", "e_far", "h_m_x1", "p_max") if k in ds}
     out = []
-    for idx in itertools.product(*(range(ds.sizes[d]) for d in extra)):
-        label = "".join(f" {d}={float(ds[d].values[i]):.3g}" for d, i in zip(extra, idx))
-        physics = {**fixed, **{d: float(ds[d].values[i]) for d, i in zip(extra, idx)}}
-        for i, eps in enumerate(eps_values):
-            for j, st in enumerate(st_values):
+    for label, physics, idx in store_groups(ds):
+        for i, eps in enumerate(ds["eps"].values):
+            for j, st in enumerate(ds["St"].values):
                 cell = (i, j, *idx)
                 if int(grid["status"][cell]) != 1:
                     continue
-                row = _blank()
-                row.update(store_stokes_numbers(float(st), density_ratio))
-                e = float(grid["e_wet"][cell])
-                e_far = _far(grid, cell)
-                row.update(group=f"eps={float(eps):.3g}{label}", geometry="either",
-                           eps=float(eps), x_ref_x0=1.0, e_wet=e, sticks=bool(e == 0.0),
-                           e_far=e_far,
-                           v_ref_over_v0="" if e_far == "" else ref_speed_ratio(FAR_DEFAULT,
-                                                                               float(st)),
-                           e_dry=float(physics.get("e_dry", 1.0)),
-                           physics=_store_physics(physics), role="fit",
-                           # a sweep reads e_far with solver.far_field.DEFAULT
-                           x_ref_over_a=FAR_DEFAULT.x_ref_over_a if "e_far" in grid else "",
-                           closest_approach_x1=float(grid["h_m_x1"][cell]),
-                           peak_pressure=float(grid["p_max"][cell]), status="ok",
-                           solver_version=solver_version)
-                out.append(row)
+                record = {k: float(grid[k][cell]) for k in grid if k != "status"}
+                out.append(store_row(float(st), float(eps), label, physics, record,
+                                     solver_version, density_ratio))
     return out
+
+
+def store_groups(ds):
+    """``(label, physics, index)`` per value of the axes beyond St and eps: the label that
+    follows ``eps=...`` in a group's name, the fixed and axis physics, the axes' indices."""
+    import itertools
+
+    fixed = dict(ds.attrs.get("fixed_physics", {}))
+    extra = [d for d in ds["status"].dims if d not in ("eps", "St")]
+    for idx in itertools.product(*(range(ds.sizes[d]) for d in extra)):
+        label = "".join(f" {d}={float(ds[d].values[i]):.3g}" for d, i in zip(extra, idx))
+        yield label, {**fixed, **{d: float(ds[d].values[i]) for d, i in zip(extra, idx)}}, idx
+
+
+def store_row(st: float, eps: float, label: str, physics: dict, record: dict,
+              solver_version: str, density_ratio: float, role: str = "fit") -> dict:
+    """The row of one finished store scene (or one solved like it, ``role`` "check"):
+    ``record`` holds its ``e_wet``, ``h_m_x1``, ``p_max`` and, where read, ``e_far``."""
+    row = _blank()
+    row.update(store_stokes_numbers(st, density_ratio))
+    e = record["e_wet"]
+    far = record.get("e_far", math.nan)
+    e_far = far if math.isfinite(far) else ""
+    row.update(group=f"eps={eps:.3g}{label}", geometry="either", eps=eps, x_ref_x0=1.0,
+               e_wet=e, sticks=bool(e == 0.0), e_far=e_far,
+               v_ref_over_v0="" if e_far == "" else ref_speed_ratio(FAR_DEFAULT, st),
+               e_dry=float(physics.get("e_dry", 1.0)), physics=_store_physics(physics),
+               role=role,
+               # a sweep reads e_far with solver.far_field.DEFAULT
+               x_ref_over_a=FAR_DEFAULT.x_ref_over_a if "e_far" in record else "",
+               closest_approach_x1=record["h_m_x1"], peak_pressure=record["p_max"],
+               status="ok", solver_version=solver_version)
+    return row
+
+
+def check_stokes(st, lo: float, hi: float) -> list[float]:
+    """Where a law fitted on rows at ``st`` (our St) inside ``[lo, hi]`` is checked besides
+    them: the range's ends (unless a row is there; ``lo`` 0 has none) and halfway (geometric)
+    between neighbouring rows inside it."""
+    st = sorted(st)
+    ends = [x for x in (lo, hi) if x > 0.0 and math.isfinite(x)
+            and min(abs(x / y - 1.0) for y in st) > 1e-6]
+    mids = [math.sqrt(a * b) for a, b in zip(st[:-1], st[1:]) if lo <= math.sqrt(a * b) <= hi]
+    return sorted(set(ends + mids))
 
 
 def missing_e(rows: list[dict], kind: str) -> list[dict]:
@@ -149,14 +173,6 @@ def ref_speed_ratio(outer, stokes: float) -> float:
     if outer.x_ref_over_a <= outer.x0_over_a:
         return 1.0
     return dataclasses.replace(outer, start_over_a=outer.x_ref_over_a).approach_speed(stokes)
-
-
-def _far(grid, cell):
-    """The store's ``e_far`` of ``cell`` ("" when the store has none or it is NaN)."""
-    if "e_far" not in grid:
-        return ""
-    v = float(grid["e_far"][cell])
-    return v if math.isfinite(v) else ""
 
 
 def scene_path(scene, vary: str, factors) -> list:
@@ -325,9 +341,8 @@ def group_settings(rows: list[dict], fit_range=None, kind="dry") -> dict:
             "between_rows": (f"checked: {n_check} scenes solved between the fitted rows and at "
                              "the range's ends (CSV role 'check', never fitted) are in every "
                              "realised error" if n_check else
-                             "not checked: the realised errors are at the rows only (a store "
-                             "cannot be solved between its rows here; export-dem of a scene "
-                             "file solves scenes between them)")}
+                             "not checked: no point of the range lies between two rows or at "
+                             "an end without a row")}
     if int(np.sum(e[fit_mask] > 0)) < 3:
         out["note"] = ("fewer than 3 rebounding collisions" + (" in --fit-range" if fit_range else "")
                        + ": no fit (use ehd restitution over a range of speeds or sizes)")
