@@ -48,6 +48,26 @@ def _dt(v, pair, steps) -> float:
     return math.pi * math.sqrt((0.5 if pair else 1.0) * mass / (v["young"] * v["radius"])) / steps
 
 
+def _title(y: dict, geometry: str, walls: bool, second: bool, header: tuple) -> list[str]:
+    """The snippet's opening comments: title, ``header``, where to paste, engines, law, error."""
+    return [
+        "# ==== ehd-collision wet restitution for YADE 2023.02a: ViscElMat lubrication ====",
+        *(f"# {line}" for line in header),
+        f"# Geometry: {'sphere-wall and sphere-sphere' if geometry == 'either' else geometry}."
+        " BLOCK 1 before the bodies; bodies: sphere(..., material=ehd_mat)"
+        + (" and the second sphere material=ehd_mat2" if second else "")
+        + (", walls: wall(..., material=ehd_wall_mat)" if walls else "") + ".",
+        *(["# Walls: utils.wall only. Facets (geom.facetBox, meshes) enter the lubrication law as a",
+           "# sphere of radius 2R and realise e up to 0.27 too high: block 2 stops a run that has them."]
+          if walls else []),
+        "# Engines: InteractionLoop([Ig2_Sphere_Sphere_ScGeom()" + (", Ig2_Wall_Sphere_ScGeom()" if walls else "")
+        + "], [Ip2_ViscElMat_ViscElMat_ViscElPhys()], [Law2_ScGeom_ViscElPhys_Basic()]).",
+        f"# Law at impact: e = max(1e-3, en (1 - ln(a/roughnessScale) / St_yade)), {y['convention']}.",
+        f"# YADE never sticks (e >= 1e-3). Largest error against the model, every row: "
+        f"{y['realised_max_error']:.3f} in e (restitution.json: yade.realised_error_by_St).",
+    ]
+
+
 def snippet(y: dict, *, geometry: str, values: dict, placeholders: bool, steps: int,
             header: tuple = ()) -> str:
     """Two blocks: the materials and time step (before the bodies) and, where walls occur, the
@@ -59,20 +79,7 @@ def snippet(y: dict, *, geometry: str, values: dict, placeholders: bool, steps: 
     pair = geometry in ("sphere-sphere", "either")
     v = values
     lines = [
-        "# ==== ehd-collision wet restitution for YADE 2023.02a: ViscElMat lubrication ====",
-        *(f"# {line}" for line in header),
-        f"# Geometry: {'sphere-wall and sphere-sphere' if geometry == 'either' else geometry}."
-        " BLOCK 1 before the bodies; bodies: sphere(..., material=ehd_mat)"
-        + (" and the second sphere material=ehd_mat2" if "radius2" in v else "")
-        + (", walls: wall(..., material=ehd_wall_mat)" if walls else "") + ".",
-        *(["# Walls: utils.wall only. Facets (geom.facetBox, meshes) enter the lubrication law as a",
-           "# sphere of radius 2R and realise e up to 0.27 too high: block 2 stops a run that has them."]
-          if walls else []),
-        "# Engines: InteractionLoop([Ig2_Sphere_Sphere_ScGeom()" + (", Ig2_Wall_Sphere_ScGeom()" if walls else "")
-        + "], [Ip2_ViscElMat_ViscElMat_ViscElPhys()], [Law2_ScGeom_ViscElPhys_Basic()]).",
-        f"# Law at impact: e = max(1e-3, en (1 - ln(a/roughnessScale) / St_yade)), {y['convention']}.",
-        f"# YADE never sticks (e >= 1e-3). Largest error against the model, every row: "
-        f"{y['realised_max_error']:.3f} in e (restitution.json: yade.realised_error_by_St).",
+        *_title(y, geometry, walls, "radius2" in v, header),
         "# ---- BLOCK 1 ----",
         "import math",
         f"ehd_density = {v['density']:.6g}{rep}particle density [kg/m^3]",
@@ -132,16 +139,18 @@ def snippet(y: dict, *, geometry: str, values: dict, placeholders: bool, steps: 
             f"  # {_dt(v, pair, steps):.3g} s with the values above",
         ]
     lines.append("# set O.dt = ehd_dt_max or smaller")
-    if walls:
-        lines += [
-            "# ---- BLOCK 2, after the bodies (before O.run) ----",
-            "# YADE counts a massless wall with the sphere's mass (e ~0.1 too high): give walls a",
-            f"# mass {WALL_MASS_FACTOR:.0e} times the sphere's (they stay fixed; only the contact law sees it)",
-            "for ehd_b in O.bodies:",
-            "    if isinstance(ehd_b.shape, Facet):",
-            "        raise RuntimeError('ehd-collision: facet walls realise e up to 0.27 too high "
-            "with this law; use utils.wall')",
-            "    if not isinstance(ehd_b.shape, Sphere) and ehd_b.state.mass == 0:",
-            f"        ehd_b.state.mass = {WALL_MASS_FACTOR:.0e} * ehd_mass",
-        ]
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines + (_WALL_BLOCK if walls else [])) + "\n"
+
+
+# block 2 (walls only): the walls' mass, and a stop where facets would realise too high an e
+_WALL_BLOCK = [
+    "# ---- BLOCK 2, after the bodies (before O.run) ----",
+    "# YADE counts a massless wall with the sphere's mass (e ~0.1 too high): give walls a",
+    f"# mass {WALL_MASS_FACTOR:.0e} times the sphere's (they stay fixed; only the contact law sees it)",
+    "for ehd_b in O.bodies:",
+    "    if isinstance(ehd_b.shape, Facet):",
+    "        raise RuntimeError('ehd-collision: facet walls realise e up to 0.27 too high "
+    "with this law; use utils.wall')",
+    "    if not isinstance(ehd_b.shape, Sphere) and ehd_b.state.mass == 0:",
+    f"        ehd_b.state.mass = {WALL_MASS_FACTOR:.0e} * ehd_mass",
+]
