@@ -540,3 +540,24 @@ def test_fit_range_states_the_error_between_the_rows_too(tmp_path):
     e = np.array([r["e_wet"] for r in in_range])
     err = np.abs(liggghts.replica_many(st, lig["MaximumRestitution"], lig["CriticalStokes"]) - e)
     assert np.max(err) == pytest.approx(lig["realised_max_error_fit_range"], rel=1e-9)
+
+
+def test_dry_export_of_unequal_spheres_works_once_they_have_e_far(exported):
+    # the refusal above rests on the missing e_far alone: rows of two unequal spheres that carry
+    # one (as the outer flow will give them) export for a dry code like any other
+    from pipeline.dem.export import export_files, missing_e
+
+    rows = read_csv(exported / "restitution.csv")
+    for r in rows:  # the second sphere: a chrome-steel ball twice the bead's size
+        r.update(material2="chrome_steel", radius2_m=2 * r["radius1_m"], density2_kg_m3=7830.0,
+                 youngs2_Pa=2.1e11, poisson2=0.3)
+    assert not missing_e(rows, "dry")
+    files = export_files(rows, "unequal", kind="dry")
+    (group,) = json.loads(files["restitution.json"])["groups"].values()
+    assert group["liggghts"]["e_realised"] == "e_far" and group["liggghts"]["atom_types"] == [
+        "glass", "chrome_steel"]
+    yade = next(v for k, v in files.items() if k.startswith("yade_"))
+    assert "Realises e_far" in yade and "ehd_mat2" in yade
+    for r in rows:
+        r["e_far"] = ""
+    assert len(missing_e(rows, "dry")) == len(rows) and not missing_e(rows, "cfd-dem")
