@@ -450,7 +450,7 @@ def _yade_block(out, st_yade, st, e, range_mask) -> dict:
         "convention": "St_yade = <rho> (R1 + R2) vn / mu (YADE's; walls of density 0: 4.5 St)",
         "geometry": "both (the wall material has density 0 and walls get a mass)",
         "walls": "utils.wall only: facets (geom.facetBox, meshes) enter the lubrication law as a "
-                 "sphere of radius 2R and realise e up to 0.27 too high; the snippet's block 2 "
+                 "sphere of radius 2R and realise e up to 0.3 too high; the snippet's block 2 "
                  "stops a run that has facets",
         "en": ty["e_max"], "st_c": ty["c"], "roughnessScale_over_d": 0.5 * math.exp(-ty["c"]),
         "law": "e = max(1e-3, en (1 - ln(a / roughnessScale) / St_yade)), a = (R1 + R2)/2: "
