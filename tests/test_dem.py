@@ -490,8 +490,6 @@ def test_bad_for_is_one_line_before_any_solve(tmp_path, capsys):
 
 
 def test_dry_export_of_unequal_spheres_is_refused_naming_cfd_dem(tmp_path, capsys):
-    from solver.far_field import OuterFlow  # noqa: F401 (the outer flow decides e_far's rows)
-
     scene = "tests/dem/glass_bead_steel_ball_water.toml"
     out = tmp_path / "o"
     line = _export_error(capsys, ["export-dem", scene, "--accuracy", "fast", "--n", "1",
