@@ -113,11 +113,19 @@ def test_exported_files_parse(exported):
     for conv in ("St", "St_exp", "St_L", "St_yade"):
         for law in ("exponential", "threshold"):
             fit = group["fits"][conv][law]
-            assert fit["convention"] == conv and fit["max_error"] < 0.1 and fit["e_max"] <= 1
-    # CSV round trip: the fit's stated error is reproduced from the CSV's own numbers
+            assert fit["convention"] == conv and fit["e_max"] <= 1
+        # e_far (dry, the default) rises from 0 within a factor 2 in St: the threshold form
+        # follows it (0.0065 measured), the exponential cannot (0.15 measured), which is why
+        # LIGGGHTS' exponential law is calibrated, not fitted (its error is checked below)
+        assert group["fits"][conv]["threshold"]["max_error"] < 0.02
+    # CSV round trip: the fit's stated error is reproduced from the CSV's own numbers: the e
+    # it realises (dry, the default: e_far) at the St of the speed the code sees at contact
+    assert group["realises"]["e_realised"] == "e_far"
+    assert group["realises"]["speed_column"] == "v_ref_m_s"
     fit = group["fits"]["St"]["threshold"]
-    st = np.array([r["St"] for r in rows if r["e_wet"] > 0])
-    e = np.array([r["e_wet"] for r in rows if r["e_wet"] > 0])
+    st = np.array([r["St"] * r["v_ref_over_v0"] for r in rows if r["e_far"] > 0])
+    e = np.array([r["e_far"] for r in rows if r["e_far"] > 0])
+    assert all(r["v_ref_m_s"] == pytest.approx(r["v0_m_s"] * r["v_ref_over_v0"]) for r in rows)
     pred = fit["e_max"] * (1 - fit["c"] / st)
     assert np.max(np.abs(pred - e)) == pytest.approx(fit["max_error"], rel=1e-9)
 
@@ -141,10 +149,11 @@ def test_exported_files_parse(exported):
 
 
 def test_export_dem_from_a_scene_file(tmp_path, capsys):
-    assert main(["export-dem", EXAMPLE, "--accuracy", "fast", "--n", "5",
+    # --for dry (the default): e_far rebounds from about 2 v0 on, 3 of 7 speeds
+    assert main(["export-dem", EXAMPLE, "--accuracy", "fast", "--n", "7",
                  "--out", str(tmp_path)]) == 0
     rows = read_csv(tmp_path / "restitution.csv")
-    assert len(rows) == 5 and rows[0]["St"] < rows[-1]["St"]
+    assert len(rows) == 7 and rows[0]["St"] < rows[-1]["St"]
     assert main(["export-dem", str(tmp_path / "nothing.zarr")]) == 2
 
 
@@ -161,7 +170,8 @@ def test_export_dem_from_a_sweep_store(tmp_path, capsys):
     run_sweep(sweep, runner="serial", progress=None)
     ds = open_results(sweep.store)
     assert float(ds.e_wet.sel(St=30.0, eps=0.01)) == collide(30.0, 0.01, accuracy="fast").e_wet
-    assert main(["export-dem", str(sweep.store), "--out", str(tmp_path / "out")]) == 0
+    assert main(["export-dem", str(sweep.store), "--out", str(tmp_path / "out"),
+                 "--for", "cfd-dem"]) == 0
     rows = read_csv(tmp_path / "out" / "restitution.csv")
     assert [r["St"] for r in rows] == [6.0, 10.0, 15.0, 30.0, 60.0]
     assert rows[0]["sticks"] and rows[0]["St_exp"] == 6.0 and rows[0]["St_yade"] == 27.0
@@ -310,12 +320,15 @@ def test_write_files_leaves_the_old_export_when_a_write_fails(tmp_path, monkeypa
 def test_fit_range_fits_only_there_and_reports_every_row(tmp_path):
     store = _tiny_store(tmp_path / "s.zarr", [6.0, 10.0, 15.0, 30.0, 60.0, 120.0])
     out_all, out_near = tmp_path / "all", tmp_path / "near"
-    assert main(["export-dem", str(store), "--out", str(out_all)]) == 0
-    assert main(["export-dem", str(store), "--out", str(out_near), "--fit-range", "10", "30"]) == 0
+    cfd = ["--for", "cfd-dem"]  # e_wet at v0: the rows' own St
+    assert main(["export-dem", str(store), "--out", str(out_all), *cfd]) == 0
+    assert main(["export-dem", str(store), "--out", str(out_near), "--fit-range", "10", "30",
+                 *cfd]) == 0
     g_all = json.loads((out_all / "restitution.json").read_text())["groups"]["eps=0.01"]
     g_near = json.loads((out_near / "restitution.json").read_text())["groups"]["eps=0.01"]
     assert g_near["fit_range"]["n"] == 3 and g_near["fits"]["St"]["threshold"]["n"] <= 3
-    rows = [r for r in read_csv(out_all / "restitution.csv") if 10 <= r["St"] <= 30]
+    # the range's rows and its check scenes (below): what the stated error covers
+    rows = [r for r in read_csv(out_near / "restitution.csv") if 10 <= r["St"] <= 30]
     st, e = np.array([r["St"] for r in rows]), np.array([r["e_wet"] for r in rows])
 
     def lig_err(g):
@@ -326,8 +339,13 @@ def test_fit_range_fits_only_there_and_reports_every_row(tmp_path):
     # calibrated where the collisions are: better there than the calibration over every row
     assert lig_err(g_near) == pytest.approx(g_near["liggghts"]["realised_max_error_fit_range"])
     assert lig_err(g_near) < lig_err(g_all)
+    # checked between the rows too: scenes solved halfway between 10, 15 and 30 (the ends are
+    # rows), never fitted
+    check = [r for r in read_csv(out_near / "restitution.csv") if r["role"] == "check"]
+    assert [r["St"] for r in check] == pytest.approx([math.sqrt(150.0), math.sqrt(450.0)])
+    assert g_near["fit_range"]["n_check"] == 2 and "checked" in g_near["fit_range"]["between_rows"]
     for code in ("liggghts", "openfoam", "yade"):  # errors still reported on every row
-        assert sum(b["n"] for b in g_near[code]["realised_error_by_St"]) == 6
+        assert sum(b["n"] for b in g_near[code]["realised_error_by_St"]) == 6 + 2
     assert main(["export-dem", str(store), "--out", str(out_near), "--fit-range", "30", "10"]) == 2
 
 
@@ -341,9 +359,203 @@ def test_store_with_a_further_axis_groups_by_it(tmp_path):
             '[numerics]\naccuracy = "fast"\n')
     sweep = parse_sweep(text).with_store(tmp_path / "s.zarr")
     run_sweep(sweep, runner="serial", progress=None)
-    assert main(["export-dem", str(sweep.store), "--out", str(tmp_path / "o")]) == 0
+    assert main(["export-dem", str(sweep.store), "--out", str(tmp_path / "o"),
+                 "--for", "cfd-dem"]) == 0
     rows = read_csv(tmp_path / "o" / "restitution.csv")
     assert {r["group"] for r in rows} == {"eps=0.01 Pi=0.01", "eps=0.01 Pi=1"}
     assert len(rows) == 8
     doc = json.loads((tmp_path / "o" / "restitution.json").read_text())
     assert set(doc["groups"]) == {"eps=0.01 Pi=0.01", "eps=0.01 Pi=1"}
+
+
+# ---- issue 26: which e, at which speed; e_dry; limitForce; validity; the range's error ----
+
+def test_one_table_maps_each_kind_of_code_to_its_e_and_speed(exported):
+    from pipeline.dem.conventions import DEM_KINDS
+
+    assert {k: (d.e_column, d.speed_column) for k, d in DEM_KINDS.items()} == {
+        "dry": ("e_far", "v_ref_m_s"), "cfd-dem": ("e_wet", "v0_m_s")}
+    doc = json.loads((exported / "restitution.json").read_text())
+    (group,) = doc["groups"].values()
+    assert doc["for"] == "dry" and doc["e_realised"] == "e_far"
+    for code in ("liggghts", "yade"):  # per group and code: the contract's two keys
+        assert group[code]["e_realised"] == "e_far"
+        assert group[code]["speed_column"] == "v_ref_m_s"
+    # every snippet names the e it realises, the physics behind it and the rows' validity
+    for path in exported.glob("*_*.*"):
+        if path.suffix in (".in", ".py", ".txt"):
+            text = path.read_text()
+            assert "Realises e_far for a dry DEM" in text, path.name
+            assert "Physics behind it:" in text and "asperity contact" in text, path.name
+            assert "Validity:" in text and "Re_x0_over_a" in text, path.name
+
+
+def test_the_dry_speed_is_the_approach_speed_at_x_ref():
+    # the outer flow's energy equation without added mass: V(x_ref) = 1 + J(x0, x_ref)/St
+    # exactly (solver/far_field.py), and the speed at x0 itself is v0
+    from solver.far_field import OuterFlow
+
+    from pipeline.dem.export import ref_speed_ratio
+
+    outer = OuterFlow()
+    for st in (2.0, 20.0, 200.0):
+        assert ref_speed_ratio(outer, st) == pytest.approx(
+            1.0 + outer.integral(outer.x_ref_over_a) / st, rel=1e-12)
+    assert ref_speed_ratio(OuterFlow(x_ref_over_a=0.01), 5.0) == 1.0  # x_ref = x0
+    wide = OuterFlow(x_ref_over_a=1.0, density_ratio=0.4)  # x_ref at the outer start
+    assert ref_speed_ratio(wide, 7.0) == pytest.approx(wide.approach_speed(7.0), rel=1e-12)
+
+
+def test_e_max_never_above_the_pairs_e_dry():
+    # data of a law whose e_max (0.99) exceeds the cap: the fits and the calibration stop at it
+    st = np.array([12.0, 15.0, 20.0, 30.0, 60.0, 120.0, 300.0])
+    e = 0.99 * np.exp(-10.0 / st)
+    for fit in (fit_exponential, fit_threshold):
+        assert fit(st, e, "St", 0.9).e_max == pytest.approx(0.9, abs=1e-9)
+        assert fit(st, e, "St").e_max <= 1.0
+    e_max, c, _, _ = liggghts.calibrate(st, e, e_cap=0.9)
+    assert e_max <= 0.9
+    mm_e, _, _ = liggghts.calibrate_minimax(st, e, e_max, c, e_cap=0.9)
+    assert mm_e <= 0.9
+
+
+def test_export_never_promises_more_than_e_dry(exported):
+    (group,) = json.loads((exported / "restitution.json").read_text())["groups"].values()
+    assert group["realises"]["e_dry"] == 0.97  # glass/glass: the materials table's pair
+    assert group["liggghts"]["MaximumRestitution"] <= 0.97
+    assert group["yade"]["en"] <= 0.97
+    assert all(f["e_max"] <= 0.97 for conv in group["fits"].values() for f in conv.values())
+
+
+def test_limit_force_makes_a_sticking_collision_rebound():
+    # why the LIGGGHTS snippet warns against limitForce: with the force never attractive the
+    # dashpot cannot hold the spheres, so at an St where the calibrated law sticks (e < 1e-4,
+    # the replica's stuck level) it rebounds at e ~0.15-0.2 (0.24 measured in LIGGGHTS 3.8.0
+    # at the issue's values); the 0.1 bound is far from both
+    e_max, c = 0.897, 10.5  # calibrated on the example (glass beads in water, e_far)
+    for st in (2.0, 5.0, 8.0):
+        assert liggghts.replica_restitution(st, e_max, c) == 0.0
+        assert liggghts.replica_restitution(st, e_max, c, limit_force=True) > 0.1
+    assert "keep limitForce off" in liggghts.snippet(
+        {"realised_max_error": 0.01, "CriticalStokes": c, "MaximumRestitution": e_max},
+        types=["glass"], placeholders=False,
+        values={"youngs": [7e10], "poisson": [0.25], "viscosity": 1e-3, "v_char": 0.1,
+                "dt_max": 1e-8})
+
+
+def test_yade_snippet_states_utils_wall_and_stops_on_facets(tmp_path):
+    from pipeline.dem import yade
+
+    text = yade.snippet({"convention": "St_yade", "realised_max_error": 0.01, "en": 0.9,
+                         "st_c": 20.0}, geometry="sphere-wall", placeholders=True, steps=200,
+                        values={"density": 2500.0, "radius": 1e-4, "young": 7e10,
+                                "poisson": 0.25, "viscosity": 1e-3})
+    assert "utils.wall only" in text
+    block2 = "#" + text.partition("# ---- BLOCK 2")[2]
+
+    class Shape:
+        pass
+
+    class Facet(Shape):
+        pass
+
+    class Sphere(Shape):
+        pass
+
+    class Body:
+        def __init__(self, shape):
+            self.shape, self.state = shape, type("State", (), {"mass": 0.0})()
+
+    env = {"Facet": Facet, "Sphere": Sphere, "ehd_mass": 1.0,
+           "O": type("O", (), {"bodies": [Body(Sphere()), Body(Shape())]})}
+    exec(block2, env)  # a wall: given its mass
+    assert env["O"].bodies[1].state.mass == 1e6
+    env["O"].bodies.append(Body(Facet()))
+    with pytest.raises(RuntimeError, match="facet walls"):
+        exec(block2, env)
+
+
+def _export_error(capsys, argv):
+    code = main(argv)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and err[0].startswith("ehd export-dem: error:"), err
+    return err[0]
+
+
+def test_bad_for_is_one_line_before_any_solve(tmp_path, capsys):
+    line = _export_error(capsys, ["export-dem", EXAMPLE, "--for", "wet", "--out",
+                                  str(tmp_path / "o")])
+    assert "--for 'wet'" in line and "dry, cfd-dem" in line
+    assert not (tmp_path / "o").exists()
+
+
+def test_dry_export_of_unequal_spheres_is_refused_naming_cfd_dem(tmp_path, capsys):
+    scene = "tests/dem/glass_bead_steel_ball_water.toml"
+    out = tmp_path / "o"
+    line = _export_error(capsys, ["export-dem", scene, "--accuracy", "fast", "--n", "1",
+                                  "--out", str(out)])
+    assert "no e_far" in line and "--for cfd-dem" in line and "unequal" in line
+    assert not out.exists() or not any(out.iterdir())
+
+
+AIR = "examples/glass_bead_wall_air.toml"  # every film thinner than air's mean free path
+
+
+def test_invalid_scene_is_refused_unless_allowed_and_then_says_so(tmp_path, capsys):
+    out = tmp_path / "o"
+    argv = ["export-dem", AIR, "--accuracy", "fast", "--n", "5", "--out", str(out)]
+    line = _export_error(capsys, argv)
+    assert "INVALID" in line and "mean_free_path" in line and "--allow-invalid" in line
+    assert not out.exists() or not any(out.iterdir())
+    assert main(argv + ["--allow-invalid"]) == 0
+    doc = json.loads((out / "restitution.json").read_text())
+    (group,) = doc["groups"].values()
+    assert group["validity"]["every_row_fails"] and "mean_free_path" in group["validity"]["checks"]
+    snippets = [p for p in out.iterdir() if p.name != "restitution.csv" and p.suffix != ".json"]
+    assert len(snippets) == 4  # LIGGGHTS particles and wall, OpenFOAM, YADE
+    for p in snippets:
+        assert "INVALID: every row fails" in p.read_text(), p.name
+
+
+def test_fit_range_states_the_error_between_the_rows_too(tmp_path):
+    # a scene: besides the path's rows, scenes at the range's ends and halfway between its rows
+    # are solved, never fitted, and every realised error includes them
+    out = tmp_path / "o"
+    # the path's St: 1.1-110 at 7 speeds, 23.7, 51 and 110 inside the range
+    assert main(["export-dem", EXAMPLE, "--accuracy", "fast", "--n", "7", "--fit-range", "20",
+                 "120", "--for", "cfd-dem", "--out", str(out)]) == 0
+    rows = read_csv(out / "restitution.csv")
+    check = [r for r in rows if r["role"] == "check"]
+    fit = [r for r in rows if r["role"] == "fit" and 20 <= r["St"] <= 120]
+    assert len(fit) == 3 and {20.0, 120.0} <= {round(r["St"], 9) for r in check}
+    assert len(check) == len(fit) + 1  # both ends and one between each pair of path rows
+    (group,) = json.loads((out / "restitution.json").read_text())["groups"].values()
+    assert group["fit_range"]["n"] == len(fit) and group["fit_range"]["n_check"] == len(check)
+    assert group["fits"]["St"]["threshold"]["n"] <= len(fit)  # never fitted on the checks
+    lig = group["liggghts"]
+    in_range = [r for r in rows if 20 <= r["St"] <= 120]
+    st = np.array([r["St"] for r in in_range])
+    e = np.array([r["e_wet"] for r in in_range])
+    err = np.abs(liggghts.replica_many(st, lig["MaximumRestitution"], lig["CriticalStokes"]) - e)
+    assert np.max(err) == pytest.approx(lig["realised_max_error_fit_range"], rel=1e-9)
+
+
+def test_dry_export_of_unequal_spheres_works_once_they_have_e_far(exported):
+    # the refusal above rests on the missing e_far alone: rows of two unequal spheres that carry
+    # one (as the outer flow will give them) export for a dry code like any other
+    from pipeline.dem.export import export_files, missing_e
+
+    rows = read_csv(exported / "restitution.csv")
+    for r in rows:  # the second sphere: a chrome-steel ball twice the bead's size
+        r.update(material2="chrome_steel", radius2_m=2 * r["radius1_m"], density2_kg_m3=7830.0,
+                 youngs2_Pa=2.1e11, poisson2=0.3)
+    assert not missing_e(rows, "dry")
+    files = export_files(rows, "unequal", kind="dry")
+    (group,) = json.loads(files["restitution.json"])["groups"].values()
+    assert group["liggghts"]["e_realised"] == "e_far" and group["liggghts"]["atom_types"] == [
+        "glass", "chrome_steel"]
+    yade = next(v for k, v in files.items() if k.startswith("yade_"))
+    assert "Realises e_far" in yade and "ehd_mat2" in yade
+    for r in rows:
+        r["e_far"] = ""
+    assert len(missing_e(rows, "dry")) == len(rows) and not missing_e(rows, "cfd-dem")

@@ -3,13 +3,17 @@
 
 - ``export-dem``: from a sweep store (``.zarr``: every ok scene, grouped by eps) or a scene file
   (solved along its impact speed, ``v0`` times 0.1 to 10), write ``restitution.csv``,
-  ``restitution.json`` and the LIGGGHTS, OpenFOAM and YADE snippets into ``--out``.
+  ``restitution.json`` and the LIGGGHTS, OpenFOAM and YADE snippets into ``--out``; ``--for``
+  picks the e the laws realise (``conventions.DEM_KINDS``), ``--allow-invalid`` exports rows
+  that all fail the validity checks, ``--fit-range`` (a scene) solves check scenes between the
+  rows.
 - ``restitution``: e(St) of a scene file along a path in impact speed or size (eps moves with
   both), printed as a table; ``--out`` writes the same export.
 """
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -75,6 +79,71 @@ def _print_rows(rows, skipped):
         print(f"skipped: {s}")
 
 
+def check_rows(rows, kind: str, source: str) -> None:
+    """UsageError unless every finished row has the e ``--for kind`` realises."""
+    from pipeline.cli import UsageError
+
+    from .conventions import DEM_KINDS
+    from .export import missing_e
+
+    missing = missing_e(rows, kind)
+    if not missing:
+        return
+    col = DEM_KINDS[kind].e_column
+    why = ("two unequal spheres have no e_far yet (the outer flow is modelled for a sphere and "
+           "a wall or two equal spheres)" if missing[0]["geometry"] == "sphere-sphere"
+           else "the rows have none")
+    raise UsageError(f"{source}: --for {kind} realises {col}, but {len(missing)} of {len(rows)} "
+                     f"rows have no {col}: {why}; export the resolved CFD-DEM e_wet with "
+                     "--for cfd-dem")
+
+
+def check_rows_between(scene, rows, fit_range, accuracy, progress):
+    """Rows of scenes solved at the ends of ``fit_range`` (our St) and halfway (geometric)
+    between the path's rows inside it (``export.check_stokes``): the law is checked there,
+    never fitted (role "check"). Returns ``(rows, skipped)``."""
+    from .export import check_stokes, scene_rows
+
+    factors = [x / scene.stokes for x in check_stokes([r["St"] for r in rows], *fit_range)]
+    if not factors:
+        return [], []
+    results, skipped = solve_path(scene, "v0", factors, accuracy, progress=progress)
+    return scene_rows(results, rows[0]["group"], role="check"), skipped
+
+
+def store_check_rows(ds, rows, fit_range, density_ratio, progress):
+    """As ``check_rows_between`` for a store: each group's check scenes solved with the store's
+    physics and numerics (``pipeline.sweeps.tasks.solve_scene``, the solver a sweep runs; a
+    fast-path store's rows came from its master curve, within its measured error of this).
+    Returns ``(rows, skipped)``."""
+    from dataclasses import fields
+
+    from pipeline.sweeps.config import physics_from_json
+    from pipeline.sweeps.tasks import solve_scene
+    from solver.settings import Numerics
+
+    from .export import check_stokes, store_groups, store_row
+
+    names = {f.name for f in fields(Numerics)} - {"save_profiles"}
+    numerics = {k: v for k, v in dict(ds.attrs.get("numerics", {})).items() if k in names}
+    accuracy = ds.attrs.get("accuracy", "standard")
+    out, skipped = [], []
+    for label, raw, _ in store_groups(ds):
+        physics = physics_from_json(raw)
+        for eps in ds["eps"].values:
+            group = [r for r in rows if r["group"] == f"eps={float(eps):.3g}{label}"]
+            for st in check_stokes([r["St"] for r in group], *fit_range) if group else ():
+                rec = solve_scene({**physics, "St": st, "eps": float(eps)}, accuracy, numerics)
+                if rec["status"] != "ok":
+                    skipped.append(f"St {st:.4g} eps {float(eps):.3g}{label}: {rec['message']}")
+                    continue
+                out.append(store_row(st, float(eps), label, raw, rec,
+                                     ds.attrs.get("solver_version", ""), density_ratio, "check"))
+                if progress:
+                    progress(f"check scene St {st:.4g} eps {float(eps):.3g}{label} solved")
+    return out, skipped
+
+
 def _fit_range(args):
     from pipeline.cli import UsageError
 
@@ -98,17 +167,34 @@ def _check_density_ratio(value: float) -> None:
         raise UsageError(f"--density-ratio {value:g}: {exc}") from None
 
 
+def _num(v) -> float:
+    return math.nan if v == "" else float(v)
+
+
+def _check_kind(kind: str) -> None:
+    from pipeline.cli import UsageError
+
+    from .conventions import DEM_KINDS
+
+    if kind not in DEM_KINDS:
+        raise UsageError(f"--for {kind!r}: give one of {', '.join(DEM_KINDS)} (dry: LIGGGHTS or "
+                         "YADE without fluid coupling; cfd-dem: resolved CFD-DEM)")
+
+
 def cmd_export_dem(args) -> int:
     from pipeline.cli import UsageError, check_output_dir
     from pipeline.cli_shared import check_accuracy
 
-    from .export import export_files, progress_to_stderr, scene_rows, store_rows, write_files
+    from .conventions import DEM_KINDS
+    from .export import (InvalidExport, export_files, progress_to_stderr, scene_rows, store_rows,
+                         write_files)
 
     _progress = progress_to_stderr("export-dem")
 
     check_output_dir("--out", args.out)  # before any solve
     check_accuracy(args.accuracy)
     fit_range = _fit_range(args)
+    _check_kind(args.kind)
     _check_density_ratio(args.density_ratio)
     if args.n < 1:
         raise UsageError(f"--n {args.n}: give a whole number of speeds >= 1")
@@ -132,22 +218,41 @@ def cmd_export_dem(args) -> int:
         if not rows:
             raise UsageError(f"{args.path}: no finished (ok) scene in the store; run "
                              "ehd sweep on it first (ehd status shows what is done)")
+        check_rows(rows, args.kind, args.path)  # before the solves between the rows
+        if fit_range:
+            extra, skipped = store_check_rows(ds, rows, fit_range, args.density_ratio, _progress)
+            rows = sorted(rows + extra, key=lambda r: (r["group"], r["St"]))
+            for s in skipped:
+                print(f"skipped: {s}")
     else:
         scene = _scene(str(path), args.materials)
         factors = np.geomspace(0.1, 10.0, args.n)
         results, skipped = solve_path(scene, "v0", factors, args.accuracy, progress=_progress)
         rows = scene_rows(results, f"{scene.body1.solid.name}-{scene.body2.solid.name} in "
                                    f"{scene.fluid.name}")
-        for s in skipped:
-            print(f"skipped: {s}")
         if not rows:
+            for s in skipped:
+                print(f"skipped: {s}")
             raise UsageError(f"{args.path}: the solver refused every speed of the path "
                              "(skipped lines above); change the scene")
-    if not any(r["e_wet"] > 0.0 for r in rows):
-        raise UsageError(f"{args.path}: no collision rebounds (every e_wet is 0): nothing to fit; "
+        check_rows(rows, args.kind, args.path)  # before the solves between the rows
+        if fit_range:
+            extra, more = check_rows_between(scene, rows, fit_range, args.accuracy, _progress)
+            rows, skipped = sorted(rows + extra, key=lambda r: r["St"]), skipped + more
+        for s in skipped:
+            print(f"skipped: {s}")
+    check_rows(rows, args.kind, args.path)
+    col = DEM_KINDS[args.kind].e_column
+    if not any(_num(r[col]) > 0.0 for r in rows):
+        raise UsageError(f"{args.path}: no collision rebounds (every {col} is 0): nothing to fit; "
                          "export a store or scene that reaches higher St")
-    files = export_files(rows, str(path), fit_range=fit_range, density_ratio=args.density_ratio,
-                         progress=_progress)
+    try:
+        files = export_files(rows, str(path), fit_range=fit_range,
+                             density_ratio=args.density_ratio, progress=_progress,
+                             kind=args.kind, allow_invalid=args.allow_invalid)
+    except InvalidExport as exc:
+        raise UsageError(f"{args.path}: {exc}; nothing written: change the scene, or export "
+                         "anyway with --allow-invalid (every file then says so)") from None
     if not any(name.startswith("liggghts_") for name in files):
         raise UsageError(f"{args.path}: no group has 3 rebounding collisions"
                          + (" in --fit-range" if fit_range else "") + ": nothing to fit; "
@@ -168,6 +273,7 @@ def cmd_restitution(args) -> int:
     check_output_dir("--out", args.out)  # before any solve
     check_output_dir("--plot", args.plot)
     check_accuracy(args.accuracy)
+    _check_kind(args.kind)
     scene = _scene(args.scene, args.materials)
     if not (0 < args.start < np.inf and 0 < args.stop < np.inf and args.n >= 1):
         raise UsageError("--from and --to must be finite positive factors and --n >= 1")
@@ -202,7 +308,15 @@ def cmd_restitution(args) -> int:
                                      title=scene.title)
         print("figure: " + ", ".join(str(p) for p in paths))
     if args.out:
-        paths = write_export(rows, args.out, args.scene, progress=_progress)
+        from .export import InvalidExport
+
+        check_rows(rows, args.kind, args.scene)
+        try:
+            paths = write_export(rows, args.out, args.scene, progress=_progress, kind=args.kind,
+                                 allow_invalid=args.allow_invalid)
+        except InvalidExport as exc:
+            raise UsageError(f"{args.scene}: {exc}; --out not written: change the scene, or "
+                             "export anyway with --allow-invalid") from None
         print("wrote " + ", ".join(str(p) for p in paths))
     failed = [t for t in thresholds if t.failed]
     if failed:  # the rest is written; the threshold is not
@@ -214,8 +328,9 @@ def cmd_restitution(args) -> int:
 
 
 def register(sub) -> None:
-    p = sub.add_parser("export-dem", help="wet restitution e(St) for DEM codes: CSV, fits, "
-                                          "LIGGGHTS / OpenFOAM / YADE settings")
+    p = sub.add_parser("export-dem", help="restitution laws for DEM codes (--for dry: e_far; "
+                                          "cfd-dem: e_wet): CSV, fits, LIGGGHTS / OpenFOAM / "
+                                          "YADE settings")
     p.add_argument("path", metavar="STORE_OR_SCENE", help="a sweep store (.zarr) or a scene file")
     p.add_argument("--out", default="dem_export", help="output folder (default dem_export)")
     p.add_argument("--density-ratio", type=float, default=0.0,
@@ -223,8 +338,11 @@ def register(sub) -> None:
     p.add_argument("--n", type=int, default=13,
                    help="scenes only: speeds, log-spaced from 0.1 to 10 v0 (default 13)")
     p.add_argument("--fit-range", nargs=2, type=float, default=None, metavar=("LO", "HI"),
-                   help="fit and calibrate only on rows with LO <= St <= HI (our St: where your "
-                        "collisions are); errors are still reported on every row")
+                   help="fit and calibrate only on rows with LO <= St <= HI (our St, at v0: where "
+                        "your collisions are); a scene also solves scenes at LO, HI and halfway "
+                        "between its rows there, to state the law's error over the whole range "
+                        "(never fitted on); errors are still reported on every row")
+    _add_export_flags(p)
     _add_solve_flags(p)
     p.set_defaults(func=cmd_export_dem)
 
@@ -237,7 +355,8 @@ def register(sub) -> None:
                    help="first factor on v0 or the radii (default 0.1)")
     p.add_argument("--to", dest="stop", type=float, default=10.0, help="last factor (default 10)")
     p.add_argument("--n", type=int, default=9, help="points, log-spaced (default 9)")
-    p.add_argument("--out", default=None, help="also write the DEM export into this folder")
+    p.add_argument("--out", default=None, help="also write the DEM export into this folder "
+                   "(as export-dem: --for and --allow-invalid apply)")
     p.add_argument("--plot", metavar="DIR", default=None,
                    help="write e against St and the path's v0 or radius, the sticking threshold "
                         "marked, as DIR/restitution.png and .pdf")
@@ -249,8 +368,23 @@ def register(sub) -> None:
                    help="with --plot: draw each e's range over what the scene does not know as "
                         "a band (each scene solved again at the ends of each unknown, as ehd "
                         "scene does: 2-6 more solves per point)")
+    _add_export_flags(p)
     _add_solve_flags(p)
     p.set_defaults(func=cmd_restitution)
+
+
+def _add_export_flags(p) -> None:
+    """``--for`` and ``--allow-invalid``: which e the exported laws realise, and whether rows
+    that all fail the validity checks may still be exported."""
+    p.add_argument("--for", dest="kind", default="dry", metavar="{dry,cfd-dem}",
+                   help="the kind of DEM code: dry (default; LIGGGHTS or YADE without fluid "
+                        "coupling) realises e_far, the whole loss the fluid causes, at the "
+                        "approach speed at x_ref; cfd-dem (resolved CFD-DEM) realises e_wet at "
+                        "v0. Two unequal spheres have no e_far yet: use cfd-dem")
+    p.add_argument("--allow-invalid", action="store_true",
+                   help="export even when every row of a group fails a validity check (e.g. "
+                        "a film thinner than a gas's mean free path); every snippet and the "
+                        "JSON then say so. Without it such an export is refused (exit 2)")
 
 
 def _add_solve_flags(p) -> None:

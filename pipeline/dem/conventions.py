@@ -26,8 +26,10 @@ for a sphere on a wall (as before) and ``St_exp_pair``/``St_L_pair`` for two equ
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
-__all__ = ["CONVENTIONS", "GEOMETRIES", "stokes_numbers", "store_stokes_numbers"]
+__all__ = ["CONVENTIONS", "GEOMETRIES", "DEM_KINDS", "DemKind", "stokes_numbers",
+           "store_stokes_numbers"]
 
 GEOMETRIES = ("sphere-wall", "sphere-sphere", "either")  # "either": a store (dimensionless)
 
@@ -46,6 +48,52 @@ CONVENTIONS = {
                     "(stores only)", "Joseph et al. 2001 (two-sphere experiments)"),
     "St_L_pair": ("(rho_p + rho_f/2) d v0 / (9 mu) of two equal spheres (stores only)",
                   "Legendre et al. 2006"),
+}
+
+
+@dataclass(frozen=True)
+class DemKind:
+    """The kind of DEM code an export is for (``ehd export-dem --for``): which e its contact law
+    realises and at which speed that law sees the collision.
+
+    e_column
+        The CSV column of the e the exported law realises.
+    speed_column
+        The CSV column of the impact speed the law is calibrated against [m/s]: the speed the
+        code sees at contact (a store, dimensionless, leaves it empty; ``speed_ratio_column`` is
+        the same speed over ``v0``).
+    speed_ratio_column
+        That speed over ``v0``; every Stokes number of the law (each convention is linear in the
+        speed) is the row's times this ratio. ``None``: ``v0`` itself (ratio 1).
+    code, why
+        The kind of code in words, and why it takes this e.
+    """
+
+    name: str
+    e_column: str
+    speed_column: str
+    speed_ratio_column: str | None
+    code: str
+    why: str
+
+
+# One place for "which e, at which speed" (docs/pipeline.md, "DEM export"; docs/scenes.md, "The
+# approach from far away"). A dry DEM code has no fluid force: its particle keeps the speed it
+# approached with down to contact, so its contact law must turn the approach speed at the
+# reading distance x_ref into the departure speed there (e_far, both speeds read at x_ref): the
+# law is calibrated against the speed at x_ref on the way in, not v0 at x0 (which the outer flow
+# has already slowed). A resolved CFD-DEM code's fluid brings the particle to x0 at v0 itself.
+DEM_KINDS = {
+    "dry": DemKind(
+        "dry", "e_far", "v_ref_m_s", "v_ref_over_v0", "dry DEM (LIGGGHTS or YADE without fluid "
+        "coupling)", "no fluid force in the code: the contact law carries the whole loss the "
+        "fluid causes, both speeds read at the reading distance x_ref (e_far, the outer flow's "
+        "Stokes resistance and added mass from x_ref to x0 and back included); the law sees the "
+        "approach speed at x_ref (v_ref_m_s), which the particle keeps down to contact there"),
+    "cfd-dem": DemKind(
+        "cfd-dem", "e_wet", "v0_m_s", None, "resolved CFD-DEM",
+        "the CFD computes the fluid force on the particle down to near contact (x0), so the "
+        "contact law carries only the loss inside x0 (e_wet) and sees the speed at x0, v0"),
 }
 
 _YADE_OVER_ST = 4.5  # rho_p a v / mu over m v / (6 pi mu a^2) with m = 4/3 pi a^3 rho_p: 9/2

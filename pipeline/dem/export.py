@@ -15,6 +15,11 @@ Snippets per group (``<tag>`` from the group name):
 
 A store's snippets carry example values (glass in water) marked ``REPLACE``; a scene's carry the
 scene's values, and only what the model does not know (friction, wall position) is marked.
+
+Which e the laws realise, and at which speed, is the export's ``kind`` (``--for``;
+``conventions.DEM_KINDS``): dry DEM ``e_far`` at the approach speed at ``x_ref``, resolved
+CFD-DEM ``e_wet`` at ``v0``. Every JSON group and snippet header names it, the film physics of
+the rows and their validity (``validity``); no law's e_max exceeds the pair's ``e_dry``.
 """
 
 from __future__ import annotations
@@ -33,22 +38,26 @@ import numpy as np
 from solver import SOLVER_VERSION
 
 from . import liggghts, openfoam, yade
-from .conventions import CONVENTIONS, store_stokes_numbers, stokes_numbers
+from .conventions import CONVENTIONS, DEM_KINDS, store_stokes_numbers, stokes_numbers
 from .fits import LAWS
 from solver.far_field import DEFAULT as FAR_DEFAULT
 
 __all__ = ["CSV_FIELDS", "store_rows", "scene_rows", "scene_path", "PATHS", "approach_speed_of",
            "path_value", "write_export", "read_csv",
            "group_settings", "export_files", "write_files", "progress_to_stderr", "ST_BANDS",
-           "PLACEHOLDERS"]
+           "PLACEHOLDERS", "ref_speed_ratio", "realised_physics", "validity", "snippet_header",
+           "InvalidExport", "missing_e", "store_groups", "store_row", "check_stokes"]
 
 CSV_FIELDS = (
     "group", "geometry", "material1", "material2", "fluid", "radius1_m", "radius2_m",
     "density1_kg_m3", "density2_kg_m3", "youngs1_Pa", "youngs2_Pa", "poisson1", "poisson2",
     "viscosity_Pa_s", "fluid_density_kg_m3", "v0_m_s", *CONVENTIONS, "eps", "x_ref_x0", "e_wet",
-    "e_far", "x_ref_over_a", "sticks", "closest_approach_x1", "closest_approach_m", "peak_pressure", "peak_pressure_Pa",
-    "roughness_m", "warning", "warning_checks", "status", "solver_version",
+    "e_far", "x_ref_over_a", "v_ref_over_v0", "v_ref_m_s", "sticks", "closest_approach_x1", "closest_approach_m", "peak_pressure", "peak_pressure_Pa",
+    "roughness_m", "warning", "warning_checks", "status", "solver_version", "e_dry", "physics",
+    "role",
 )
+# role: "fit" (fitted and calibrated on, when inside --fit-range) or "check" (solved between the
+# rows and at the ends of --fit-range only to measure the law there: never fitted on)
 
 # Edges of the St bands (ours) the realised errors are reported in: the threshold region, the
 # steep rise, the tail, and beyond the paper's range.
@@ -67,44 +76,104 @@ def _blank():
 def store_rows(ds, density_ratio: float = 0.0) -> list[dict]:
     """One row per ok scene of a sweep store with (St, eps) axes; groups are the eps values
     (and the values of any further axis, e.g. ``eps=0.0001 Pi=0.1``)."""
-    import itertools
-
     solver_version = ds.attrs.get("solver_version", "")
     extra = [d for d in ds["status"].dims if d not in ("eps", "St")]
-    st_values, eps_values = ds["St"].values, ds["eps"].values
     # whole arrays at once (a .sel per cell took 16 s for 448 scenes)
     # e_far: stores made before it existed lack it (the column stays empty)
     grid = {k: np.asarray(ds[k].transpose("eps", "St", *extra).values)
             for k in ("status", "e_wet", "e_far", "h_m_x1", "p_max") if k in ds}
     out = []
-    for idx in itertools.product(*(range(ds.sizes[d]) for d in extra)):
-        label = "".join(f" {d}={float(ds[d].values[i]):.3g}" for d, i in zip(extra, idx))
-        for i, eps in enumerate(eps_values):
-            for j, st in enumerate(st_values):
+    for label, physics, idx in store_groups(ds):
+        for i, eps in enumerate(ds["eps"].values):
+            for j, st in enumerate(ds["St"].values):
                 cell = (i, j, *idx)
                 if int(grid["status"][cell]) != 1:
                     continue
-                row = _blank()
-                row.update(store_stokes_numbers(float(st), density_ratio))
-                e = float(grid["e_wet"][cell])
-                row.update(group=f"eps={float(eps):.3g}{label}", geometry="either",
-                           eps=float(eps), x_ref_x0=1.0, e_wet=e, sticks=bool(e == 0.0),
-                           e_far=_far(grid, cell),
-                           # a sweep reads e_far with solver.far_field.DEFAULT
-                           x_ref_over_a=FAR_DEFAULT.x_ref_over_a if "e_far" in grid else "",
-                           closest_approach_x1=float(grid["h_m_x1"][cell]),
-                           peak_pressure=float(grid["p_max"][cell]), status="ok",
-                           solver_version=solver_version)
-                out.append(row)
+                record = {k: float(grid[k][cell]) for k in grid if k != "status"}
+                out.append(store_row(float(st), float(eps), label, physics, record,
+                                     solver_version, density_ratio))
     return out
 
 
-def _far(grid, cell):
-    """The store's ``e_far`` of ``cell`` ("" when the store has none or it is NaN)."""
-    if "e_far" not in grid:
-        return ""
-    v = float(grid["e_far"][cell])
-    return v if math.isfinite(v) else ""
+def store_groups(ds):
+    """``(label, physics, index)`` per value of the axes beyond St and eps: the label that
+    follows ``eps=...`` in a group's name, the fixed and axis physics, the axes' indices."""
+    import itertools
+
+    fixed = dict(ds.attrs.get("fixed_physics", {}))
+    extra = [d for d in ds["status"].dims if d not in ("eps", "St")]
+    for idx in itertools.product(*(range(ds.sizes[d]) for d in extra)):
+        label = "".join(f" {d}={float(ds[d].values[i]):.3g}" for d, i in zip(extra, idx))
+        yield label, {**fixed, **{d: float(ds[d].values[i]) for d, i in zip(extra, idx)}}, idx
+
+
+def store_row(st: float, eps: float, label: str, physics: dict, record: dict,
+              solver_version: str, density_ratio: float, role: str = "fit") -> dict:
+    """The row of one finished store scene (or one solved like it, ``role`` "check"):
+    ``record`` holds its ``e_wet``, ``h_m_x1``, ``p_max`` and, where read, ``e_far``."""
+    row = _blank()
+    row.update(store_stokes_numbers(st, density_ratio))
+    e = record["e_wet"]
+    far = record.get("e_far", math.nan)
+    e_far = far if math.isfinite(far) else ""
+    row.update(group=f"eps={eps:.3g}{label}", geometry="either", eps=eps, x_ref_x0=1.0,
+               e_wet=e, sticks=bool(e == 0.0), e_far=e_far,
+               v_ref_over_v0="" if e_far == "" else ref_speed_ratio(FAR_DEFAULT, st),
+               e_dry=float(physics.get("e_dry", 1.0)), physics=_store_physics(physics),
+               role=role,
+               # a sweep reads e_far with solver.far_field.DEFAULT
+               x_ref_over_a=FAR_DEFAULT.x_ref_over_a if "e_far" in record else "",
+               closest_approach_x1=record["h_m_x1"], peak_pressure=record["p_max"],
+               status="ok", solver_version=solver_version)
+    return row
+
+
+def check_stokes(st, lo: float, hi: float) -> list[float]:
+    """Where a law fitted on rows at ``st`` (our St) inside ``[lo, hi]`` is checked besides
+    them: the range's ends (unless a row is there; ``lo`` 0 has none) and halfway (geometric)
+    between neighbouring rows inside it."""
+    st = sorted(st)
+    ends = [x for x in (lo, hi) if x > 0.0 and math.isfinite(x)
+            and min(abs(x / y - 1.0) for y in st) > 1e-6]
+    mids = [math.sqrt(a * b) for a, b in zip(st[:-1], st[1:]) if lo <= math.sqrt(a * b) <= hi]
+    return sorted(set(ends + mids))
+
+
+def missing_e(rows: list[dict], kind: str) -> list[dict]:
+    """The finished rows that lack the e ``kind`` realises (``e_far``: two unequal spheres have
+    none until the outer flow models them)."""
+    col = DEM_KINDS[kind].e_column
+    return [r for r in rows if r["status"] in ("ok", "start_deformed") and r[col] == ""
+            and math.isfinite(_num(r["e_wet"]))]
+
+
+def _store_physics(physics: dict) -> str:
+    """The store's physics in words: what it fixed or varied beyond St and eps."""
+    given = ", ".join(f"{k} = {v}" for k, v in sorted(physics.items()) if k not in ("St", "eps"))
+    return "store physics: " + (given or "the classic film (nothing else switched on)")
+
+
+def physics_kind(physics) -> str:
+    """The film physics a row was solved with, in words without its numbers (a path's rows
+    share it where the numbers differ): "classic film" or e.g. "jfo cavitation, asperity
+    contact" (``pipeline.scenes.checks.physics_label`` gives the numbers)."""
+    parts = [] if physics.cavitation == "off" else [f"{physics.cavitation} cavitation"]
+    parts += [f"{law} {name}" for name, law in (("viscosity", physics.viscosity_law),
+                                                 ("density", physics.density_law))
+              if law != "constant"]
+    if not physics.smooth:
+        parts.append("asperity contact (losses e_dry where the surfaces touch)")
+    return ", ".join(parts) or "classic film"
+
+
+def ref_speed_ratio(outer, stokes: float) -> float:
+    """The approach speed at the reading distance ``x_ref`` over ``v0``: what arrives at ``x0``
+    with ``v0`` after the outer flow (``outer``, a ``solver.far_field.OuterFlow``) from
+    ``x_ref`` (``OuterFlow.approach_speed`` with the outer start at ``x_ref``). The speed a
+    dry DEM code sees at contact (``conventions.DEM_KINDS``)."""
+    if outer.x_ref_over_a <= outer.x0_over_a:
+        return 1.0
+    return dataclasses.replace(outer, start_over_a=outer.x_ref_over_a).approach_speed(stokes)
 
 
 def scene_path(scene, vary: str, factors) -> list:
@@ -161,9 +230,10 @@ def path_value(scene, vary: str) -> float:
     return scene.v0 if vary == "v0" else approach_speed_of(scene)
 
 
-def scene_rows(results, group: str) -> list[dict]:
+def scene_rows(results, group: str, role: str = "fit") -> list[dict]:
     """Rows of solved scenes (``pipeline.scenes.run.SceneResult``), each with every validity
-    warning of its scene (yield, fluid inertia, roughness, ...)."""
+    warning of its scene (yield, fluid inertia, roughness, ...). ``role``: "fit" or "check"
+    (``CSV_FIELDS``)."""
     from pipeline.scenes.checks import combined_roughness
 
     out = []
@@ -178,6 +248,8 @@ def scene_rows(results, group: str) -> list[dict]:
                                   rho_2=None if b2.wall else b2.solid.density,
                                   d_2=None if b2.wall else 2.0 * b2.radius))
         sigma = combined_roughness(s)
+        far = r.outer is not None and math.isfinite(c.e_far)
+        ratio = ref_speed_ratio(r.outer, s.stokes) if far else ""
         row.update(
             group=group, geometry=geometry, material1=b1.solid.name, material2=b2.solid.name,
             fluid=s.fluid.name, radius1_m=b1.radius, radius2_m="" if b2.wall else b2.radius,
@@ -187,14 +259,17 @@ def scene_rows(results, group: str) -> list[dict]:
             poisson1=b1.solid.poisson_ratio, poisson2=b2.solid.poisson_ratio,
             viscosity_Pa_s=s.fluid.viscosity, fluid_density_kg_m3=s.fluid.density, v0_m_s=s.v0,
             eps=s.eps, x_ref_x0=c.x_ref_x0, e_wet=c.e_wet, sticks=bool(c.e_wet == 0.0),
-            e_far=c.e_far if r.outer is not None and math.isfinite(c.e_far) else "",
+            e_far=c.e_far if far else "",
             x_ref_over_a=c.x_ref_over_a if r.outer is not None else "",
+            v_ref_over_v0=ratio, v_ref_m_s=ratio * s.v0 if far else "",
             closest_approach_x1=c.h_m_x1, closest_approach_m=c.h_m_x1 * s.x1,
             peak_pressure=c.p_max, peak_pressure_Pa=r.peak_pressure,
             roughness_m="" if sigma is None else sigma,
             warning="; ".join(w.message for w in r.warnings),
             warning_checks=" ".join(w.check for w in r.warnings), status=c.status,
-            solver_version=SOLVER_VERSION)
+            solver_version=SOLVER_VERSION, e_dry=s.e_dry,
+            physics=physics_kind(c.physics),
+            role=role)
         out.append(row)
     return out
 
@@ -223,120 +298,206 @@ def _realised(st, realised, e, fit_mask) -> dict:
             "realised_error_by_St": _by_band(st, realised, e)}
 
 
-def group_settings(rows: list[dict], fit_range=None) -> dict:
+def realised_physics(rows: list[dict], kind) -> dict:
+    """What the law of a group realises and the physics behind it (every JSON block and
+    snippet header says it): ``kind`` a ``conventions.DemKind``."""
+    labels = {}
+    for r in rows:
+        labels.setdefault(r["physics"] or "not recorded", []).append(_num(r["St"]))
+    film = "; ".join(f"{p} (rows at St {min(st):.3g}-{max(st):.3g})" if len(labels) > 1 else p
+                     for p, st in labels.items())
+    e_dry = _e_cap(rows)
+    x_ref = _first(rows, "x_ref_over_a")
+    outer = (f"; outer flow from x_ref = {x_ref:.3g} a (exact Stokes resistance"
+             + (", added mass)" if _num(_first(rows, "fluid_density_kg_m3")) > 0 else ")")
+             if kind.e_column == "e_far" and x_ref != "" else "")
+    return {"for": kind.name, "code": kind.code, "e_realised": kind.e_column,
+            "speed_column": kind.speed_column, "speed_over_v0_column": kind.speed_ratio_column,
+            "why": kind.why, "physics": film + outer, "e_dry": e_dry}
+
+
+def _e_cap(rows) -> float:
+    """The pair's dry restitution (1 where none is known): no law's e_max above it."""
+    values = [_num(r["e_dry"]) for r in rows if r["e_dry"] != ""]
+    return min(values) if values else 1.0
+
+
+def validity(rows: list[dict]) -> dict:
+    """The validity checks the group's rows fail: ``n_rows``, ``n_rows_with_warnings``,
+    ``checks`` ({name: rows}), and ``every_row_fails`` (the fit rows all carry a warning: the
+    export is refused unless asked, ``--allow-invalid``)."""
+    checks = {}
+    for r in rows:
+        for name in r["warning_checks"].split():
+            checks[name] = checks.get(name, 0) + 1
+    failing = [r for r in rows if r["warning_checks"]]
+    fit_rows = [r for r in rows if r["role"] != "check"]
+    every = bool(fit_rows) and all(r["warning_checks"] for r in fit_rows)
+    return {"n_rows": len(rows), "n_rows_with_warnings": len(failing), "checks": checks,
+            "every_row_fails": every,
+            "summary": ("valid: no row fails a validity check" if not failing else
+                        f"{'INVALID: every row fails' if every else f'{len(failing)} of {len(rows)} rows fail'}"
+                        f" validity checks ({', '.join(sorted(checks))}; restitution.csv "
+                        "warning): the model does not hold there")}
+
+
+def group_settings(rows: list[dict], fit_range=None, kind="dry") -> dict:
     """Fits on every convention, the LIGGGHTS calibration, the OpenFOAM and YADE settings of one
     group of rows, each with the error its code realises against the model (every row, sticking
-    ones included, and per St band). ``fit_range``: ``(St_lo, St_hi)`` (ours) of the rows the
-    fits and calibrations use (where the user's collisions are); errors are reported on every
-    row regardless. A group with fewer than 3 rebounding rows in the range gets a note."""
+    ones included, check rows too, and per St band). ``kind``: ``conventions.DEM_KINDS`` key,
+    which e (``e_realised``) is fitted at which speed (every Stokes number times the row's
+    ``speed_over_v0_column``). ``fit_range``: ``(St_lo, St_hi)`` (ours, at v0) of the rows the
+    fits and calibrations use (where the user's collisions are; never the "check" rows); errors
+    are reported on every row regardless. A group with fewer than 3 rebounding rows in the
+    range gets a note."""
+    dem = DEM_KINDS[kind]
     ok = [r for r in rows if r["status"] in ("ok", "start_deformed") and
-          math.isfinite(_num(r["e_wet"]))]
-    e = np.array([_num(r["e_wet"]) for r in ok])
-    st = np.array([_num(r["St"]) for r in ok])
+          math.isfinite(_num(r[dem.e_column]))]
+    e = np.array([_num(r[dem.e_column]) for r in ok])
+    st_v0 = np.array([_num(r["St"]) for r in ok])
+    speed = np.array([1.0 if dem.speed_ratio_column is None else _num(r[dem.speed_ratio_column])
+                      for r in ok])
+    st = st_v0 * speed  # our St at the speed the code sees at contact
     lo, hi = fit_range if fit_range else (0.0, math.inf)
-    fit_mask = (st >= lo) & (st <= hi)
+    fit_mask = (st_v0 >= lo) & (st_v0 <= hi) & np.array([r["role"] != "check" for r in ok],
+                                                         dtype=bool)
+    range_mask = (st_v0 >= lo) & (st_v0 <= hi)
     geometry = ok[0]["geometry"] if ok else ""
-    out = {"n": len(ok), "n_rebound": int(np.sum(e > 0)), "geometry": geometry, "fits": {}}
+    if kind == "dry" and geometry == "either":
+        geometry = "sphere-wall"  # a store reads e_far for a sphere and a wall (FAR_DEFAULT)
+    out = {"n": len(ok), "n_rebound": int(np.sum(e > 0)), "geometry": geometry,
+           "realises": realised_physics(ok or rows, dem), "validity": validity(rows),
+           "n_check_rows": int(sum(r["role"] == "check" for r in ok)), "fits": {}}
     if fit_range:
-        out["fit_range"] = {"St_from": lo, "St_to": hi, "n": int(fit_mask.sum())}
+        n_check = int((range_mask & ~fit_mask).sum())
+        out["fit_range"] = {
+            "St_from": lo, "St_to": hi, "n": int(fit_mask.sum()), "n_check": n_check,
+            "between_rows": (f"checked: {n_check} scenes solved between the fitted rows and at "
+                             "the range's ends (CSV role 'check', never fitted) are in every "
+                             "realised error" if n_check else
+                             "not checked: no point of the range lies between two rows or at "
+                             "an end without a row")}
     if int(np.sum(e[fit_mask] > 0)) < 3:
         out["note"] = ("fewer than 3 rebounding collisions" + (" in --fit-range" if fit_range else "")
                        + ": no fit (use ehd restitution over a range of speeds or sizes)")
         return out
-    values = {conv: np.array([_num(r[conv]) for r in ok]) for conv in CONVENTIONS}
+    cap = out["realises"]["e_dry"]
+    values = {conv: np.array([_num(r[conv]) for r in ok]) * speed for conv in CONVENTIONS}
     for conv, x in values.items():
         if np.all(np.isfinite(x)):
-            out["fits"][conv] = {law: fit(x[fit_mask], e[fit_mask], conv).as_dict()
+            out["fits"][conv] = {law: fit(x[fit_mask], e[fit_mask], conv, cap).as_dict()
                                  for law, fit in LAWS.items()}
-    ef, em = st[fit_mask], e[fit_mask]
+    tag = {"e_realised": dem.e_column, "speed_column": dem.speed_column}
+    out["liggghts"] = {**tag, **_liggghts_block(out, st, e, fit_mask, range_mask, cap)}
+    if geometry in ("sphere-wall", "either"):
+        out["openfoam"] = {**tag, **_openfoam_block(out, values["St_L"], st, e, fit_mask,
+                                                   range_mask, cap)}
+    out["yade"] = {**tag, **_yade_block(out, values["St_yade"], st, e, range_mask)}
+    return out
 
-    # LIGGGHTS: the law never sticks; calibrated on the rebounding rows of the range
+
+def _liggghts_block(out, st, e, fit_mask, range_mask, cap) -> dict:
+    """LIGGGHTS: the law never sticks; calibrated on the rebounding rows of the range."""
+    ef, em = st[fit_mask], e[fit_mask]
     exp_fit = out["fits"]["St"]["exponential"]
     plain = liggghts.replica_many(ef[em > 0], exp_fit["e_max"], exp_fit["c"])
-    ls_e, ls_c, _, _ = liggghts.calibrate(ef, em, exp_fit["e_max"], exp_fit["c"])
+    ls_e, ls_c, _, _ = liggghts.calibrate(ef, em, exp_fit["e_max"], exp_fit["c"], e_cap=cap)
     ls_realised = liggghts.replica_many(st, ls_e, ls_c)
     # refined to the smallest largest error over the range (sticking rows included): that is
     # what the JSON states, and near the threshold the least-squares pair leaves it 20-30 %
     # larger (measured on the paper store: 0.051-0.100 against 0.043-0.077)
-    mm_e, mm_c, _ = liggghts.calibrate_minimax(ef, em, ls_e, ls_c)
+    mm_e, mm_c, _ = liggghts.calibrate_minimax(ef, em, ls_e, ls_c, e_cap=cap)
     mm_realised = liggghts.replica_many(st, mm_e, mm_c)
     use_mm = (np.max(np.abs(mm_realised - e)[fit_mask])
               < np.max(np.abs(ls_realised - e)[fit_mask]))
     e_max, c, realised = (mm_e, mm_c, mm_realised) if use_mm else (ls_e, ls_c, ls_realised)
     rebound = fit_mask & (e > 0)
-    out["liggghts"] = {
+    return {
         "convention": "St", "geometry": "both (meff, reff: a wall counts as infinite)",
-        "MaximumRestitution": e_max, "CriticalStokes": c,
+        "MaximumRestitution": e_max, "CriticalStokes": c, "MaximumRestitution_cap": cap,
         "calibration": "minimax" if use_mm else "least_squares",
         "calibration_max_error": float(np.max(np.abs(realised - e)[rebound])),
         "uncalibrated_max_error": float(np.max(np.abs(plain - em[em > 0]))),
         "least_squares": {"MaximumRestitution": ls_e, "CriticalStokes": ls_c,
-                          **_realised(st, ls_realised, e, fit_mask)},
-        **_realised(st, realised, e, fit_mask),
+                          **_realised(st, ls_realised, e, range_mask)},
+        **_realised(st, realised, e, range_mask),
+        "limitForce": "off: with limitForce on the normal force is never attractive, the "
+                      "dashpot cannot hold the spheres and collisions the model says stick "
+                      "rebound (liggghts.replica_restitution(limit_force=True); e 0.24 measured "
+                      "in LIGGGHTS 3.8.0)",
         "steps_per_contact": liggghts.STEPS_PER_CONTACT,
         "time_step_error_measured": liggghts.TIME_STEP_ERROR,
         "note": "CriticalStokes is the constant C of e = e_max exp(-C/St) with St from the "
                 "instantaneous normal velocity; values calibrated against the replica "
                 "(pipeline/dem/liggghts.py) so the realised e matches the model at impact: "
                 "least squares over the rebounding rows, then (calibration: minimax) the pair "
-                "of smallest largest error over every row of the range. "
+                "of smallest largest error over every row of the range; MaximumRestitution "
+                "at most MaximumRestitution_cap (the pair's e_dry). "
                 "calibration_max_error: rebounding rows of the fit; realised_max_error: every "
-                "row, where the model sticks too (the law never sticks). Needs dt <= "
+                "row, check rows between the fitted ones included, where the model sticks too "
+                "(the law never sticks). Needs dt <= "
                 "tc/steps_per_contact, at which LIGGGHTS 3.8.0 was measured to differ from the "
                 "replica by up to time_step_error_measured (tests/test_dem_programs.py).",
     }
 
-    # OpenFOAM localInteractionHW: a patch (wall) model, on St_L
-    if geometry in ("sphere-wall", "either"):
-        st_l = values["St_L"]
-        fl = out["fits"]["St_L"]["exponential"]
-        thr_l = out["fits"]["St_L"]["threshold"]
-        fit_law = openfoam.law(st_l, fl["e_max"], fl["c"])
-        ce, cc, _ = openfoam.calibrate(st_l[fit_mask], em, fl["e_max"], fl["c"])
-        cal_law = openfoam.law(st_l, ce, cc)
-        fit_err = float(np.max(np.abs(fit_law[fit_mask] - em)))
-        cal_err = float(np.max(np.abs(cal_law[fit_mask] - em)))
-        use_cal = cal_err < fit_err
-        chosen = (ce, cc, cal_law) if use_cal else (fl["e_max"], fl["c"], fit_law)
-        out["openfoam"] = {
-            "model": "localInteractionHW (patchInteractionModel)",
-            "library": openfoam.LIBRARY, "libs": openfoam.LIBS_LINE,
-            "dictionary": openfoam.DICTIONARY, "geometry": "sphere-wall (patches only)",
-            "convention": "St_L = (rho_p + rho_f/2) d Un / (9 mu)",
-            "e": chosen[0], "coeffStc": chosen[1],
-            "values_from": "calibrated" if use_cal else "fit",
-            "fit": {"e": fl["e_max"], "coeffStc": fl["c"], **_realised(st, fit_law, e, fit_mask)},
-            "calibrated": {"e": ce, "coeffStc": cc, **_realised(st, cal_law, e, fit_mask)},
-            **_realised(st, chosen[2], e, fit_mask),
-            "sticks_below_St_L": chosen[1] / (math.log(chosen[0]) - openfoam.STICK_LOG_E),
-            "model_sticks_below_St_L": thr_l["c"],
-            "eCutoffLog": openfoam.STICK_LOG_E,
-            "note": "e and coeffStc: the exponential fit on St_L, or (values_from: calibrated) "
-                    "the pair that minimises the squared error of the law the library applies "
-                    "(with its sticking cut-off ln e < -5.3, hard-coded; eCutoffLog is read "
-                    "but unused) over every row, sticking ones included. rhoF must be the "
-                    "fluid density of St_L's fit: the scene's; for a store, density_ratio "
-                    "times the particle density",
-        }
 
-    # YADE ViscElMat lubrication: the threshold law on St_yade, floored at 1e-3
+def _openfoam_block(out, st_l, st, e, fit_mask, range_mask, cap) -> dict:
+    """OpenFOAM localInteractionHW: a patch (wall) model, on St_L."""
+    em = e[fit_mask]
+    fl = out["fits"]["St_L"]["exponential"]
+    thr_l = out["fits"]["St_L"]["threshold"]
+    fit_law = openfoam.law(st_l, fl["e_max"], fl["c"])
+    ce, cc, _ = openfoam.calibrate(st_l[fit_mask], em, fl["e_max"], fl["c"], e_cap=cap)
+    cal_law = openfoam.law(st_l, ce, cc)
+    fit_err = float(np.max(np.abs(fit_law[fit_mask] - em)))
+    cal_err = float(np.max(np.abs(cal_law[fit_mask] - em)))
+    use_cal = cal_err < fit_err
+    chosen = (ce, cc, cal_law) if use_cal else (fl["e_max"], fl["c"], fit_law)
+    return {
+        "model": "localInteractionHW (patchInteractionModel)",
+        "library": openfoam.LIBRARY, "libs": openfoam.LIBS_LINE,
+        "dictionary": openfoam.DICTIONARY, "geometry": "sphere-wall (patches only)",
+        "convention": "St_L = (rho_p + rho_f/2) d Un / (9 mu)",
+        "e": chosen[0], "coeffStc": chosen[1],
+        "values_from": "calibrated" if use_cal else "fit",
+        "fit": {"e": fl["e_max"], "coeffStc": fl["c"], **_realised(st, fit_law, e, range_mask)},
+        "calibrated": {"e": ce, "coeffStc": cc, **_realised(st, cal_law, e, range_mask)},
+        **_realised(st, chosen[2], e, range_mask),
+        "sticks_below_St_L": chosen[1] / (math.log(chosen[0]) - openfoam.STICK_LOG_E),
+        "model_sticks_below_St_L": thr_l["c"],
+        "eCutoffLog": openfoam.STICK_LOG_E,
+        "note": "e and coeffStc: the exponential fit on St_L, or (values_from: calibrated) "
+                "the pair that minimises the squared error of the law the library applies "
+                "(with its sticking cut-off ln e < -5.3, hard-coded; eCutoffLog is read "
+                "but unused) over every row, sticking ones included; e at most the pair's "
+                "e_dry. rhoF must be the "
+                "fluid density of St_L's fit: the scene's; for a store, density_ratio "
+                "times the particle density",
+    }
+
+
+def _yade_block(out, st_yade, st, e, range_mask) -> dict:
+    """YADE ViscElMat lubrication: the threshold law on St_yade, floored at 1e-3."""
     ty = out["fits"]["St_yade"]["threshold"]
-    out["yade"] = {
+    return {
         "material": "ViscElMat(lubrication=True)",
         "convention": "St_yade = <rho> (R1 + R2) vn / mu (YADE's; walls of density 0: 4.5 St)",
         "geometry": "both (the wall material has density 0 and walls get a mass)",
+        "walls": "utils.wall only: facets (geom.facetBox, meshes) enter the lubrication law as a "
+                 "sphere of radius 2R and realise e up to 0.3 too high; the snippet's block 2 "
+                 "stops a run that has facets",
         "en": ty["e_max"], "st_c": ty["c"], "roughnessScale_over_d": 0.5 * math.exp(-ty["c"]),
         "law": "e = max(1e-3, en (1 - ln(a / roughnessScale) / St_yade)), a = (R1 + R2)/2: "
                "threshold St_yade,c = ln(a / roughnessScale), so roughnessScale = a exp(-St_c)",
         "e_floor": yade.E_FLOOR, "wall_mass_factor": yade.WALL_MASS_FACTOR,
-        **_realised(st, yade.law(values["St_yade"], ty["e_max"], ty["c"]), e, fit_mask),
+        **_realised(st, yade.law(st_yade, ty["e_max"], ty["c"]), e, range_mask),
         "steps_per_contact": liggghts.STEPS_PER_CONTACT,
         "note": "the roughnessScale that reproduces the EHD threshold is far below any real "
                 "roughness: a fitting constant of the rigid-lubrication law, not a surface "
                 "property. YADE never sticks (e >= 1e-3). A massless wall would be counted with "
-                "the sphere's mass (e ~0.1 too high): the snippet gives walls a mass",
+                "the sphere's mass (e ~0.1 too high): the snippet gives walls a mass; en at most "
+                "the pair's e_dry",
     }
-    return out
 
 
 def _first(rows, key):
@@ -379,9 +540,26 @@ def _tag(name):
     return re.sub(r"[^A-Za-z0-9.+-]+", "_", name).strip("_")
 
 
+def snippet_header(s: dict) -> tuple:
+    """Comment lines (no comment marker) every snippet of group settings ``s`` opens with: the e
+    its law realises, at which speed, the physics behind it, and the validity of the rows."""
+    import textwrap
+
+    r, v = s["realises"], s["validity"]
+    text = [f"Realises {r['e_realised']} for a {r['code']}: {r['why']}.",
+            f"The law sees the impact speed of restitution.csv column {r['speed_column']} (its St "
+            "is the row's St times " + (r["speed_over_v0_column"] or "1") + ").",
+            f"Physics behind it: {r['physics']}; e_dry {r['e_dry']:g} (no e_max above it).",
+            f"Validity: {v['summary']}."]
+    if v["every_row_fails"]:
+        text.append("Exported with --allow-invalid: do not trust these values.")
+    return tuple(line for t in text for line in textwrap.wrap(t, 94))
+
+
 def _snippets(name, grp, s, store: bool, density_ratio: float) -> dict:
     """{file name: text} of one group, and the time steps into ``s``."""
     tag = _tag(name)
+    header = snippet_header(s)
     geometry = s["geometry"]
     walls = geometry in ("sphere-wall", "either")
     lig = s["liggghts"]
@@ -389,7 +567,7 @@ def _snippets(name, grp, s, store: bool, density_ratio: float) -> dict:
     if store:
         p = PLACEHOLDERS
         types = ["particles (and walls)"]
-        lig_text = liggghts.snippet(lig, types=types, placeholders=True, values={
+        lig_text = liggghts.snippet(lig, types=types, placeholders=True, header=header, values={
             "youngs": [p["young"]], "poisson": [p["poisson"]], "viscosity": p["viscosity"],
             "v_char": p["v_char"], "density": p["density"], "radius": p["radius"]})
         wall_type = 1
@@ -401,7 +579,7 @@ def _snippets(name, grp, s, store: bool, density_ratio: float) -> dict:
         v = _scene_values(grp)
         mats = list(dict.fromkeys([_first(grp, "material1"), _first(grp, "material2")]))
         n = len(mats)
-        lig_text = liggghts.snippet(lig, types=mats, placeholders=False, values={
+        lig_text = liggghts.snippet(lig, types=mats, placeholders=False, header=header, values={
             "youngs": [v["youngs1_Pa"], v["youngs2_Pa"]][:n],
             "poisson": [v["poisson1"], v["poisson2"]][:n], "viscosity": v["viscosity_Pa_s"],
             "v_char": v["v0"], "dt_max": v["dt_max"]})
@@ -424,10 +602,12 @@ def _snippets(name, grp, s, store: bool, density_ratio: float) -> dict:
         lig["atom_types"] = types
     files[f"liggghts_{tag}.in"] = lig_text
     if walls:
-        files[f"liggghts_{tag}_wall.in"] = liggghts.wall_snippet(wall_type, placeholders=store)
-        files[f"openfoam_{tag}.txt"] = openfoam.snippet(s, store=store)
+        files[f"liggghts_{tag}_wall.in"] = liggghts.wall_snippet(wall_type, placeholders=store,
+                                                                 header=header)
+        files[f"openfoam_{tag}.txt"] = openfoam.snippet(s, store=store, header=header)
     files[f"yade_{tag}.py"] = yade.snippet(s["yade"], geometry=geometry, values=yv,
-                                           placeholders=store, steps=liggghts.STEPS_PER_CONTACT)
+                                           placeholders=store, steps=liggghts.STEPS_PER_CONTACT,
+                                           header=header)
     return files
 
 
@@ -438,15 +618,23 @@ def progress_to_stderr(command: str):
     return progress
 
 
+class InvalidExport(ValueError):
+    """Every fit row of a group fails a validity check and ``allow_invalid`` was not given."""
+
+
 def export_files(rows: list[dict], source: str, *, fit_range=None, density_ratio=0.0,
-                 progress=None) -> dict:
+                 progress=None, kind="dry", allow_invalid=False) -> dict:
     """Everything an export writes, as ``{file name: text}`` (nothing written yet).
-    ``progress``: called with a line per group when there are several."""
+    ``progress``: called with a line per group when there are several. ``kind``: which e the
+    laws realise (``conventions.DEM_KINDS``). Raises ``InvalidExport`` (nothing computed is
+    lost: nothing was written) when a group's fit rows all fail validity checks, unless
+    ``allow_invalid``."""
     groups = {}
     for r in rows:
         groups.setdefault(r["group"], []).append(r)
     store = all(r["geometry"] == "either" for r in rows)
-    doc = {"source": source, "solver_version": SOLVER_VERSION,
+    doc = {"source": source, "solver_version": SOLVER_VERSION, "for": kind,
+           "e_realised": DEM_KINDS[kind].e_column, "speed_column": DEM_KINDS[kind].speed_column,
            "conventions": {k: {"definition": d, "used_by": u} for k, (d, u) in CONVENTIONS.items()},
            "st_bands": [b if math.isfinite(b) else None for b in ST_BANDS],
            "groups": {}}
@@ -456,7 +644,9 @@ def export_files(rows: list[dict], source: str, *, fit_range=None, density_ratio
     files = {}
     t0 = time.perf_counter()
     for k, (name, grp) in enumerate(groups.items()):
-        s = group_settings(grp, fit_range)
+        s = group_settings(grp, fit_range, kind)
+        if s["validity"]["every_row_fails"] and not allow_invalid:
+            raise InvalidExport(f"group {name}: {s['validity']['summary']}")
         doc["groups"][name] = s
         if "liggghts" in s:
             files.update(_snippets(name, grp, s, store, density_ratio))
@@ -490,10 +680,11 @@ def write_files(files: dict, out_dir) -> list[Path]:
 
 
 def write_export(rows: list[dict], out_dir, source: str, *, fit_range=None, density_ratio=0.0,
-                 progress=None) -> list[Path]:
+                 progress=None, kind="dry", allow_invalid=False) -> list[Path]:
     """Compute the export of ``rows`` and write it into ``out_dir``."""
     return write_files(export_files(rows, source, fit_range=fit_range,
-                                    density_ratio=density_ratio, progress=progress), out_dir)
+                                    density_ratio=density_ratio, progress=progress, kind=kind,
+                                    allow_invalid=allow_invalid), out_dir)
 
 
 def _json_default(v):
@@ -507,7 +698,7 @@ def _json_default(v):
 def read_csv(path) -> list[dict]:
     """The rows of ``restitution.csv`` back, numbers as floats (empty: ``""``)."""
     text_fields = ("group", "geometry", "material1", "material2", "fluid", "warning",
-                   "warning_checks", "status", "solver_version")
+                   "warning_checks", "status", "solver_version", "physics", "role")
     rows = []
     with open(path, newline="") as fh:
         for r in csv.DictReader(fh):

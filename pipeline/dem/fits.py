@@ -6,6 +6,9 @@
 - ``threshold``: ``e = e_max (1 - St_c / St)`` for ``St > St_c``, 0 below (the rigid lubrication
   form ``e = 1 - ln(x_ref/x_c)/St``; linear in ``1/St``).
 
+Both take ``e_cap``, the largest ``e_max`` allowed: the pair's dry restitution ``e_dry`` (no
+law may promise more than the solids give back dry; 1 without one).
+
 Each fit carries its error (the largest absolute difference from the table it was fitted to) and
 the St range of that table's rebounding rows: the range the law is stated to hold for.
 """
@@ -58,25 +61,29 @@ def _split(st, e):
     return st[up], e[up], float(stuck.max()) if stuck.size else math.nan
 
 
-def fit_exponential(st, e, convention="St") -> Fit:
+def fit_exponential(st, e, convention="St", e_cap=1.0) -> Fit:
     """``e = e_max exp(-C/St)``: a start from the line ``ln e = ln e_max - C/St``, then least squares
     in ``e`` (the log fit alone would weight the near-sticking rows far too much)."""
     s, y, st_stick = _split(st, e)
     slope, icpt = np.polyfit(1.0 / s, np.log(y), 1)
-    # e_max <= 1: the codes refuse a restitution above 1 (perfectly elastic solids: e_dry = 1)
-    p0 = (min(math.exp(icpt), 1.0 - 1e-9), max(-slope, 1e-9))
+    # e_max <= e_cap <= 1: the codes refuse a restitution above 1, and none above e_dry is real
+    p0 = (min(math.exp(icpt), e_cap * (1.0 - 1e-9)), max(-slope, 1e-9))
     p, _ = optimize.curve_fit(lambda x, a, c: a * np.exp(-c / x), s, y, p0=p0,
-                              bounds=([1e-9, 0.0], [1.0, np.inf]))
+                              bounds=([1e-9, 0.0], [e_cap, np.inf]))
     fit = Fit("exponential", convention, float(p[0]), float(p[1]), float(s[0]), float(s[-1]),
               st_stick, 0.0, int(s.size))
     return _with_error(fit, s, y)
 
 
-def fit_threshold(st, e, convention="St") -> Fit:
+def fit_threshold(st, e, convention="St", e_cap=1.0) -> Fit:
     """``e = e_max (1 - St_c/St)``: linear least squares of ``e = A + B/St`` (``e_max = A``,
-    ``St_c = -B/A``) over the rebounding rows."""
+    ``St_c = -B/A``) over the rebounding rows; where ``A`` exceeds ``e_cap``, ``A = e_cap`` and
+    ``B`` by least squares alone (the constrained minimum: the cost is a convex quadratic)."""
     s, y, st_stick = _split(st, e)
     b, a = np.polyfit(1.0 / s, y, 1)
+    if a > e_cap:
+        a = e_cap
+        b = float(np.sum((y - a) / s) / np.sum(1.0 / s**2))
     fit = Fit("threshold", convention, float(a), float(-b / a), float(s[0]), float(s[-1]),
               st_stick, 0.0, int(s.size))
     return _with_error(fit, s, y)

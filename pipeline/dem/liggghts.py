@@ -164,10 +164,12 @@ def replica_many(st_in, e_max, st_crit, *, limit_force=False) -> np.ndarray:
                          bool(limit_force), _STEP, _T_MAX)
 
 
-def calibrate(st, e_target, e_max0=None, c0=None, weights=None):
+def calibrate(st, e_target, e_max0=None, c0=None, weights=None, e_cap=1.0):
     """``(MaximumRestitution, CriticalStokes)`` whose replica reproduces ``e_target`` at ``st``
     (LIGGGHTS' convention = ours, impact speeds), by least squares over the rebounding rows
-    (``weights`` per row: where the user's collisions are). Returns
+    (``weights`` per row: where the user's collisions are), ``MaximumRestitution <= e_cap``
+    (the pair's e_dry: the law's e tends to it at high St, and no real collision gives back
+    more than dry solids). Returns
     ``(e_max, C, max_abs_error, realised)`` over the rebounding rows."""
     st, e_target = np.asarray(st, float), np.asarray(e_target, float)
     keep = e_target > 0.0
@@ -180,15 +182,16 @@ def calibrate(st, e_target, e_max0=None, c0=None, weights=None):
         return (replica_many(st, p[0], p[1]) - e_target) * w
 
     # CriticalStokes > 0 is required by LIGGGHTS (src/global_properties.cpp)
-    res = optimize.least_squares(resid, x0=[min(e_max0, 1.0), max(c0, 1e-3)],
-                                 bounds=([1e-6, 1e-9], [1.0, np.inf]), xtol=1e-10, ftol=1e-10)
+    res = optimize.least_squares(resid, x0=[min(e_max0, e_cap * (1.0 - 1e-9)), max(c0, 1e-3)],
+                                 bounds=([1e-6, 1e-9], [e_cap, np.inf]), xtol=1e-10, ftol=1e-10)
     realised = replica_many(st, res.x[0], res.x[1])
     return float(res.x[0]), float(res.x[1]), float(np.max(np.abs(realised - e_target))), realised
 
 
-def calibrate_minimax(st, e_target, e_max0, c0, max_evaluations=120):
+def calibrate_minimax(st, e_target, e_max0, c0, max_evaluations=120, e_cap=1.0):
     """``(MaximumRestitution, CriticalStokes, max_abs_error)`` minimising the largest error over
-    every row, sticking ones included (started from the least-squares values ``e_max0, c0``).
+    every row, sticking ones included (started from the least-squares values ``e_max0, c0``),
+    ``MaximumRestitution <= e_cap`` (``calibrate``).
     The replica's e grows with St, so of the sticking rows only the one of largest St can hold
     the largest error: the others are not integrated."""
     st, e_target = np.asarray(st, float), np.asarray(e_target, float)
@@ -200,14 +203,16 @@ def calibrate_minimax(st, e_target, e_max0, c0, max_evaluations=120):
     st_u, e_u = st[use], e_target[use]
 
     def worst(p):
-        if not (0.0 < p[0] <= 1.0 and p[1] > 0.0):
+        if not (0.0 < p[0] <= e_cap and p[1] > 0.0):
             return np.inf
         return float(np.max(np.abs(replica_many(st_u, p[0], p[1]) - e_u)))
 
     r = optimize.minimize(worst, [e_max0, c0], method="Nelder-Mead",
                           options={"xatol": 1e-4, "fatol": 1e-5, "maxfev": max_evaluations,
                                    "initial_simplex": [[e_max0, c0],
-                                                       [min(1.0, e_max0 * 1.02), c0],
+                                                       # down where up would leave e_cap
+                                                       [e_max0 * (1.02 if e_max0 * 1.02 <= e_cap
+                                                                  else 0.98), c0],
                                                        [e_max0, c0 * 1.1]]})
     return float(r.x[0]), float(r.x[1]), float(r.fun)
 
@@ -228,12 +233,14 @@ def contact_time(meff, reff, yeff, v_char) -> float:
     return math.pi * math.sqrt(meff / hooke_stiffness(meff, reff, yeff, v_char))
 
 
-def snippet(lig: dict, *, types: list[str], values: dict, placeholders: bool) -> str:
+def snippet(lig: dict, *, types: list[str], values: dict, placeholders: bool,
+            header: tuple = ()) -> str:
     """LIGGGHTS input lines for ``len(types)`` atom types, to paste after ``create_box`` and
     before the atoms: the pair style and every property the hooke ``viscous`` model reads.
     ``values``: ``youngs`` and ``poisson`` per type, ``viscosity``, ``v_char``; with
     ``placeholders`` also ``density`` and ``radius`` (example values marked REPLACE) from which
-    the input computes the time step itself; else ``dt_max`` [s] (the scene's number)."""
+    the input computes the time step itself; else ``dt_max`` [s] (the scene's number).
+    ``header``: comment lines (without ``#``) after the title: the e realised, its physics."""
     n = len(types)
     v = values
     rep = "  # REPLACE: " if placeholders else "  # the scene's "
@@ -249,6 +256,7 @@ def snippet(lig: dict, *, types: list[str], values: dict, placeholders: bool) ->
     v_char = max(v["v_char"], MIN_CHARACTERISTIC_VELOCITY)
     lines = [
         "# ==== ehd-collision wet restitution for LIGGGHTS 3.8: gran model hooke, viscous on ====",
+        *(f"# {line}" for line in header),
         "# Paste after create_box (" + f"{n} atom type{'s' if n > 1 else ''}: "
         + ", ".join(f"{i + 1} = {t}" for i, t in enumerate(types)) + ") and before the atoms.",
         "# CriticalStokes is the C of e = MaximumRestitution exp(-C/St), St = meff vn/(6 pi mu reff^2)",
@@ -267,6 +275,9 @@ def snippet(lig: dict, *, types: list[str], values: dict, placeholders: bool) ->
         ]
     lines += [
         "variable ehd_friction equal 0.5  # REPLACE: your friction coefficient (no effect head-on)",
+        "# WARNING: keep limitForce off (LIGGGHTS' default; its docs recommend 'limitForce on'):",
+        "# with it the force is never attractive, the dashpot cannot hold the spheres together and",
+        "# collisions the model says stick rebound (e 0.24 measured in LIGGGHTS 3.8.0).",
         "hard_particles yes",
         "pair_style gran model hooke tangential history viscous on",
         "pair_coeff * *",
@@ -312,11 +323,13 @@ def _example_dt(v) -> float:
     return tc / STEPS_PER_CONTACT
 
 
-def wall_snippet(wall_type: int, *, placeholders: bool) -> str:
+def wall_snippet(wall_type: int, *, placeholders: bool, header: tuple = ()) -> str:
     """The wall line (paste after the snippet): the same model and keywords in fix wall/gran;
-    the model keywords (``viscous on``) after the wall's own arguments, as LIGGGHTS requires."""
+    the model keywords (``viscous on``) after the wall's own arguments, as LIGGGHTS requires.
+    ``header``: as ``snippet``'s."""
     return "\n".join([
         "# ==== ehd-collision: walls (paste after the particle block) ====",
+        *(f"# {line}" for line in header),
         "# the wall's material is atom type %d; the same law (meff, reff = the sphere's)" % wall_type,
         "variable ehd_wall_z equal 0.0  # REPLACE: the wall's position (or use your mesh walls with "
         "the same 'model hooke tangential history' and 'viscous on' after 'meshes ...')",

@@ -37,15 +37,15 @@ def law(st_l, e_max, coeff_stc):
     return np.where(log_e < STICK_LOG_E, 0.0, np.exp(log_e))
 
 
-def calibrate(st_l, e, e_max0, c0, weights=None):
-    """``(e, coeffStc)`` that minimise the squared error of ``law`` over every row, sticking
-    ones included (the fit of the rebounding rows alone leaves the library rebounding where the
+def calibrate(st_l, e, e_max0, c0, weights=None, e_cap=1.0):
+    """``(e, coeffStc)``, ``e <= e_cap`` (the pair's e_dry), that minimise the squared error of
+    ``law`` over every row, sticking ones included (the fit of the rebounding rows alone leaves the library rebounding where the
     model sticks). Returns ``(e_max, coeffStc, max_abs_error)``."""
     st_l, e = np.asarray(st_l, float), np.asarray(e, float)
     w = np.ones_like(e) if weights is None else np.asarray(weights, float)
 
     def cost(p):
-        if not (0.0 < p[0] <= 1.0 and p[1] > 0.0):
+        if not (0.0 < p[0] <= e_cap and p[1] > 0.0):
             return np.inf
         return float(np.sum(w * (law(st_l, p[0], p[1]) - e) ** 2))
 
@@ -53,7 +53,7 @@ def calibrate(st_l, e, e_max0, c0, weights=None):
     # the cut-off makes the cost piecewise smooth: a few starts between the fit's C and the C
     # that puts the cut-off at the model's threshold
     for scale in (1.0, 1.2, 1.5, 2.0):
-        r = optimize.minimize(cost, [min(e_max0, 1.0), c0 * scale], method="Nelder-Mead",
+        r = optimize.minimize(cost, [min(e_max0, e_cap), c0 * scale], method="Nelder-Mead",
                               options={"xatol": 1e-6, "fatol": 1e-12, "maxiter": 2000})
         if best is None or r.fun < best.fun:
             best = r
@@ -61,8 +61,10 @@ def calibrate(st_l, e, e_max0, c0, weights=None):
     return em, c, float(np.max(np.abs(law(st_l, em, c) - e)))
 
 
-def snippet(s: dict, *, store: bool) -> str:
-    """The controlDict line and the kinematicCloudProperties entries of group settings ``s``."""
+def snippet(s: dict, *, store: bool, header: tuple = ()) -> str:
+    """The controlDict line and the kinematicCloudProperties entries of group settings ``s``;
+    ``header``: comment lines (without ``//``) after the title: the e realised, its physics."""
+    head = "".join(f"// {line}\n" for line in header)
     o = s["openfoam"]
     rep = "  // REPLACE: " if store else "  // "
     if not store:
@@ -73,7 +75,7 @@ def snippet(s: dict, *, store: bool) -> str:
         rho_note = (f"REPLACE: {o['density_ratio']:.3g} (the export's rho_f/rho_p) x your "
                     "particle density, as in the fit's St_L")
     return f"""// ehd-collision wet restitution for OpenFOAM: patchInteractionModel localInteractionHW
-// Library: {LIBRARY} (third party; build it for your OpenFOAM).
+{head}// Library: {LIBRARY} (third party; build it for your OpenFOAM).
 // Law applied at impact: St_L = (rho_p + rhoF/2) Un d / (9 muP),  e = e exp(-coeffStc/St_L),
 // the parcel sticks where ln e < -5.3 (hard-coded in the library: eCutoffLog is not used).
 // Walls only (a patch interaction). Largest error of this law against the model, every row:
