@@ -152,8 +152,8 @@ def answer_lines(d: dict) -> list[str]:
         if value is None:
             lines.append(f"{label} ({result}): not computed (two unequal spheres)")
             continue
-        spread = "" if span is None or span[0] == span[1] else \
-            f", range {span[0]:.3f} to {span[1]:.3f}"
+        spread = "" if span is None else f", range {span[0]:.3f} to {span[1]:.3f}" + (
+            " (no unknown moves it)" if span[0] == span[1] else "")
         lines.append(f"{label} ({result}): {value:.3f}{spread}")
     shares = [f"{r['unknown']} {100 * r['share']:.0f} %" for r in d["range_drivers"]
               if r["share"] > 0.0]
