@@ -31,6 +31,10 @@ def _close_figures():
 # tiers are one list; a slow test you add belongs here (tests/test_tiers.py checks that every
 # entry still names a test).
 SLOW = {
+    "test_answer.py": (
+        "test_thresholds_in_e_far_and_e_wet_bracket_the_change",
+        "test_an_approach_too_slow_for_the_outer_flow_stops_before_x0",
+    ),
     "test_cavitation.py": (
         "test_rigid_separation_force_and_cavity_converge_to_the_closed_form",
         "test_whole_collisions_converge_under_refinement",
