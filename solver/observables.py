@@ -3,7 +3,9 @@
 Everything that lists results is generated from these declarations: the JSON keys of
 ``Collision.to_dict`` (``JSON_KEYS``), the record a sweep task returns, the store's variables
 (with ``long_name`` and ``units``), the quantities the master-curve fast path interpolates, and the
-rows ``ehd run`` prints. Adding an observable is one entry here plus the code that computes it.
+rows ``ehd run`` prints; with its ``scene`` keys, the SI keys of ``ehd scene --json`` and the rows
+of its report (pipeline/scenes/run.py, ``si_results``; commands.py, ``result_rows``). Adding an
+observable is one entry here plus the code that computes it.
 
 Units (docs/model.md, "Scales"): lengths along the axis in ``x1`` (suffix ``_x1``) or ``x0``
 (``_x0``), times ``tau = v0 t / x0``, velocities in ``v0``, force in ``6 pi mu a^2 v0 / x1``,
@@ -15,8 +17,58 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["Observable", "OBSERVABLES", "OBSERVABLE", "STATUS", "STATUS_CODES", "MODEL_CODES",
+__all__ = ["Observable", "SceneKey", "si_unit", "OBSERVABLES", "OBSERVABLE", "STATUS",
+           "STATUS_CODES", "MODEL_CODES",
            "LABELS", "Column", "SERIES", "SERIES_INDEX", "failure_message"]
+
+
+@dataclass(frozen=True)
+class SceneKey:
+    """One SI key of ``ehd scene --json`` made from an observable, and its report row.
+
+    key
+        The JSON key; its suffix names the SI unit (``SI_UNITS``: ``_nm``, ``_m``, ``_m3``,
+        ``_s``, ``_N``, ``_Pa``, ``_Pa_s``, ``_m_per_s``; none: a pure number).
+    scale
+        The scene scale that makes the observable SI (pipeline/scenes/run.py, ``SCALES``): a
+        units string of this module (``"x1"``, ``"x0/v0"``, ``"sqrt(a x1)"``...), ``"mu0"`` (the
+        ambient viscosity) or ``"v(x_ref)"`` (the approach speed at x_ref); ``""``: the
+        observable's own ``units``.
+    label
+        Its row in the scene report; ``""``: JSON only.
+    form
+        ``""``: the observable times the scale. ``"exp"`` and ``"log10"``: the observable is the
+        natural log of a quantity over the scale, the key holds that quantity in SI (null where
+        it passes e^700) or its log10.
+    null
+        What the report shows where the value is null (``""``: ``-``).
+    when
+        The row is shown only where this key of the scene's JSON is true (``"cavitated"``) or
+        is not the value after ``!=`` (``"viscosity_law!=constant"``); ``""``: always.
+    outer
+        Read through the outer flow (solver/far_field.py): null for a scene without one (two
+        unequal spheres).
+    """
+
+    key: str
+    scale: str = ""
+    label: str = ""
+    form: str = ""
+    null: str = ""
+    when: str = ""
+    outer: bool = False
+
+
+# JSON key suffix -> (unit printed, factor from the SI base unit); the longest suffix wins
+SI_UNITS = {"_m_per_s": ("m/s", 1.0), "_Pa_s": ("Pa*s", 1.0), "_nm": ("nm", 1e9),
+            "_m3": ("m^3", 1.0), "_m": ("m", 1.0), "_s": ("s", 1.0), "_N": ("N", 1.0),
+            "_Pa": ("Pa", 1.0)}
+
+
+def si_unit(key: str) -> tuple[str, float]:
+    """``(unit, factor)`` of a scene key from its suffix (``SI_UNITS``); ``("", 1.0)``: a
+    pure number."""
+    return next((v for s, v in SI_UNITS.items() if key.endswith(s)), ("", 1.0))
 
 
 @dataclass(frozen=True)
@@ -39,6 +91,9 @@ class Observable:
     derived, start
         A derived observable is a property of ``Collision`` computed from the others; every
         other one is a field of it (solver/result.py), starting at ``initial``.
+    scene
+        Its SI keys in ``ehd scene`` (``SceneKey``: key, scale, report row); ``()``: it is in
+        ``ehd scene``'s ``dimensionless`` object only.
     """
 
     name: str
@@ -50,6 +105,7 @@ class Observable:
     master: str = ""
     derived: bool = False  # computed from other observables (a property of Collision, no field)
     start: object = None  # a Collision's value before its solve sets it (None: by kind)
+    scene: tuple = ()  # SceneKey: the SI keys of `ehd scene` and their report rows
 
     @property
     def initial(self):
@@ -64,16 +120,23 @@ _P = "mu a v0 / x1^2"
 OBSERVABLES = (
     Observable("v_r", "float", "maximum rebound (separation) velocity max(-v)/v0, 0 without "
                "rebound", "v0", "rebound velocity v_r/v0", master="lin velocity",
-               start=0.0),
+               start=0.0,
+               scene=(SceneKey("v_r", "1"),
+                      SceneKey("rebound_speed_m_per_s", label="max rebound speed"))),
     Observable("e_wet", "float", "wet coefficient of restitution: separation speed where the "
                "spheres pass back out through x_ref (default x0) over the approach speed there; "
-               "0 when they stick", "v0/v0", "wet restitution e_wet (at x_ref)"),
+               "0 when they stick", "v0/v0", "wet restitution e_wet (at x_ref)",
+               scene=(SceneKey("e_wet", "1", "wet restitution e_wet"),
+                      SceneKey("departure_speed_m_per_s", "v(x_ref)",
+                               "  departure speed at x_ref"))),
     Observable("h_m_x1", "float", "closest approach of the deformed surfaces, whole collision",
-               "x1", "closest approach h_m/x1", master="log length"),
+               "x1", "closest approach h_m/x1", master="log length",
+               scene=(SceneKey("closest_approach_nm", label="closest approach"),)),
     Observable("h_m_x0", "float", "closest approach of the deformed surfaces, whole collision",
                "x0", "  h_m/x0", derived=True),
     Observable("h_m_approach_x1", "float", "closest approach until v first reaches 0", "x1",
-               "closest approach on approach /x1", master="log length"),
+               "closest approach on approach /x1", master="log length",
+               scene=(SceneKey("closest_approach_on_approach_nm", label="  during approach"),)),
     Observable("h_m_approach_x0", "float", "closest approach until v first reaches 0", "x0",
                derived=True),
     Observable("x_e_x1", "float", "equilibrium separation of the undeformed surfaces (inf: exp "
@@ -81,63 +144,102 @@ OBSERVABLES = (
     Observable("x_e_x0", "float", "equilibrium separation of the undeformed surfaces (inf: exp "
                "overflow, see ln_x_e_x0)", "x0", "  x_e/x0", derived=True),
     Observable("ln_x_e_x1", "float", "natural log of x_e/x1 (finite where x_e/x1 overflows)", "1",
-               "  ln(x_e/x1)", master="lin log_length"),
+               "  ln(x_e/x1)", master="lin log_length",
+               scene=(SceneKey("equilibrium_separation_m", "x1", "equilibrium separation x_e",
+                               "exp",
+                               null="beyond e^700 m"),
+                      SceneKey("log10_equilibrium_separation_m", "x1", "  log10(x_e / m)",
+                               "log10"))),
     Observable("ln_x_e_x0", "float", "natural log of x_e/x0; > 0 means escaped", "1", derived=True),
     Observable("tau_max_deformation", "float", "time of the largest central deformation W(0)",
                "x0/v0", "tau at max deformation", master="lin time"),
     Observable("tau_v_zero", "float", "first time v = 0 (inf: the spheres never stop in finite "
-               "time)", "x0/v0", "tau at v = 0", master="lin time"),
+               "time)", "x0/v0", "tau at v = 0", master="lin time",
+               scene=(SceneKey("time_to_stop_s", label="time to stop (v = 0)",
+                               null="never in finite time (creeps to rest)"),)),
     Observable("tau_max_rebound", "float", "time of the largest rebound speed (NaN: no rebound)",
-               "x0/v0", "tau at max rebound", master="lin time"),
+               "x0/v0", "tau at max rebound", master="lin time",
+               scene=(SceneKey("time_of_max_rebound_s", label="time of max rebound",
+                               null="no rebound"),)),
     Observable("tau_peak_force", "float", "time of the peak film force", "x0/v0",
                master="lin time"),
     Observable("peak_force", "float", "peak film force", "6 pi mu a^2 v0 / x1",
-               "peak force / (6 pi mu a^2 v0/x1)", master="log force"),
+               "peak force / (6 pi mu a^2 v0/x1)", master="log force",
+               scene=(SceneKey("peak_force_N", label="peak force"),)),
     Observable("p_max", "float", "largest film pressure over the collision (a pressure-dependent "
                "liquid: until v first reaches 0)", _P,
-               "peak film pressure / (mu a v0/x1^2)", master="log pressure"),
+               "peak film pressure / (mu a v0/x1^2)", master="log pressure",
+               scene=(SceneKey("peak_pressure_Pa", label="peak film pressure"),)),
     Observable("p_min", "float", "lowest film pressure over the collision (< 0: tension)", _P,
-               "lowest film pressure (< 0: tension)", master="lin pressure"),
+               "lowest film pressure (< 0: tension)", master="lin pressure",
+               scene=(SceneKey("min_pressure_Pa", label="min film pressure (< 0: tension)"),)),
     Observable("w0_max_x1", "float", "largest central deformation W(0)", "x1",
-               "max central deformation W(0)/x1", master="log length"),
+               "max central deformation W(0)/x1", master="log length",
+               scene=(SceneKey("max_central_deformation_nm", label="max central deformation"),)),
     Observable("x_min_x1", "float", "smallest separation X of the undeformed surfaces (< 0: "
-               "overlap)", "x1", "min separation X/x1 (<0: overlap)", master="lin length"),
+               "overlap)", "x1", "min separation X/x1 (<0: overlap)", master="lin length",
+               scene=(SceneKey("min_separation_nm", label="min separation x (< 0: overlap)"),)),
     Observable("dimple", "flag", "a dimple forms (central gap above the minimum by more than "
-               "1e-3 x1)", "1", "dimple"),
+               "1e-3 x1)", "1", "dimple",
+               scene=(SceneKey("dimple", label="dimple"),)),
     Observable("dimple_depth_x1", "float", "largest dimple depth H(0) - min_R H", "x1",
-               "  depth /x1", master="lin length", start=0.0),
+               "  depth /x1", master="lin length", start=0.0,
+               scene=(SceneKey("dimple_depth_nm", label="  depth", when="dimple"),)),
     Observable("tau_dimple", "float", "first time the dimple is deeper than 1e-3 x1", "x0/v0"),
     Observable("escaped", "flag", "rebound carries the spheres back beyond x0 (x_e > x0): no "
-               "sticking", "1", "escaped (x_e > x0: no sticking)", derived=True),
+               "sticking", "1", "escaped (x_e > x0: no sticking)", derived=True,
+               scene=(SceneKey("escaped", label="escaped (x_e > x0: no sticking)"),)),
     Observable("energy_error", "float", "max energy-closure error of the coupled phase (void "
                "work included)",
                "m v0^2 / 2", "energy closure error", master="lin energy"),
     Observable("cavitated", "flag", "the film cavitated (its pressure reached the floor -Pi)", "1",
-               "cavitated"),
+               "cavitated",
+               scene=(SceneKey("cavitated", label="cavitated", when="cavitation!=off"),)),
     Observable("cavity_radius_max", "float", "largest cavity radius (outermost cavitated node)",
-               "sqrt(a x1)", "  largest cavity radius /sqrt(a x1)", start=0.0),
+               "sqrt(a x1)", "  largest cavity radius /sqrt(a x1)", start=0.0,
+               scene=(SceneKey("cavity_radius_max_m", label="  largest cavity radius",
+                               when="cavitated"),)),
     Observable("tau_cavitation_onset", "float", "time the film first cavitates (NaN: never)",
-               "x0/v0", "  tau at cavitation onset"),
+               "x0/v0", "  tau at cavitation onset",
+               scene=(SceneKey("cavitation_onset_s", label="  cavitation onset",
+                               when="cavitated"),)),
     Observable("void_volume_max", "float", "largest void volume Int_cav (H - H_onset) ds",
-               "2 pi a x1^2", "  largest void volume /(2 pi a x1^2)", start=0.0),
+               "2 pi a x1^2", "  largest void volume /(2 pi a x1^2)", start=0.0,
+               scene=(SceneKey("void_volume_max_m3", label="  largest void volume",
+                               when="cavitated"),)),
     Observable("viscosity_ratio_max_approach", "float", "largest viscosity over ambient mu/mu0 "
                "until v first reaches 0 (at the approach's peak film pressure)", "1",
-               "peak viscosity ratio on approach mu/mu0"),
+               "peak viscosity ratio on approach mu/mu0",
+               scene=(SceneKey("viscosity_ratio_max_approach",
+                               label="peak viscosity on approach mu/mu0",
+                               when="viscosity_law!=constant"),
+                      SceneKey("peak_viscosity_Pa_s", "mu0", "  peak viscosity",
+                               when="viscosity_law!=constant"))),
     Observable("h_axis_at_peak_pressure_x1", "float", "central gap H(0) when the film pressure "
                "peaks on approach (the trapped lens of a piezoviscous film)", "x1",
-               "  central gap at peak pressure /x1"),
+               "  central gap at peak pressure /x1",
+               scene=(SceneKey("central_gap_at_peak_pressure_nm",
+                               label="  central gap at peak pressure",
+                               when="viscosity_law!=constant"),)),
     Observable("solidified", "flag", "the film solidified on approach: its viscosity rose "
-               "beyond 1e4 mu0", "1", "  solidified (mu > 1e4 mu0)"),
+               "beyond 1e4 mu0", "1", "  solidified (mu > 1e4 mu0)",
+               scene=(SceneKey("solidified", label="  solidified (mu > 1e4 mu0)",
+                               when="viscosity_law!=constant"),)),
     Observable("start_strain_energy", "float", "strain energy where the coupled phase starts, "
                "over the kinetic energy", "1", start=0.0),
     Observable("e_far", "float", "far-field restitution: departure over approach speed, both "
                "read at x_ref_over_a on the rigid outer path with the exact Stokes resistance "
                "and the added mass (solver/far_field.py; defaults: sphere and wall, x0 = 0.01 a, "
                "x_ref = 0.1 a, no added mass); 0 when the spheres stop before x_ref", "v/v",
-               "far-field restitution e_far"),
+               "far-field restitution e_far",
+               scene=(SceneKey("e_far", "1", "far-field restitution e_far", outer=True,
+                               null="not computed (two unequal spheres)"),)),
     Observable("v_outer_start", "float", "approach speed at the outer start (outer_start_over_a) "
                "that arrives at x0 with v0, on the same outer path", "v0",
-               "  approach speed at outer start /v0"),
+               "  approach speed at outer start /v0",
+               scene=(SceneKey("outer_start_speed_m_per_s",
+                               label="  approach speed at the outer start",
+                               outer=True, null="not computed (two unequal spheres)"),)),
     Observable("steps", "count", "accepted time steps of the coupled solve", "1", "steps",
                diagnostic=True),
     Observable("rejected_steps", "count", "rejected time steps of the coupled solve", "1",

@@ -302,8 +302,8 @@ def test_with_a_floor_the_step_control_is_the_cavitating_films():
     # e_wet by at most 2e-5; the bug kept the Kirchhoff pressure in the norm and took 2.7x the
     # steps (the refill below), so 5 % separates the two.
     assert both.steps == pytest.approx(floor.steps, rel=0.05)
-    # 1e-4: five times the largest flip seen (2e-5), below the preset's v_r error (5.6e-4,
-    # benchmarks/accuracy.md)
+    # 1e-4: five times the largest flip seen (2e-5), below the preset's v_r error on a
+    # piezoviscous film (benchmarks/piezoviscous.md: 5.6e-04)
     assert both.v_r == pytest.approx(floor.v_r, rel=1e-4)
     refill = collide(Physics(St=470.2981592314503, eps=6.774250277240935e-07, beta=0.3,
                              viscosity_law="roelands", Pi=0.01), save_profiles=False)

@@ -4,8 +4,8 @@ output in it is what the program prints now.
 A sample is a fenced block whose first line is ``$ ehd ...``: the command runs (in-process, from
 the clone's folder), and every line the block shows must appear in its output, in that order.
 A line ``...`` stands for any number of lines. Numbers are compared within 5e-3 relative: another
-CPU's round-off moves a result within the preset's own accuracy at most (standard: 0.5 % on
-h_m, benchmarks/accuracy.md); every other character must match.
+CPU's round-off moves a result by less than the standard preset's target error
+(benchmarks/accuracy.md: 0.005; its largest on h_m is 1.1e-02); every other character must match.
 """
 
 import math

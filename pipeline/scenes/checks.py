@@ -54,9 +54,9 @@ THRESHOLDS = {
 # The automatic switches of the pressure-dependent viscosity and density (run.run_scene), read at
 # the peak pressure p_peak of the classic film (the solver's p_max times p*):
 # - viscosity: alpha p_peak >= 0.1, i.e. the viscosity there exceeds mu0 by more than
-#   exp(0.1) - 1 = 10.5 %. That is above the few-% accuracy of the solver's own presets (standard:
-#   largest errors 1.3e-3 on v_r, 1.1e-2 on h_m, 1.9e-2 on h_m on approach over the St, eps panel
-#   of benchmarks/accuracy.md), so below it the constant viscosity is as good as the solve, and
+#   exp(0.1) - 1 = 10.5 %. That is above the few-% accuracy of the solver's own presets (the
+#   standard preset's largest errors over the St, eps panel, benchmarks/accuracy.md: 1.3e-3 on
+#   v_r, 1.1e-2 on h_m, 1.9e-2 on h_m on approach), so below it the constant viscosity is as good as the solve, and
 #   above it the viscosity law can move the results by more than the solver's own error;
 VISCOSITY_SWITCH = 0.1
 # - density (fluids with Dowson-Higginson constants): the density rise at p_peak,

@@ -12,7 +12,8 @@ import sys
 
 from ..errors import EXIT_SCENE_FAILED
 
-__all__ = ["register", "cmd_scene", "cmd_paper_figures", "load_scene", "format_report"]
+__all__ = ["register", "cmd_scene", "cmd_paper_figures", "load_scene", "format_report",
+           "result_rows"]
 
 # flag dest -> (section or None for top level, key)
 _FLAG_FIELDS = {
@@ -170,6 +171,35 @@ def answer_lines(d: dict) -> list[str]:
     return lines
 
 
+def _shown(when: str, d: dict) -> bool:
+    """``SceneKey.when`` against the scene's JSON: ``"key"`` true, ``"key!=value"`` not value."""
+    if not when:
+        return True
+    key, _, off = when.partition("!=")
+    return d[key] != off if off else bool(d[key])
+
+
+def _si_text(value, key) -> str:
+    """The value of ``key`` (a ``SceneKey``) for the report, in the unit its name ends with."""
+    from solver.observables import si_unit
+
+    if value is None:
+        return key.null or "-"
+    unit = "" if key.form == "log10" else si_unit(key.key)[0]
+    if unit in ("m", "s", "N", "Pa", "m/s", "Pa*s"):  # with a readable prefix (25 µm)
+        return _q(value, unit)
+    return f"{_g(value)} {unit}".rstrip()
+
+
+def result_rows(d: dict) -> list[tuple[str, str]]:
+    """The report's result rows: every labelled ``SceneKey`` of the observable registry
+    (solver/observables.py), in its order, where its ``when`` holds."""
+    from .run import scene_keys
+
+    return [(k.label, _si_text(d[k.key], k)) for _, k in scene_keys()
+            if k.label and _shown(k.when, d)]
+
+
 def format_report(d: dict) -> str:
     """Human-readable report of ``SceneResult.to_dict()``."""
     from .checks import per_gpa
@@ -205,52 +235,13 @@ def format_report(d: dict) -> str:
         ("Re (Re x0/a)", f"{d['Re']:.4g} ({d['Re_x0_over_a']:.3g})"),
         ("(v0/c)^(1/5)", "-" if d["wave_parameter"] is None else
          f"{d['wave_parameter']:.3g} (c = {_q(d['sound_speed_m_per_s'], 'm/s')})"),
+        ("e_far reads at x_ref", f"{_q(d['x_ref_m'], 'm')} = {d['x_ref_over_a']:.3g} a (exact "
+         f"Stokes resistance, added mass at rho_f/rho_p = {_g(d['density_ratio'], '.3g')}; outer "
+         f"start {d['outer_start_over_a']:.3g} a)"),
     ]
-    results = [
-        ("max rebound speed", f"{_q(d['rebound_speed_m_per_s'], 'm/s')} (v_r = {_g(d['v_r'])} v0)"),
-        ("wet restitution e_wet", "0: the spheres stick (they never leave the lubrication "
-         "region)" if d["e_wet"] == 0.0 else f"{_g(d['e_wet'])} (leaving the lubrication region "
-         f"at x0 with {_q(d['departure_speed_m_per_s'], 'm/s')})"),
-        ("far-field restitution e_far", "not computed (two unequal spheres)"
-         if d["e_far"] is None else
-         f"{_g(d['e_far'])} (speeds read at x_ref = {_q(d['x_ref_m'], 'm')} = "
-         f"{d['x_ref_over_a']:.3g} a on the exact Stokes resistance, added mass at "
-         f"rho_f/rho_p = {d['density_ratio']:.3g}; approach at the outer start "
-         f"{d['outer_start_over_a']:.3g} a: {_q(d['outer_start_speed_m_per_s'], 'm/s')})"),
-        *((f"  {v['code']} takes {v['key']}", f"{_g(v['value'])}: {v['why']}")
-          for v in d["dem_restitution"].values()),
-        ("closest approach", f"{_g(d['closest_approach_nm'])} nm "
-                             f"(h_m/x1 = {_g(d['dimensionless']['h_m_x1'])})"),
-        ("  during approach", f"{_g(d['closest_approach_on_approach_nm'])} nm"),
-        ("equilibrium separation",
-         f"beyond x0: the rebound carries the spheres apart, no sticking (model value "
-         f"10^{d['log10_equilibrium_separation_m']:.3g} m)" if d["escaped"]
-         else _q(d["equilibrium_separation_m"], "m")),
-        ("time to stop (v = 0)", "never in finite time (creeps to rest)"
-         if d["time_to_stop_s"] is None else _q(d["time_to_stop_s"], "s")),
-        ("time of max rebound", _q(d["time_of_max_rebound_s"], "s")),
-        ("peak force", _q(d["peak_force_N"], "N")),
-        ("peak film pressure", _q(d["peak_pressure_Pa"], "Pa")),
-        ("min film pressure", _q(d["min_pressure_Pa"], "Pa")),
-        ("max central deformation", f"{_g(d['max_central_deformation_nm'])} nm"),
-        ("min separation x", f"{_g(d['min_separation_nm'])} nm (negative: flattened overlap)"),
-        ("dimple", _g(d["dimple"]) + (f" (depth {_g(d['dimple_depth_nm'])} nm)" if d["dimple"] else "")),
-    ]
-    dim = d["dimensionless"]
-    if d["viscosity_law"] != "constant" and dim.get("viscosity_ratio_max_approach") is not None:
-        # the solver's largest mu/mu0 on approach (a pressure-dependent law only)
-        ratio = dim["viscosity_ratio_max_approach"]
-        solid = " (solidified: above 1e4 mu0)" if dim.get("solidified") else ""
-        results.append(("peak viscosity", f"{_g(ratio, '.3g')} mu0 = "
-                        f"{_q(ratio * ins['fluid']['viscosity_Pa_s'], 'Pa*s')} on approach{solid}"))
-    if d["cavitated"]:
-        results += [
-            ("largest cavity radius", _q(d["cavity_radius_max_m"], "m")),
-            ("largest void volume", f"{_g(d['void_volume_max_m3'], '.3g')} m^3"),
-            ("cavitation onset", _q(d["cavitation_onset_s"], "s")),
-        ]
-    elif d["cavitation"] != "off":
-        results.append(("cavitated", "no (the film stayed above the cavitation pressure)"))
+    results = [*result_rows(d),
+               *((f"{v['code']} takes {v['key']}", f"{_g(v['value'])}: {v['why']}")
+                 for v in d["dem_restitution"].values())]
     width = max(len(k) for k, _ in rows + results)
     lines.append("derived")
     lines += [f"  {k:<{width}}  {v}" for k, v in rows]

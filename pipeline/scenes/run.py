@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from solver import observables
 from solver.physics import Physics
 
 from .checks import (Check, cavitation_crosses, cavitation_reason, density_reason, density_switch,
@@ -17,28 +18,72 @@ from .checks import (Check, cavitation_crosses, cavitation_reason, density_reaso
 from .answer import STIFFNESS_LABELS, answer, stopped_answer
 from .scene import Scene
 
-__all__ = ["SceneResult", "run_scene", "RESULT_KEYS", "check_solvable", "dem_restitution",
+__all__ = ["SceneResult", "run_scene", "RESULT_KEYS", "SCALES", "scene_keys", "result_keys",
+           "si_value", "check_solvable", "dem_restitution",
            "DEM_COUPLING", "stopped_result"]
 
-# Keys of SceneResult.to_dict() (a contract for scripts using `ehd scene --json`; see docs/scenes.md)
-RESULT_KEYS = (
+# Keys of SceneResult.to_dict() (a contract for scripts using `ehd scene --json`, docs/scenes.md):
+# the scene's own keys, then the SI keys of the observables (solver/observables.py, ``SceneKey``)
+_SCENE_KEYS = (
     "title", "verdict", "e_for_dem", "e_for_dem_range", "e_for_cfd_dem", "e_for_cfd_dem_range",
-    "range_drivers", "approach_speed_m_per_s", "inputs", "reduced_radius_m", "reduced_mass_kg", "theta_per_Pa", "effective_modulus_Pa",
-    "x0_m", "x0_over_a", "x1_m", *Physics.names(), "Re", "Re_x0_over_a", "sound_speed_m_per_s",
-    "wave_parameter", "model", "model_reason", "cavitation_reason", "viscosity_reason",
-    "density_reason", "roughness_reason", "e_dry_source", "cavitation_pressure_Pa",
-    "status", "message", "v_r",
-    "rebound_speed_m_per_s", "e_wet", "departure_speed_m_per_s", "e_far", "x_ref_m",
-    "x_ref_over_a", "outer_start_m", "outer_start_over_a", "outer_start_speed_m_per_s",
-    "outer_geometry", "density_ratio", "dem_restitution",
-    "closest_approach_nm", "closest_approach_on_approach_nm",
-    "equilibrium_separation_m", "log10_equilibrium_separation_m", "escaped", "time_to_stop_s",
-    "time_of_max_rebound_s", "peak_force_N", "peak_pressure_Pa", "min_pressure_Pa",
-    "max_central_deformation_nm", "min_separation_nm", "dimple", "dimple_depth_nm",
-    "cavitated", "cavity_radius_max_m", "void_volume_max_m3", "cavitation_onset_s",
-    "viscosity_ratio_max_approach", "peak_viscosity_Pa_s", "central_gap_at_peak_pressure_nm",
-    "solidified", "sensitivity", "warnings", "notes", "dimensionless",
+    "range_drivers", "approach_speed_m_per_s", "inputs", "reduced_radius_m", "reduced_mass_kg",
+    "theta_per_Pa", "effective_modulus_Pa", "x0_m", "x0_over_a", "x1_m", *Physics.names(), "Re",
+    "Re_x0_over_a", "sound_speed_m_per_s", "wave_parameter", "model", "model_reason",
+    "cavitation_reason", "viscosity_reason", "density_reason", "roughness_reason",
+    "e_dry_source", "cavitation_pressure_Pa", "status", "message", "x_ref_m", "x_ref_over_a",
+    "outer_start_m", "outer_start_over_a", "outer_geometry", "density_ratio", "dem_restitution",
 )
+_LAST_KEYS = ("sensitivity", "warnings", "notes", "dimensionless")
+
+
+def scene_keys() -> tuple:
+    """``(Observable, SceneKey)`` of every SI key of ``ehd scene``, in the registry's order."""
+    return tuple((o, k) for o in observables.OBSERVABLES for k in o.scene)
+
+
+def result_keys() -> tuple:
+    """The keys of ``SceneResult.to_dict`` as the registry declares them now."""
+    return (*_SCENE_KEYS, *(k.key for _, k in scene_keys()), *_LAST_KEYS)
+
+
+RESULT_KEYS = result_keys()
+
+# The scene scales that make an observable SI (``SceneKey.scale``): the units of the
+# dimensionless solution (docs/model.md, "Scales") in the scene's values, (scene, collision) -> SI
+SCALES = {
+    "1": lambda s, c: 1.0,
+    "v0": lambda s, c: s.v0,
+    "x1": lambda s, c: s.x1,
+    "x0/v0": lambda s, c: s.time_scale,
+    "sqrt(a x1)": lambda s, c: math.sqrt(s.reduced_radius * s.x1),
+    "2 pi a x1^2": lambda s, c: 2.0 * math.pi * s.reduced_radius * s.x1**2,
+    "6 pi mu a^2 v0 / x1": lambda s, c: s.force_scale,
+    "mu a v0 / x1^2": lambda s, c: s.pressure_scale,
+    "mu0": lambda s, c: s.fluid.viscosity,
+    # the approach speed at x_ref, St_ref/St v0 (rigid.impact_stokes)
+    "v(x_ref)": lambda s, c: c.St_ref / c.St * s.v0,
+}
+
+
+def si_value(o, key, scene: Scene, c, outer) -> object:
+    """The value of ``key`` (a ``SceneKey`` of observable ``o``) for collision ``c`` of
+    ``scene``: SI, non-finite as None, flags as bool or None (unknown)."""
+    v = getattr(c, o.name)
+    if key.outer and outer is None:
+        return None
+    if o.kind == "flag":
+        return None if v is None else bool(v)
+    if o.kind == "count":
+        return int(v)
+    scale = SCALES[key.scale or o.units](scene, c)
+    factor = observables.si_unit(key.key)[1]
+    if key.form:  # the observable is ln(quantity / scale)
+        ln_si = float(v) + math.log(scale * factor)
+        v = ln_si / math.log(10.0) if key.form == "log10" else (
+            math.exp(ln_si) if ln_si < 700 else math.nan)
+    else:
+        v = float(v) * scale * factor
+    return v if math.isfinite(v) else None
 
 
 @dataclass
@@ -65,27 +110,26 @@ class SceneResult:
     def to_dict(self) -> dict:
         """All results (keys ``RESULT_KEYS``), SI with the unit in the key, non-finite as None."""
         s, c = self.scene, self.collision
-        x1, x0 = s.x1, s.x0
 
         def num(v):
             v = float(v)
             return v if math.isfinite(v) else None
 
-        ln_xe_m = c.ln_x_e_x1 + math.log(x1)
+        si = {k.key: si_value(o, k, s, c, self.outer) for o, k in scene_keys()}
         out = {
             "title": s.title, **self.answer,
             # the speed at the outer start: given, or what arrives at x0 with v0
-            "approach_speed_m_per_s": s.approach_speed if s.approach_speed is not None else (
-                num(c.v_outer_start * s.v0) if self.outer else None),
+            "approach_speed_m_per_s": s.approach_speed if s.approach_speed is not None else
+            si["outer_start_speed_m_per_s"],
             "inputs": s.inputs(),
             "reduced_radius_m": num(s.reduced_radius), "reduced_mass_kg": num(s.reduced_mass),
             "theta_per_Pa": s.theta, "effective_modulus_Pa": s.effective_modulus,
-            "x0_m": x0, "x0_over_a": x0 / s.reduced_radius, "x1_m": x1,
+            "x0_m": s.x0, "x0_over_a": s.x0 / s.reduced_radius, "x1_m": s.x1,
             # the physics solved (Pi = inf, the classic film without a floor, is null as in
             # the solver's JSON)
             **{k: num(v) if isinstance(v, float) else v for k, v in c.physics.as_dict().items()},
             "Re": s.reynolds,
-            "Re_x0_over_a": s.reynolds * x0 / s.reduced_radius,
+            "Re_x0_over_a": s.reynolds * s.x0 / s.reduced_radius,
             "sound_speed_m_per_s": s.sound_speed, "wave_parameter": s.wave_parameter,
             "model": c.model, "model_reason": model_reason(s, c),
             "cavitation_reason": self.cavitation_reason,
@@ -93,48 +137,19 @@ class SceneResult:
             "roughness_reason": self.roughness_reason, "e_dry_source": s.e_dry_source,
             "cavitation_pressure_Pa": s.cavitation_pressure,
             "status": c.status, "message": c.message,
-            "v_r": num(c.v_r), "rebound_speed_m_per_s": num(c.v_r * s.v0),
-            # the speed leaving the lubrication region at x_ref (default x0): e_wet times the
-            # approach speed there, St_ref/St v0 (rigid.impact_stokes)
-            "e_wet": num(c.e_wet),
-            "departure_speed_m_per_s": num(c.e_wet * c.St_ref / c.St * s.v0),
-            # the near-field result read from x_ref on the exact Stokes resistance with the
-            # added mass (solver/far_field.py); null for two unequal spheres
-            "e_far": num(c.e_far) if self.outer else None,
+            # where e_far reads the speeds (solver/far_field.py; null for two unequal spheres)
             "x_ref_m": s.x_ref_distance, "x_ref_over_a": s.x_ref_distance / s.reduced_radius,
             "outer_start_m": s.outer_start_distance,
             "outer_start_over_a": s.outer_start_distance / s.reduced_radius,
-            "outer_start_speed_m_per_s": num(c.v_outer_start * s.v0) if self.outer else None,
             "outer_geometry": s.outer_geometry,
             "density_ratio": self.outer.density_ratio if self.outer else s.density_ratio,
             "dem_restitution": dem_restitution(c.e_wet, c.e_far if self.outer else math.nan),
-            "closest_approach_nm": num(c.h_m_x1 * x1 * 1e9),
-            "closest_approach_on_approach_nm": num(c.h_m_approach_x1 * x1 * 1e9),
-            "equilibrium_separation_m": num(math.exp(ln_xe_m)) if ln_xe_m < 700 else None,
-            "log10_equilibrium_separation_m": num(ln_xe_m / math.log(10.0)),
-            "escaped": bool(c.escaped),
-            "time_to_stop_s": num(c.tau_v_zero * s.time_scale),
-            "time_of_max_rebound_s": num(c.tau_max_rebound * s.time_scale),
-            "peak_force_N": num(c.peak_force * s.force_scale),
-            "peak_pressure_Pa": num(self.peak_pressure), "min_pressure_Pa": num(self.min_pressure),
-            "max_central_deformation_nm": num(c.w0_max_x1 * x1 * 1e9),
-            "min_separation_nm": num(c.x_min_x1 * x1 * 1e9),
-            "dimple": bool(c.dimple), "dimple_depth_nm": num(c.dimple_depth_x1 * x1 * 1e9),
-            # the cavity in SI: radius in sqrt(a x1), void volume in 2 pi a x1^2, time in x0/v0
-            "cavitated": None if c.cavitated is None else bool(c.cavitated),
-            "cavity_radius_max_m": num(c.cavity_radius_max * math.sqrt(s.reduced_radius * x1)),
-            "void_volume_max_m3": num(c.void_volume_max * 2.0 * math.pi * s.reduced_radius * x1**2),
-            "cavitation_onset_s": num(c.tau_cavitation_onset * s.time_scale),
-            # the pressure-dependent liquid on approach (1 and mu0 for a constant viscosity)
-            "viscosity_ratio_max_approach": num(c.viscosity_ratio_max_approach),
-            "peak_viscosity_Pa_s": num(c.viscosity_ratio_max_approach * s.fluid.viscosity),
-            "central_gap_at_peak_pressure_nm": num(c.h_axis_at_peak_pressure_x1 * x1 * 1e9),
-            "solidified": None if c.solidified is None else bool(c.solidified),
+            **si,
             "sensitivity": self.sensitivity,
             "warnings": [w.as_dict() for w in self.warnings], "notes": list(self.notes),
             "dimensionless": c.to_dict(),
         }
-        assert tuple(out) == RESULT_KEYS
+        assert tuple(out) == result_keys()
         return out
 
 
@@ -168,7 +183,7 @@ def stopped_result(scene: Scene) -> dict:
     outer = scene.outer_flow()
     a = scene.reduced_radius
     stop = outer.stopping_gap(scene.stokes_of(scene.approach_speed))
-    out = dict.fromkeys(RESULT_KEYS)
+    out = dict.fromkeys(result_keys())
     out.update(
         title=scene.title, **stopped_answer(), approach_speed_m_per_s=scene.approach_speed,
         inputs=scene.inputs(), reduced_radius_m=a, reduced_mass_kg=scene.reduced_mass,
