@@ -22,7 +22,7 @@ from dataclasses import dataclass
 __all__ = ["Threshold", "SolveFailed", "sticking_threshold", "format_threshold", "RTOL"]
 
 RTOL = 1e-3  # the bracket's final relative width: below the presets' errors on x_e near St_c
-# (standard: 1.1 % on ln x_e, benchmarks/accuracy.md), which decide whether a scene sticks
+# (standard, on ln x_e: benchmarks/accuracy.md: 1.1 %), which decide whether a scene sticks
 
 
 @dataclass(frozen=True)
