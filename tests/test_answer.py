@@ -246,3 +246,62 @@ def test_a_rough_scene_ranges_over_the_asperity_stiffness_from_its_sensitivity(t
     rows = [r.sensitivity[k] for k in answer_module.STIFFNESS_LABELS]
     wet = [x["e_wet"] for x in rows] + [float(r.collision.e_wet)]
     assert driver["e_for_cfd_dem"] == [min(wet), max(wet)]
+
+
+# ---- what a hostile run found (issue 26 review) -----------------------------------------------
+def test_both_speed_flags_are_refused(capsys):
+    assert main(["scene", "--material1", "glass", "--radius1", "1 mm", "--material2", "steel",
+                 "--wall", "--fluid", "water", "--approach-speed", "0.3", "--v0", "0.1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "either --v0" in err and "not both" in err
+
+
+def test_a_roughness_end_above_x0_is_left_out_with_its_reason(table):
+    # a 50 um bead: x0 = 0.5 um, below the 2 um top of the unknown band of the steel plate
+    scene = scene_from_dict(beads(approach_speed="2 m/s",
+                                  body1={"material": "glass", "radius": "50 um"}), table)
+    r = run_scene(scene, accuracy="fast", ranges=True)
+    (rough,) = [d for d in r.answer["range_drivers"] if d["unknown"] == "roughness"]
+    assert rough["status"].startswith("failed (high: not solved: the rms roughness")
+    assert "not below the film's start x0" in rough["status"]
+
+
+def test_a_gas_typed_by_its_numbers_gets_a_gas_physics(table):
+    air = {"v0": "10 cm/s", "body1": {"material": "glass", "radius": "50 um"},
+           "body2": {"material": "glass", "wall": True},
+           "fluid": {"viscosity": "18.32 uPa s", "density": "1.19 kg/m^3"}}
+    scene = scene_from_dict(air, table)
+    assert scene.fluid.gas and scene.cavitation_pressure is None
+    assert "a gas film does not cavitate" in scene.cavitation_pressure_source
+    named = scene_from_dict(air | {"fluid": {"name": "air"}}, table)
+    assert named.cavitation_pressure is None  # the same switch as the named air
+
+
+def test_stopped_scene_ranges_follow_no_range_and_v0_paths_are_refused(tmp_path, capsys):
+    flags = ["--material1", "glass", "--radius1", "1 mm", "--material2", "steel", "--wall",
+             "--fluid", "water", "--approach-speed", "1 mm/s", "--json"]
+    assert main(["scene", *flags, "--no-range"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["verdict"] == "sticks" and d["e_for_dem_range"] is None
+    path = tmp_path / "stop.toml"
+    path.write_text('approach_speed = "1 mm/s"\n[body1]\nmaterial = "glass"\nradius = "1 mm"\n'
+                    '[body2]\nmaterial = "steel"\nwall = true\n[fluid]\nname = "water"\n')
+    assert main(["restitution", str(path), "--n", "3", "--accuracy", "fast"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--vary approach_speed" in err
+
+
+def test_restitution_range_needs_a_plot_and_fit_range_is_finite(capsys):
+    from pathlib import Path
+
+    example = str(Path(__file__).resolve().parent.parent / "examples" / "glass_beads_water.toml")
+    assert main(["restitution", example, "--n", "3", "--range"]) == 2
+    assert "give --plot DIR" in capsys.readouterr().err
+    assert main(["export-dem", example, "--n", "3", "--fit-range", "15", "inf"]) == 2
+    assert "both finite" in capsys.readouterr().err
+
+
+def test_a_tiny_rebound_is_not_shown_as_zero():
+    from pipeline.scenes.commands import _e3
+
+    assert _e3(1.1e-4) == "0.00011" and _e3(0.0) == "0.000" and _e3(0.7584) == "0.758"

@@ -68,13 +68,15 @@ def _cell(v):
 
 
 def _print_rows(rows, skipped):
-    print(f"{'St':>10} {'St_L':>10} {'eps':>10} {'v0 [m/s]':>10} {'e_wet':>8} {'e_far':>8}  note")
+    print(f"{'St':>10} {'St_L':>10} {'eps':>10} {'v0 [m/s]':>10} {'V [m/s]':>10} {'e_wet':>8} "
+          f"{'e_far':>8}  note")
     for r in rows:
         note = "sticks" if r["sticks"] else ""
         if r["warning_checks"]:
             note = (note + "; " if note else "") + "warnings: " + r["warning_checks"] + " (see CSV)"
+        approach = "-" if r["approach_speed_m_s"] == "" else f"{r['approach_speed_m_s']:.4g}"
         print(f"{r['St']:>10.4g} {r['St_L']:>10.4g} {r['eps']:>10.3g} {r['v0_m_s']:>10.4g} "
-              f"{r['e_wet']:>8.4f} {_cell(r['e_far']):>8}  {note}")
+              f"{approach:>10} {r['e_wet']:>8.4f} {_cell(r['e_far']):>8}  {note}")
     for s in skipped:
         print(f"skipped: {s}")
 
@@ -150,8 +152,8 @@ def _fit_range(args):
     if args.fit_range is None:
         return None
     lo, hi = args.fit_range
-    if not (0.0 <= lo < hi):
-        raise UsageError(f"--fit-range {lo:g} {hi:g}: give 0 <= LO < HI (our St)")
+    if not (0.0 <= lo < hi < np.inf):
+        raise UsageError(f"--fit-range {lo:g} {hi:g}: give 0 <= LO < HI, both finite (our St)")
     return (lo, hi)
 
 
@@ -272,6 +274,9 @@ def cmd_restitution(args) -> int:
 
     check_output_dir("--out", args.out)  # before any solve
     check_output_dir("--plot", args.plot)
+    if args.range and not args.plot:
+        raise UsageError("--range draws each e's range as a band on the figure: give --plot DIR "
+                         "too")
     check_accuracy(args.accuracy)
     _check_kind(args.kind)
     scene = _scene(args.scene, args.materials)

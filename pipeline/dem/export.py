@@ -52,7 +52,7 @@ CSV_FIELDS = (
     "group", "geometry", "material1", "material2", "fluid", "radius1_m", "radius2_m",
     "density1_kg_m3", "density2_kg_m3", "youngs1_Pa", "youngs2_Pa", "poisson1", "poisson2",
     "viscosity_Pa_s", "fluid_density_kg_m3", "v0_m_s", *CONVENTIONS, "eps", "x_ref_x0", "e_wet",
-    "e_far", "x_ref_over_a", "v_ref_over_v0", "v_ref_m_s", "sticks", "closest_approach_x1", "closest_approach_m", "peak_pressure", "peak_pressure_Pa",
+    "e_far", "x_ref_over_a", "v_ref_over_v0", "v_ref_m_s", "approach_speed_m_s", "sticks", "closest_approach_x1", "closest_approach_m", "peak_pressure", "peak_pressure_Pa",
     "roughness_m", "warning", "warning_checks", "status", "solver_version", "e_dry", "physics",
     "role",
 )
@@ -183,6 +183,12 @@ def scene_path(scene, vary: str, factors) -> list:
     it along a path in size (``v0`` mapped again: ``scene_file.at_approach_speed``)."""
     from pipeline.scenes.scene_file import at_approach_speed
 
+    if vary == "v0" and scene.stops_outside:
+        from pipeline.scenes.scene import SceneError
+
+        raise SceneError("the scene's v0 is 0: its approach speed is too slow for the outer flow "
+                         "to reach x0, so every v0 along the path would be 0; vary the approach "
+                         "speed instead (--vary approach_speed)")
     scenes = []
     for f in factors:
         if vary == "v0":
@@ -262,6 +268,7 @@ def scene_rows(results, group: str, role: str = "fit") -> list[dict]:
             e_far=c.e_far if far else "",
             x_ref_over_a=c.x_ref_over_a if r.outer is not None else "",
             v_ref_over_v0=ratio, v_ref_m_s=ratio * s.v0 if far else "",
+            approach_speed_m_s=approach_speed_of(s) if r.outer is not None else "",
             closest_approach_x1=c.h_m_x1, closest_approach_m=c.h_m_x1 * s.x1,
             peak_pressure=c.p_max, peak_pressure_Pa=r.peak_pressure,
             roughness_m="" if sigma is None else sigma,

@@ -77,7 +77,12 @@ def _roughness_variants(scene):
     for end, label in enumerate(("low", "high")):
         changed = {b.label: _body_solid(scene, b.label, roughness=ROUGHNESS_CLASSES[cls][end])
                    for b, cls in bodies}
-        ends.append((label, dataclasses.replace(scene, **changed)))
+        variant = dataclasses.replace(scene, **changed)
+        sigma = variant.roughness_rms
+        if sigma is not None and sigma >= scene.x0:  # the contact cannot start inside x0
+            variant = (f"not solved: the rms roughness {format_quantity(sigma, 'm')} is not "
+                       f"below the film's start x0 = {format_quantity(scene.x0, 'm')}")
+        ends.append((label, variant))
     return what, ends
 
 
@@ -94,7 +99,7 @@ def _cavitation_variants(scene):
 
 def _alpha_variants(scene):
     f = scene.fluid
-    if f.mean_free_path is not None or f.pressure_viscosity is not None \
+    if f.gas or f.pressure_viscosity is not None \
             or scene.viscosity_law != "auto":
         return None
     fluid = dataclasses.replace(f, pressure_viscosity=ALPHA_UNKNOWN_HIGH)
@@ -144,6 +149,8 @@ def _reading_driver(result):
 def _solve(run_scene, scene, accuracy, solve_options) -> dict:
     """``_solved`` of one variant; a variant outside what the scene layer accepts (a roughness
     above x0, say) is a driver end that could not be solved, with the reason."""
+    if isinstance(scene, str):  # an end that cannot be solved, with its reason
+        return {"e_for_dem": None, "e_for_cfd_dem": None, "status": scene}
     try:
         result = run_scene(scene, accuracy, sensitivity_solves=False, **(solve_options or {}))
     except ValueError as exc:
@@ -189,7 +196,9 @@ def answer(result, accuracy: str = "standard", solve_options: dict | None = None
 
 
 def _assemble(central, drivers, computed=True) -> dict:
-    spans = [(d["e_for_dem"][1] - d["e_for_dem"][0]) if d["e_for_dem"] else 0.0 for d in drivers]
+    # the shares of e_for_dem's range; of e_for_cfd_dem's where there is no e_far
+    key = "e_for_dem" if central["e_for_dem"] is not None else "e_for_cfd_dem"
+    spans = [(d[key][1] - d[key][0]) if d[key] else 0.0 for d in drivers]
     total = sum(spans)
     for d, span in zip(drivers, spans):
         d["share"] = span / total if total > 0.0 else 0.0
@@ -206,7 +215,9 @@ def _assemble(central, drivers, computed=True) -> dict:
     return out
 
 
-def stopped_answer() -> dict:
-    """The answer of a scene whose outer flow stops the spheres before ``x0``: they stick."""
-    return {"verdict": "sticks", "e_for_dem": 0.0, "e_for_dem_range": [0.0, 0.0],
-            "e_for_cfd_dem": 0.0, "e_for_cfd_dem_range": [0.0, 0.0], "range_drivers": []}
+def stopped_answer(ranges: bool = True) -> dict:
+    """The answer of a scene whose outer flow stops the spheres before ``x0``: they stick,
+    whatever the unknowns (ranges of one point; null when not asked for)."""
+    span = [0.0, 0.0] if ranges else None
+    return {"verdict": "sticks", "e_for_dem": 0.0, "e_for_dem_range": span,
+            "e_for_cfd_dem": 0.0, "e_for_cfd_dem_range": span, "range_drivers": []}

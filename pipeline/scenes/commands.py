@@ -87,6 +87,10 @@ def load_scene(path=None, flags: dict | None = None, materials=(), *, user_files
     from .scene_file import scene_from_dict
 
     data = _read_scene_file(path) if path else {}
+    given = [k for k in _ONE_SPEED if (flags or {}).get(k) not in (None, False)]
+    if len(given) == 2:
+        raise ValueError("give either --v0 (the speed at the film's start x0) or "
+                         "--approach-speed (the speed at the outer start), not both")
     for dest, value in (flags or {}).items():
         if value is None or value is False:
             continue
@@ -142,25 +146,41 @@ _ANSWER_ROWS = (("e_for_dem", "e for a dry DEM code", "e_far"),
                 ("e_for_cfd_dem", "e for a resolved CFD-DEM code", "e_wet"))
 
 
+def _e3(value) -> str:
+    """An e for the report: 3 decimals, or 2 significant digits where those would show a
+    rebound as 0.000."""
+    return f"{value:.2g}" if 0.0 < value < 0.0005 else f"{value:.3f}"
+
+
+def _e_lines(d: dict) -> list[str]:
+    """The e per code kind with its range, and which unknowns make the range."""
+    lines = []
+    for key, label, result in _ANSWER_ROWS:
+        value, span = d[key], d[f"{key}_range"]
+        if value is None:
+            lines.append(f"{label} ({result}): not computed")
+            continue
+        spread = "" if span is None else f", range {_e3(span[0])} to {_e3(span[1])}" + (
+            " (no unknown moves it)" if span[0] == span[1] else "")
+        lines.append(f"{label} ({result}): {_e3(value)}{spread}")
+    shares = [f"{r['unknown']} {100 * r['share']:.0f} %" for r in d["range_drivers"]
+              if r["share"] > 0.0]
+    if shares:
+        code = "dry DEM" if d["e_for_dem"] is not None else "resolved CFD-DEM"
+        lines.append(f"  range of the {code} e from: {', '.join(shares)} (one at a time; "
+                     "range_drivers in --json)")
+    return lines
+
+
 def answer_lines(d: dict) -> list[str]:
     """The report's first lines: the verdict, the e per code kind with its range and drivers,
     and the two speeds (docs/scenes.md, "The answer and its range")."""
     if d["verdict"] is None:
-        return ["verdict: none (the solve failed; see below)"]
-    lines = [f"verdict: the spheres {d['verdict'].replace('sticks', 'stick').replace('rebounds', 'rebound')}"]
-    for key, label, result in _ANSWER_ROWS:
-        value, span = d[key], d[f"{key}_range"]
-        if value is None:
-            lines.append(f"{label} ({result}): not computed (two unequal spheres)")
-            continue
-        spread = "" if span is None else f", range {span[0]:.3f} to {span[1]:.3f}" + (
-            " (no unknown moves it)" if span[0] == span[1] else "")
-        lines.append(f"{label} ({result}): {value:.3f}{spread}")
-    shares = [f"{r['unknown']} {100 * r['share']:.0f} %" for r in d["range_drivers"]
-              if r["share"] > 0.0]
-    if shares:
-        lines.append(f"  range of the dry DEM e from: {', '.join(shares)} (one at a time; "
-                     "range_drivers in --json)")
+        lines = ["verdict: none (the solve failed; see below)"]
+    else:
+        lines = [f"verdict: the spheres "
+                 f"{d['verdict'].replace('sticks', 'stick').replace('rebounds', 'rebound')}"]
+        lines += _e_lines(d)
     approach = d["approach_speed_m_per_s"]
     given = d["inputs"]["approach_speed_m_per_s"] is not None
     lines.append(
@@ -289,7 +309,7 @@ def cmd_scene(args) -> int:
     if scene.stops_outside:  # the outer flow stops the spheres: no film collision to solve
         from .run import stopped_result
 
-        d = stopped_result(scene)
+        d = stopped_result(scene, ranges=not args.no_range)
         print(json.dumps(d) if args.json else format_report(d))
         return 0
     try:

@@ -78,6 +78,13 @@ _TEXT_FIELDS = {"materials": ("description", "source"),
                 "fluids": ("description", "source", "pressure_source")}
 
 
+# A fluid less dense than this [kg/m^3] is a gas, with or without a mean free path: liquids at
+# room temperature are denser than 600 kg/m^3 (pentane 626), gases at 1 atm lighter than
+# 10 kg/m^3 (sulphur hexafluoride 6.1, the densest common one); so a gas typed by its viscosity
+# and density gets a gas's physics (no cavitation floor), as the named air does
+GAS_DENSITY_BELOW = 100.0
+
+
 # Surface classes a body's roughness can be given as, instead of a value (docs/scenes.md,
 # "Surface roughness"): rms bands [m]. A class is solved at the band's geometric middle, and the
 # report's range spans the band. "polished": from optically polished or float glass (about 1 nm,
@@ -146,8 +153,10 @@ class FluidProps:
 
     @property
     def gas(self) -> bool:
-        """A gas: it has a mean free path (the fluids table gives one to gases only)."""
-        return self.mean_free_path is not None
+        """A gas: it has a mean free path (the fluids table gives one to gases only), or a
+        density below ``GAS_DENSITY_BELOW`` (a gas typed by its numbers)."""
+        return self.mean_free_path is not None or (
+            self.density is not None and self.density < GAS_DENSITY_BELOW)
 
     @property
     def has_roelands(self) -> bool:

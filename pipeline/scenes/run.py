@@ -176,16 +176,16 @@ def dem_restitution(e_wet: float, e_far: float) -> dict:
     return out
 
 
-def stopped_result(scene: Scene) -> dict:
+def stopped_result(scene: Scene, ranges: bool = True) -> dict:
     """``SceneResult.to_dict`` of a scene whose outer flow stops the spheres before ``x0``
     (``Scene.stops_outside``): they stick without a film collision; nothing of the film is
-    computed (its keys are null)."""
+    computed (its keys are null). ``ranges`` False: the ranges null (``--no-range``)."""
     outer = scene.outer_flow()
     a = scene.reduced_radius
     stop = outer.stopping_gap(scene.stokes_of(scene.approach_speed))
     out = dict.fromkeys(result_keys())
     out.update(
-        title=scene.title, **stopped_answer(), approach_speed_m_per_s=scene.approach_speed,
+        title=scene.title, **stopped_answer(ranges), approach_speed_m_per_s=scene.approach_speed,
         inputs=scene.inputs(), reduced_radius_m=a, reduced_mass_kg=scene.reduced_mass,
         theta_per_Pa=scene.theta, effective_modulus_Pa=scene.effective_modulus, x0_m=scene.x0,
         x0_over_a=scene.x0 / a, status="ok",

@@ -457,8 +457,12 @@ def _eps_too_large(scene: Scene, eps: float) -> str:
 
 
 def _stokes_too_large(scene: Scene, stokes: float) -> str:
-    return (f"St = {stokes:.4g} is outside the solver's range (0, {Physics.group('St').hi:g}]: "
-            "viscous losses are negligible and the impact is close to dry Hertz contact")
+    speed = (f"the approach speed {format_quantity(scene.approach_speed, 'm/s')}, v0 = "
+             if scene.approach_speed is not None else "v0 = ")
+    return (f"St = {stokes:.4g} (from {speed}{format_quantity(scene.v0, 'm/s')}) is outside the "
+            f"solver's range (0, {Physics.group('St').hi:g}]: viscous losses are negligible and "
+            "the impact is close to dry Hertz contact; a slower speed or a smaller or lighter "
+            "sphere is within it")
 
 
 def _beta_too_large(scene: Scene, beta: float) -> str:

@@ -8,8 +8,9 @@ from __future__ import annotations
 
 import math
 
-from .materials import (FLUID_FIELDS, PRESSURE_FIELDS, ROUGHNESS_CLASSES, SOLID_FIELDS,
-                        FluidProps, MaterialTable, Solid, check_pairs, roughness_class_value)
+from .materials import (FLUID_FIELDS, GAS_DENSITY_BELOW, PRESSURE_FIELDS, ROUGHNESS_CLASSES,
+                        SOLID_FIELDS, FluidProps, MaterialTable, Solid, check_pairs,
+                        roughness_class_value)
 from .scene import (CAVITATION_CHOICES, DENSITY_CHOICES, ROUGHNESS_CHOICES, STANDARD_ATMOSPHERE,
                     VISCOSITY_CHOICES, Body, Scene, SceneError, _reduced)
 from .units import FieldSpec, format_quantity, to_si
@@ -172,9 +173,12 @@ def _cavitation_pressure(raw, fluid: FluidProps, ambient: float):
         p_cav = ambient - t
         return p_cav, (f"tensile strength {format_quantity(t, 'Pa')} below the ambient "
                        f"{format_quantity(ambient, 'Pa')}")
-    given = raw.get("cavitation_pressure", "vapour" if fluid.mean_free_path is None else None)
+    given = raw.get("cavitation_pressure", None if fluid.gas else "vapour")
     if given is None:
-        return None, "a gas film does not cavitate"
+        return None, "a gas film does not cavitate" + (
+            "" if fluid.mean_free_path is not None else
+            f" (a density below {GAS_DENSITY_BELOW:g} kg/m^3 is a gas's; give its mean_free_path "
+            "for the continuum check)")
     preset = given.strip().lower().replace("vapor", "vapour") if isinstance(given, str) else None
     if preset in CAVITATION_PRESETS:
         if preset == "gas-saturated":
