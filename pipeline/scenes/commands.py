@@ -311,6 +311,9 @@ def cmd_scene(args) -> int:
 
         d = stopped_result(scene, ranges=not args.no_range)
         print(json.dumps(d) if args.json else format_report(d))
+        if args.plot:
+            print(f"ehd scene: no figures in {args.plot}: the spheres stop before x0, so there is "
+                  "no film collision to draw", file=sys.stderr)
         return 0
     try:
         # profiles only for the figures: the pressure extremes come from the solver
