@@ -17,12 +17,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import NamedTuple
 
 import numpy as np
 
 from ..model.elasticity import force_weights, influence_matrix
 
-__all__ = ["RadialGrid", "reference_grid", "scaled_grid", "SHAPE_WIDTH"]
+__all__ = ["RadialGrid", "Nodes", "reference_grid", "scaled_grid", "SHAPE_WIDTH"]
 
 # Pressure between nodes follows (SHAPE_WIDTH + R^2/2)^-2 (reference units, inner radius 1):
 # the rigid far field of a film about as wide as the contact region (elasticity.influence_matrix).
@@ -39,6 +40,21 @@ class RadialGrid:
     area: np.ndarray  # (N,) finite-volume cell areas in s (the last one ends at R_L)
     force_weight: np.ndarray  # (N,) Int P R dR = force_weight @ P, far-field tail included
     influence: np.ndarray  # (N, N) deflection per unit nodal pressure, W = influence @ P
+
+    def nodes(self) -> "Nodes":
+        """The arrays the compiled film and time loop read, as one record."""
+        return Nodes(self.s, self.s_face, self.area, self.force_weight, self.influence)
+
+
+class Nodes(NamedTuple):
+    """A grid as the compiled code reads it (``RadialGrid`` less the radii; numba compiles a
+    NamedTuple of arrays once and loads it from its cache). ``weight`` is ``force_weight``."""
+
+    s: np.ndarray
+    s_face: np.ndarray
+    area: np.ndarray
+    weight: np.ndarray
+    influence: np.ndarray
 
 
 def _reference_nodes(n_inner: int, axis_ratio: float, axis_extent: float, stretch: float,
