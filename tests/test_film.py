@@ -56,8 +56,9 @@ def _residual(grid, phys, bh, hist, y, film):
 
 
 def _copy(film):
-    """A copy of every array of the film's state."""
-    return Film(*(type(part)(*(a.copy() for a in part)) for part in film))
+    """A copy of every array of the film's state (each piece's record, model/state.py)."""
+    return Film(*(type(part)(*(getattr(part, f).copy() for f in part._fields))
+                  for part in film))
 
 
 def _central_differences(residual_of, y, p, rel_step=3e-4):

@@ -17,11 +17,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import NamedTuple
 
 import numpy as np
 
 from ..model.elasticity import force_weights, influence_matrix
+from ..model.state import array_record
 
 __all__ = ["RadialGrid", "Nodes", "reference_grid", "scaled_grid", "SHAPE_WIDTH"]
 
@@ -46,15 +46,12 @@ class RadialGrid:
         return Nodes(self.s, self.s_face, self.area, self.force_weight, self.influence)
 
 
-class Nodes(NamedTuple):
-    """A grid as the compiled code reads it (``RadialGrid`` less the radii; numba compiles a
-    NamedTuple of arrays once and loads it from its cache). ``weight`` is ``force_weight``."""
-
-    s: np.ndarray
-    s_face: np.ndarray
-    area: np.ndarray
-    weight: np.ndarray
-    influence: np.ndarray
+# A grid as the compiled code reads it (``RadialGrid`` less the radii, ``weight`` its
+# ``force_weight``): ``s``, ``s_face``, ``area``, ``weight``, ``influence``; one reference however
+# many arrays (model/state.py: array_record), passed to every Newton iteration's functions.
+Nodes = array_record("Nodes", ("s", "s_face", "area", "weight", "influence"),
+                       "A grid as the compiled film and time loop read it (integration/grid.py).",
+                       __name__)
 
 
 def _reference_nodes(n_inner: int, axis_ratio: float, axis_extent: float, stretch: float,

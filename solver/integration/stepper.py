@@ -39,7 +39,7 @@ import numpy as np
 from .._jit import jit
 from ..model import step as model
 from ..model.film import face_fluxes, gap
-from ..model.state import Step
+from ..model.state import Step, array_record
 from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
 from .events import reached
 from .linalg import MAX_SLOTS, lowrank_prepare, lowrank_solve, lu_factor, matvec
@@ -76,7 +76,9 @@ _H0, _W_ABSMAX = SERIES_INDEX["H0"], SERIES_INDEX["W_absmax"]
 _P_MAX, _P_MIN = SERIES_INDEX["P_max"], SERIES_INDEX["P_min"]
 
 
-# ---- the records: what the caller hands in, and what the loop allocates once ----------------------
+# ---- the records: what the caller hands in, and what the loop allocates once -------------------
+# (Work and Factorisation, passed to the Newton iteration's functions, are StructRefs: one
+# reference however many arrays, state.array_record)
 class Start(NamedTuple):
     """The state the coupled phase starts from (time, separation, speed, pressure profile) and
     the energy dissipated before it."""
@@ -111,44 +113,26 @@ class History(NamedTuple):
     n: np.ndarray
 
 
-class Work(NamedTuple):
-    """The iterate and the loop's work arrays, allocated once per coupled phase (m = N + 2
-    unknowns)."""
+# The iterate and the loop's work arrays, allocated once per coupled phase (m = N + 2 unknowns):
+# ``y``, ``y_pred``, ``res`` (m,): the iterate, the predictor, the residual (then the Newton
+# update, then the local error); ``w``, ``h`` (N,): the iterate's deflection and gap; ``q``
+# (N-1,): its face fluxes; ``c_hist`` (N,): the content's history (state.Step); ``dh``, ``kdp``,
+# ``scale`` (N,): the gap's change, the film pressure's change (a rough film's) or K times an
+# error, the pressure's error scale (model/step.py: step_error); ``dres_dh`` (N, 3): the
+# Jacobian's gap partials (film.jacobian); ``counters``: ``COUNTERS``.
+Work = array_record("Work", ("y", "y_pred", "res", "w", "h", "q", "c_hist", "dh", "kdp",
+                               "scale", "dres_dh", "counters"),
+                      "The time loop's work arrays (integration/stepper.py).", __name__)
 
-    y: np.ndarray  # (m,) the iterate
-    y_pred: np.ndarray  # (m,) the predictor
-    res: np.ndarray  # (m,) the residual, then the Newton update, then the local error
-    w: np.ndarray  # (N,) the iterate's deflection
-    h: np.ndarray  # (N,) its gap
-    q: np.ndarray  # (N-1,) its face fluxes
-    c_hist: np.ndarray  # (N,) the content's history (state.Step)
-    dh: np.ndarray  # (N,) the gap's change
-    kdp: np.ndarray  # (N,) the film pressure's change (a rough film's), or K times an error
-    scale: np.ndarray  # (N,) the pressure's error scale (model/step.py: step_error)
-    dres_dh: np.ndarray  # (N, 3) the Jacobian's gap partials (film.jacobian)
-    counters: np.ndarray  # COUNTERS
-
-
-class Factorisation(NamedTuple):
-    """The Newton matrix: the matrix (factorised in place) and its pivots, its copy before
-    factorising, a fresh Jacobian, the low-rank update's arrays (linalg.lowrank_prepare), the
-    updated slots and their number (``rank[0]``, 0: the factorised matrix itself), the solve's
-    work space; whether it is usable (``valid[0]``) and the ``bh`` it was factorised at."""
-
-    jac: np.ndarray
-    piv: np.ndarray
-    base: np.ndarray
-    fresh: np.ndarray
-    u: np.ndarray
-    v: np.ndarray
-    z: np.ndarray
-    cap: np.ndarray
-    cpiv: np.ndarray
-    slots: np.ndarray
-    rank: np.ndarray
-    work: np.ndarray
-    valid: np.ndarray
-    bh: np.ndarray
+# The Newton matrix: ``jac`` (factorised in place) and its pivots ``piv``, ``base`` its copy
+# before factorising, ``fresh`` a fresh Jacobian, ``u``, ``v``, ``z``, ``cap``, ``cpiv`` the
+# low-rank update's arrays (linalg.lowrank_prepare), ``slots`` the updated slots and ``rank``
+# their number (``rank[0]``, 0: the factorised matrix itself), ``work`` the solve's work space;
+# ``valid`` (1,): whether it is usable, ``bh`` (1,): the ``bh`` it was factorised at.
+Factorisation = array_record(
+    "Factorisation", ("jac", "piv", "base", "fresh", "u", "v", "z", "cap", "cpiv", "slots",
+                      "rank", "work", "valid", "bh"),
+    "The Newton matrix and its LU state (integration/stepper.py).", __name__)
 
 
 @jit
