@@ -23,6 +23,7 @@ model/film.py; N is the number of nodes, N-1 of cells.
 import sys
 from typing import NamedTuple
 
+import numba
 import numpy as np
 from numba.core import types
 from numba.experimental import structref
@@ -47,8 +48,19 @@ def array_record(name: str, fields: tuple, doc: str, module: str = __name__):
     proxy = type(name, (structref.StructRefProxy,), {"__module__": module, "__doc__": doc,
                                                      "_fields": tuple(fields)})
     structref.define_proxy(proxy, type_class, list(fields))
+    for field in fields:  # read from Python (tests, inspection): a compiled getter per field
+        setattr(proxy, field, property(_getter(field)))
     setattr(sys.modules[module], type_class.__name__, type_class)
     return proxy
+
+
+def _getter(field: str):
+    """A function that returns ``record.<field>`` of a record from Python (compiled on first use,
+    not cached: Python-side only)."""
+    namespace = {}
+    exec(f"def get(record):\n    return record.{field}\n", namespace)
+    compiled = numba.njit(namespace["get"])
+    return lambda record: compiled(record)
 
 
 # The fields of ``Cavity``, a floor's state, one entry per cell unless said otherwise:
