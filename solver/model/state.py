@@ -76,7 +76,8 @@ def _getter(field: str):
 #   accepted state's cavity radius.
 Cavity = array_record("Cavity", (
     "active", "active_lu", "active0", "active_base", "theta", "theta0", "theta1", "dtheta",
-    "h_onset", "q_prev", "worked", "p_abs", "p_seen", "r_edge"), "A floor's state (model/state.py).")
+    "h_onset", "q_prev", "worked", "p_abs", "p_seen", "r_edge"),
+    "A floor's state (model/state.py).")
 
 # The fields of ``Contact``, rough surfaces' state, one entry per node unless said otherwise:
 # ``pa``, ``p_film``, ``slope``: the contact pressure p_a, the film pressure P and the contact
