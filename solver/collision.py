@@ -398,11 +398,11 @@ def include_rigid_peaks(result, head):
                 setattr(result, t_name, head["t_" + t_name[4:]] * tau_per_t)
 
 
-def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
-    stokes, x_start, tau_per_t = physics.St, physics.x_start, physics.tau_per_t
-    x_switch, v_switch, t_switch = head.x, head.v, head.t
-
-    shortcuts = plan(physics)
+def _integrate(physics, numerics, head, shortcuts):
+    """The coupled phase's grid and time loop (integration/stepper.py) from the hand-over state
+    ``head`` until the shortcuts' end event (a JFO cavity has a memory: rigid once the film is
+    full): the grid, then ``stepper.integrate``'s results."""
+    stokes, x_switch, v_switch = physics.St, head.x, head.v
     grid = scene_grid(stokes, x_switch, numerics, physics.Pi if shortcuts.floor else math.inf,
                       physics.roughness)
     p_init = head.pressure(grid.s)  # the rigid film's pressure; K p = asymptotic W
@@ -411,12 +411,30 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
     # first step of 1e-3 X/V spanned the whole stop and dissipated 1.5 times the kinetic energy
     time_scale = x_switch / max(v_switch, 1e-3) * min(1.0, stokes)
     _, stop_params = rigid.release_event(numerics.release, stokes, physics)
-    stop_kind = shortcuts.end_event  # a JFO cavity has a memory: rigid once the film is full
-    code, counters, rows, p_hist, w_hist, theta_hist = stepper.integrate(
-        grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, physics.as_array(),
-        x_switch, v_switch, p_init, t_switch, 1.0 - v_switch**2, numerics.rtol,
-        1e-3 * time_scale, 1e-12 * time_scale, numerics.max_steps, stop_kind, stop_params,
-        numerics.save_profiles)
+    return (grid,) + stepper.integrate(
+        grid.nodes(), physics.as_array(),
+        stepper.Start(float(head.t), float(x_switch), float(v_switch), p_init,
+                      float(1.0 - v_switch**2)),
+        stepper.Control(float(numerics.rtol), float(1e-3 * time_scale),
+                        float(1e-12 * time_scale), int(numerics.max_steps)),
+        shortcuts.end_event, stop_params, numerics.save_profiles)
+
+
+def _save_profiles(result, t_c, x_c, p_hist, w_hist, theta_hist):
+    """The coupled phase's profiles into ``result`` (``Numerics.save_profiles``)."""
+    result.profile_tau = t_c * result.physics.tau_per_t
+    result.pressure = p_hist
+    result.deformation = w_hist
+    if result.physics.cavitation == "jfo":
+        result.fluid_fraction = theta_hist
+    result.profile_x = x_c
+
+
+def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
+    stokes, x_start, tau_per_t = physics.St, physics.x_start, physics.tau_per_t
+    shortcuts = plan(physics)
+    grid, code, counters, rows, p_hist, w_hist, theta_hist = _integrate(physics, numerics, head,
+                                                                        shortcuts)
     name = next(k for k, (c, _) in STATUS.items() if c == code)
     message = STATUS[name][1]
     cols = {c.name: rows[:, k] for k, c in enumerate(SERIES)}
@@ -435,14 +453,9 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
         rejected_steps=int(counters[stepper.REJECTED]),
         newton_iterations=int(counters[stepper.NEWTON]),
         lu_factorizations=int(counters[stepper.LU]),
-        tau_handover=t_switch * tau_per_t, radius=grid.radius)
+        tau_handover=head.t * tau_per_t, radius=grid.radius)
     if numerics.save_profiles:
-        result.profile_tau = t_c * tau_per_t
-        result.pressure = p_hist
-        result.deformation = w_hist
-        if physics.cavitation == "jfo":
-            result.fluid_fraction = theta_hist
-        result.profile_x = x_c
+        _save_profiles(result, t_c, x_c, p_hist, w_hist, theta_hist)
     if name != "ok":
         result.v_r = result.dimple_depth_x1 = math.nan
         result.dimple = result.cavitated = None

@@ -19,6 +19,7 @@ from solver.collision import scene_grid
 from solver.model import cavitation
 from solver.model.film import (cavity_edge, constrain, film_force, jacobian, residual,
                                update_cavity, update_cavity_jfo)
+from solver.model.state import Coupling, Step
 from solver.settings import resolve
 
 # (X, U, Pi) -> F of the issue; re-derived here as -3U/(X + s_c) with the cavity from its equation
@@ -43,13 +44,13 @@ def rigid_separation(x, u, pi, n_inner=64, stretch=1.2, max_rel=0.3, bh=1.0):
     res, q = np.empty(n + 2), np.empty(n - 1)
     jac, work = np.empty((n + 2, n + 2)), np.empty((n, 3))
     for _ in range(100):
-        residual(grid.s, grid.s_face, grid.area, grid.force_weight, phys, bh, h_hist, x, -u, x,
-                 -u, p, np.ones(n - 1), h, q, res)
+        residual(grid.nodes(), phys, Step(bh, h_hist, x, -u), x, -u, p, np.ones(n - 1), h, q,
+                 res)
         changed = update_cavity(p, res, phys, active)
         constrain(p, res, active, phys)
-        jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, np.zeros((n, n)), phys, bh, p,
-                 np.ones(n - 1), h, active, jac, work, np.ones(n), grid.force_weight, 0.0,
-                 np.empty(0))
+        jacobian(grid.nodes(), phys, bh, p, np.ones(n - 1), h, active,
+                 Coupling(np.zeros((n, n)), np.ones(n), grid.force_weight, 0.0, np.empty(0)), jac,
+                 work)
         step = np.linalg.solve(jac[:n, :n], -res[:n])
         p += step
         if not changed and np.max(np.abs(step)) < 1e-13 * np.max(np.abs(p)):
@@ -199,15 +200,12 @@ def jfo_steps(xs, pi, dt=1.0, n_inner=64, stretch=1.2, max_rel=0.3):
         c_hist = theta * h_old[:n - 1]
         u = (x - h_old[0]) / dt
         for _ in range(200):
-            residual(grid.s, grid.s_face, grid.area, grid.force_weight, phys, dt, c_hist, x, -u,
-                     x, -u, p, theta, h, q, res)
+            residual(grid.nodes(), phys, Step(dt, c_hist, x, -u), x, -u, p, theta, h, q, res)
             changed = update_cavity_jfo(p, theta, phys, active)
             if changed:
-                residual(grid.s, grid.s_face, grid.area, grid.force_weight, phys, dt, c_hist, x, -u, x,
-                 -u, p, theta, h, q, res)
-            jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, zero_k, phys, dt, p,
-                     theta, h, active, jac, work, np.ones(n), grid.force_weight, 0.0,
-                     np.empty(0))
+                residual(grid.nodes(), phys, Step(dt, c_hist, x, -u), x, -u, p, theta, h, q, res)
+            jacobian(grid.nodes(), phys, dt, p, theta, h, active,
+                     Coupling(zero_k, np.ones(n), grid.force_weight, 0.0, np.empty(0)), jac, work)
             step = np.linalg.solve(jac[:n, :n], -res[:n])
             theta[active] += step[:n - 1][active]
             step[:n - 1][active] = 0.0
@@ -217,8 +215,7 @@ def jfo_steps(xs, pi, dt=1.0, n_inner=64, stretch=1.2, max_rel=0.3):
                 break
         else:
             raise AssertionError("the JFO active set did not settle")
-        residual(grid.s, grid.s_face, grid.area, grid.force_weight, phys, dt, c_hist, x, -u, x,
-                 -u, p, theta, h, q, res)
+        residual(grid.nodes(), phys, Step(dt, c_hist, x, -u), x, -u, p, theta, h, q, res)
         states.append((p.copy(), theta.copy(), active.copy(), h.copy(), q.copy()))
         h_old = h
     return grid, states, physics

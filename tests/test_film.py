@@ -17,6 +17,7 @@ from solver.collision import scene_grid
 from solver.integration.linalg import lu_factor, lu_solve, matvec
 from solver.model import step
 from solver.model.film import gap
+from solver.model.state import Film, Step
 from solver.physics import PI
 from solver.settings import resolve
 
@@ -34,25 +35,30 @@ def _state(rng, grid, phys):
     return x, v, p
 
 
-def _residual(grid, phys, bh, hist, y, marks, cells, scalars):
-    """The step's residual at the unknowns ``y`` with the active set of ``marks`` held; a JFO
+def _residual(grid, phys, bh, hist, y, film):
+    """The step's residual at the unknowns ``y`` with the active set of ``film`` held; a JFO
     cavity's slot ``y[i]`` is its fraction ``theta_i`` (``P_i`` fixed at ``-Pi`` there), a rough
     film's other slots its total loads; the gap (with a rough film's contact) as the loop
     computes it, ``step.surface_gap``."""
     n = grid.s.size
-    yy, cells = y.copy(), cells.copy()
+    yy = y.copy()
+    film = _copy(film)
     if phys[step.CAVITATION] == step.JFO:
-        active = marks[step.ACTIVE]
-        cells[step.THETA][active] = y[:n - 1][active]
+        active = film.cavity.active
+        film.cavity.theta[active] = y[:n - 1][active]
         yy[:n - 1][active] = -phys[PI]
     w, h, q, res = np.empty(n), np.empty(n), np.empty(n - 1), np.empty(n + 2)
-    scalars = scalars.copy()
     h[:] = np.nan  # no warm start: the contact gap must not depend on it
-    step.surface_gap(grid.s, grid.influence, phys, yy, marks, scalars, w, h)
-    step.step_residual(grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, phys, bh,
-                       hist[0], hist[1], hist[2], yy, marks.copy(), cells, scalars, False, q, w, h,
-                       res)
+    nodes = grid.nodes()
+    step.surface_gap(nodes, phys, yy, film, w, h)
+    step.step_residual(nodes, phys, Step(bh, *hist), yy, film, False, q, w, h, res)
     return res
+
+
+def _copy(film):
+    """A copy of every array of the film's state (each piece's record, model/state.py)."""
+    return Film(*(type(part)(*(getattr(part, f).copy() for f in part._fields))
+                  for part in film))
 
 
 def _central_differences(residual_of, y, p, rel_step=3e-4):
@@ -109,15 +115,16 @@ def test_every_films_jacobian_matches_central_differences(film, seed):
     # the differences' step (at most 3e-4 * 3), which would otherwise straddle the kink
     p = np.where(p < 0.0, np.minimum(p, -0.01), np.maximum(p, 0.01))
     y = np.concatenate([p, [x, v]])
-    marks, cells, _ = step.new_state(np.zeros(n - 1))
+    film = step.new_film(np.zeros(n - 1))
+    cavity, contact = film.cavity, film.contact
     if step.has_active_set(phys):
         active = np.zeros(n - 1, dtype=bool)
         active[rng.choice(n - 1, size=(n - 1) // 3, replace=False)] = True
-        marks[step.ACTIVE] = active
+        cavity.active[:] = active
         if physics.cavitation == "jfo":
-            cells[step.THETA][active] = rng.uniform(0.2, 0.95, active.sum())
+            cavity.theta[active] = rng.uniform(0.2, 0.95, active.sum())
             p[:n - 1][active] = -physics.Pi
-            y[:n - 1][active] = cells[step.THETA][active]
+            y[:n - 1][active] = cavity.theta[active]
     w, h = np.empty(n), np.empty(n)
     gap(grid.s, grid.influence, x, p, w, h)
     if np.min(h) <= 0.05:
@@ -126,36 +133,34 @@ def test_every_films_jacobian_matches_central_differences(film, seed):
         gap(grid.s, grid.influence, x, p, w, h)
     yp = y.copy()
     yp[:n] = p  # the Jacobian reads the pressures (a JFO slot's P is the floor)
-    scalars = step.new_state(np.zeros(n - 1))[2]
     if physics.roughness:
         if physics.e_dry < 1.0:  # unloading: c = e_dry^2 through a set load
-            scalars[step.LOAD_SCALE] = physics.e_dry ** 2
-            step.node_block(scalars, step.T_SET)[:] = np.abs(p) * rng.uniform(0.5, 1.5, n)
-            step.node_block(scalars, step.H_SET)[:] = h * rng.uniform(0.97, 1.0, n)
+            contact.load_scale[0] = physics.e_dry ** 2
+            contact.t_set[:] = np.abs(p) * rng.uniform(0.5, 1.5, n)
+            contact.h_set[:] = h * rng.uniform(0.97, 1.0, n)
         # the slots of a rough film are its total loads; a roughness from the state's gaps puts
         # a third to a half of the nodes in contact (the law is smooth at first touch, so the
         # differences may straddle it)
         for _ in range(50):
             physics = physics.replace(roughness=float(np.quantile(h, rng.uniform(0.3, 0.5))))
             phys = physics.as_array()
-            step.surface_gap(grid.s, grid.influence, phys, yp, marks, scalars, w, h)
-            if np.count_nonzero(step.node_block(scalars, step.PA)) >= 2:
+            step.surface_gap(grid.nodes(), phys, yp, film, w, h)
+            if np.count_nonzero(contact.pa) >= 2:
                 break
         else:
             raise AssertionError("no roughness found that puts two nodes in contact")
     bh = 10.0 ** rng.uniform(-4.0, 0.0)
     hist = (x + grid.s + rng.uniform(0.0, 0.1, n), x + 0.01, v + 0.01)
     jac = np.empty((n + 2, n + 2))
-    step.step_jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, grid.influence, phys,
-                       bh, yp, h, marks, cells, scalars, jac, np.empty((n, 3)))
-    assert step.settled(marks)  # the Jacobian records the set it was built with
+    step.step_jacobian(grid.nodes(), phys, bh, yp, h, film, jac, np.empty((n, 3)))
+    assert step.settled(film)  # the Jacobian records the set it was built with
 
     # the mobility exp(-beta P) makes the residual's third derivatives large (a plain difference
     # was 7e-6 off at its step, converging to the Jacobian as step^2): Richardson extrapolation
     # of two steps cancels that term
     def differences(rel_step):
         return _central_differences(
-            lambda yy: _residual(grid, phys, bh, hist, yy, marks, cells, scalars), y, p, rel_step)
+            lambda yy: _residual(grid, phys, bh, hist, yy, film), y, p, rel_step)
 
     fd = (4.0 * differences(1.5e-4) - differences(3e-4)) / 3.0
     scale = np.max(np.abs(jac), axis=1, keepdims=True)  # each row at its own scale

@@ -20,6 +20,7 @@ from solver import Physics, collide
 from solver.collision import scene_grid
 from solver.model.film import face_flux, film_force, jacobian, residual
 from solver.model.liquid import density
+from solver.model.state import Coupling, Step
 from solver.settings import resolve
 
 # grid levels refined everywhere (inner cells, outer stretch, largest outer cell)
@@ -51,11 +52,10 @@ def rigid_squeeze(x, v, physics, n_inner, stretch, max_rel, bh=1.0):
     jac, work = np.empty((n + 2, n + 2)), np.empty((n, 3))
     theta = np.ones(n - 1)
     for _ in range(200):
-        residual(grid.s, grid.s_face, grid.area, grid.force_weight, phys, bh, h_hist, x, v, x, v,
-                 p, theta, h, q, res)
-        jacobian(grid.s, grid.s_face, grid.area, grid.force_weight, np.zeros((n, n)), phys, bh, p,
-                 theta, h, np.zeros(n - 1, dtype=bool), jac, work, np.ones(n), grid.force_weight,
-                 0.0, np.empty(0))
+        residual(grid.nodes(), phys, Step(bh, h_hist, x, v), x, v, p, theta, h, q, res)
+        jacobian(grid.nodes(), phys, bh, p, theta, h, np.zeros(n - 1, dtype=bool),
+                 Coupling(np.zeros((n, n)), np.ones(n), grid.force_weight, 0.0, np.empty(0)), jac,
+                 work)
         step = np.linalg.solve(jac[:n, :n], -res[:n])
         # damped where the Barus film is near its glass gap (the pressure grows like -ln(X - k))
         p += step / max(1.0, np.max(np.abs(step)) / 2.0)

@@ -21,8 +21,9 @@ from functools import lru_cache
 import numpy as np
 
 from ..model.elasticity import force_weights, influence_matrix
+from ..model.state import array_record
 
-__all__ = ["RadialGrid", "reference_grid", "scaled_grid", "SHAPE_WIDTH"]
+__all__ = ["RadialGrid", "Nodes", "reference_grid", "scaled_grid", "SHAPE_WIDTH"]
 
 # Pressure between nodes follows (SHAPE_WIDTH + R^2/2)^-2 (reference units, inner radius 1):
 # the rigid far field of a film about as wide as the contact region (elasticity.influence_matrix).
@@ -39,6 +40,18 @@ class RadialGrid:
     area: np.ndarray  # (N,) finite-volume cell areas in s (the last one ends at R_L)
     force_weight: np.ndarray  # (N,) Int P R dR = force_weight @ P, far-field tail included
     influence: np.ndarray  # (N, N) deflection per unit nodal pressure, W = influence @ P
+
+    def nodes(self) -> "Nodes":
+        """The arrays the compiled film and time loop read, as one record."""
+        return Nodes(self.s, self.s_face, self.area, self.force_weight, self.influence)
+
+
+# A grid as the compiled code reads it (``RadialGrid`` less the radii, ``weight`` its
+# ``force_weight``): ``s``, ``s_face``, ``area``, ``weight``, ``influence``; one reference however
+# many arrays (model/state.py: array_record), passed to every Newton iteration's functions.
+Nodes = array_record("Nodes", ("s", "s_face", "area", "weight", "influence"),
+                       "A grid as the compiled film and time loop read it (integration/grid.py).",
+                       __name__)
 
 
 def _reference_nodes(n_inner: int, axis_ratio: float, axis_extent: float, stretch: float,

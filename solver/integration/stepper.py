@@ -32,11 +32,14 @@ Counters: ``STEPS``, ``REJECTED``, ``NEWTON``, ``LU``, ``JACOBIANS`` index the c
 loop returns (``COUNTERS`` names them in that order).
 """
 
+from typing import NamedTuple
+
 import numpy as np
 
 from .._jit import jit
 from ..model import step as model
 from ..model.film import face_fluxes, gap
+from ..model.state import Step, array_record
 from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
 from .events import reached
 from .linalg import MAX_SLOTS, lowrank_prepare, lowrank_solve, lu_factor, matvec
@@ -71,6 +74,65 @@ _W0, _H_MIN, _R_H_MIN = SERIES_INDEX["W0"], SERIES_INDEX["H_min"], SERIES_INDEX[
 _E_K, _E_S, _DISS = SERIES_INDEX["E_k"], SERIES_INDEX["E_s"], SERIES_INDEX["dissipated"]
 _H0, _W_ABSMAX = SERIES_INDEX["H0"], SERIES_INDEX["W_absmax"]
 _P_MAX, _P_MIN = SERIES_INDEX["P_max"], SERIES_INDEX["P_min"]
+
+
+# ---- the records: what the caller hands in, and what the loop allocates once -------------------
+# (Work and Factorisation, passed to the Newton iteration's functions, are StructRefs: one
+# reference however many arrays, state.array_record)
+class Start(NamedTuple):
+    """The state the coupled phase starts from (time, separation, speed, pressure profile) and
+    the energy dissipated before it."""
+
+    t: float
+    x: float
+    v: float
+    p: np.ndarray
+    dissipated: float
+
+
+class Control(NamedTuple):
+    """The step control: relative tolerance, first and smallest step, most accepted steps."""
+
+    rtol: float
+    dt_init: float
+    dt_min: float
+    max_steps: int
+
+
+class History(NamedTuple):
+    """The accepted states the BDF2 step and its predictor read: solutions ``y0`` (newest),
+    ``y1``, ``y2``, gaps ``h0``, ``h1``, their times ``t`` (3,) and how many are held, ``n``
+    (1,), at most 3."""
+
+    y0: np.ndarray
+    y1: np.ndarray
+    y2: np.ndarray
+    h0: np.ndarray
+    h1: np.ndarray
+    t: np.ndarray
+    n: np.ndarray
+
+
+# The iterate and the loop's work arrays, allocated once per coupled phase (m = N + 2 unknowns):
+# ``y``, ``y_pred``, ``res`` (m,): the iterate, the predictor, the residual (then the Newton
+# update, then the local error); ``w``, ``h`` (N,): the iterate's deflection and gap; ``q``
+# (N-1,): its face fluxes; ``c_hist`` (N,): the content's history (state.Step); ``dh``, ``kdp``,
+# ``scale`` (N,): the gap's change, the film pressure's change (a rough film's) or K times an
+# error, the pressure's error scale (model/step.py: step_error); ``dres_dh`` (N, 3): the
+# Jacobian's gap partials (film.jacobian); ``counters``: ``COUNTERS``.
+Work = array_record("Work", ("y", "y_pred", "res", "w", "h", "q", "c_hist", "dh", "kdp",
+                               "scale", "dres_dh", "counters"),
+                      "The time loop's work arrays (integration/stepper.py).", __name__)
+
+# The Newton matrix: ``jac`` (factorised in place) and its pivots ``piv``, ``base`` its copy
+# before factorising, ``fresh`` a fresh Jacobian, ``u``, ``v``, ``z``, ``cap``, ``cpiv`` the
+# low-rank update's arrays (linalg.lowrank_prepare), ``slots`` the updated slots and ``rank``
+# their number (``rank[0]``, 0: the factorised matrix itself), ``work`` the solve's work space;
+# ``valid`` (1,): whether it is usable, ``bh`` (1,): the ``bh`` it was factorised at.
+Factorisation = array_record(
+    "Factorisation", ("jac", "piv", "base", "fresh", "u", "v", "z", "cap", "cpiv", "slots",
+                      "rank", "work", "valid", "bh"),
+    "The Newton matrix and its LU state (integration/stepper.py).", __name__)
 
 
 @jit
@@ -139,115 +201,129 @@ def _predict(dt, t0, t1, t2, n_hist, y0, y1, y2, y_pred):
 
 @jit
 def _factorisation(m):
-    """Work space of the Newton matrix: the matrix (factorised in place) and its pivots, its copy
-    before factorising, a fresh Jacobian, the low-rank update's arrays (linalg.lowrank_prepare),
-    the updated slots and their number (``rank[0]``, 0: the factorised matrix itself)."""
+    """The Newton matrix's work space (``Factorisation``), not yet factorised."""
     r = 2 * MAX_SLOTS
-    return (np.empty((m, m)), np.empty(m, dtype=np.int32), np.empty((m, m)), np.empty((m, m)),
-            np.empty((r, m)), np.empty((r, m)), np.empty((r, m)), np.empty(r * r),
-            np.empty(r, dtype=np.int32), np.empty(MAX_SLOTS, dtype=np.int64),
-            np.zeros(1, dtype=np.int64), np.empty(r))
+    return Factorisation(np.empty((m, m)), np.empty(m, dtype=np.int32), np.empty((m, m)),
+                         np.empty((m, m)), np.empty((r, m)), np.empty((r, m)), np.empty((r, m)),
+                         np.empty(r * r), np.empty(r, dtype=np.int32),
+                         np.empty(MAX_SLOTS, dtype=np.int64), np.zeros(1, dtype=np.int64),
+                         np.empty(r), np.zeros(1, dtype=np.bool_), np.ones(1))
 
 
 @jit
-def _factorise(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, scalars, fac,
-               dres_dh, counters):
-    """A fresh Jacobian at the iterate ``y`` (gap ``h``), LU-factorised in place; counted. False
-    if the matrix is singular."""
-    jac, piv, base, rank = fac[0], fac[1], fac[2], fac[10]
-    model.step_jacobian(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, scalars,
-                        jac, dres_dh)
-    model.mark_factorised(marks)
+def _work(n):
+    """The loop's work arrays (``Work``) for ``n`` nodes."""
+    m = n + 2
+    return Work(np.empty(m), np.empty(m), np.empty(m), np.empty(n), np.empty(n),
+                np.empty(n - 1), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+                np.empty((n, 3)), np.zeros(len(COUNTERS), dtype=np.int64))
+
+
+@jit
+def _factorise(grid, phys, bh, y, h, film, fac, work):
+    """A fresh Jacobian at the iterate ``y`` (gap ``h``), LU-factorised in place; counted.
+    ``fac.valid[0]`` False if the matrix is singular."""
+    model.step_jacobian(grid, phys, bh, y, h, film, fac.jac, work.dres_dh)
+    model.mark_factorised(film)
     if model.has_active_set(phys):  # kept for low-rank updates at a change of the set
-        base[:, :] = jac
-    rank[0] = 0
-    counters[JACOBIANS] += 1
-    counters[LU] += 1
-    return lu_factor(jac, piv)
+        fac.base[:, :] = fac.jac
+    fac.rank[0] = 0
+    work.counters[JACOBIANS] += 1
+    work.counters[LU] += 1
+    fac.valid[0] = lu_factor(fac.jac, fac.piv)
+    fac.bh[0] = bh
 
 
 @jit
-def _update_for_set(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, scalars,
-                    fac, dres_dh, counters):
+def _update_for_set(grid, phys, bh, y, h, film, fac, work):
     """After a change of the active set: the factorised matrix with the rows and columns of the
     slots that changed since it was factorised replaced by a fresh Jacobian's
     (linalg.lowrank_prepare), instead of a new factorisation; the other rows keep the factorised
     values (a chord iteration). False when more than ``MAX_SLOTS`` slots changed or the update is
     singular: then the caller factorises afresh."""
-    jac, piv, base, fresh, u, v, z, cap, cpiv, slots, rank = fac[:11]
-    model.step_jacobian(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, scalars,
-                        fresh, dres_dh)
-    counters[JACOBIANS] += 1
-    k = model.changed_slots(marks, slots)
+    model.step_jacobian(grid, phys, bh, y, h, film, fac.fresh, work.dres_dh)
+    work.counters[JACOBIANS] += 1
+    k = model.changed_slots(film, fac.slots)
     if k > MAX_SLOTS:
         return False
-    rank[0] = 0
+    fac.rank[0] = 0
     if k > 0:
-        if not lowrank_prepare(jac, piv, base, fresh, slots, k, u, v, z, cap, cpiv):
+        if not lowrank_prepare(fac.jac, fac.piv, fac.base, fac.fresh, fac.slots, k, fac.u,
+                               fac.v, fac.z, fac.cap, fac.cpiv):
             return False
-        rank[0] = k
-    counters[LOWRANK] += 1
+        fac.rank[0] = k
+    work.counters[LOWRANK] += 1
     return True
 
 
 @jit
 def _solve(fac, b):
     """Solve with the Newton matrix (the factorised one, or its low-rank update) in place."""
-    lowrank_solve(fac[0], fac[1], fac[10][0], fac[5], fac[6], fac[7], fac[8], b, fac[11])
+    lowrank_solve(fac.jac, fac.piv, fac.rank[0], fac.v, fac.z, fac.cap, fac.cpiv, b, fac.work)
 
 
 @jit
-def _newton(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist, rtol, y,
-            marks, cells, scalars, q, w, h, res, dh, dp, fac, dres_dh, lu_valid, bh_lu, counters):
-    """Solve the step from the predictor in ``y`` by chord Newton (module docstring), reusing
-    the LU while ``bh`` stays within 30 % of ``bh_lu``. The gap update of an iterate is the next
-    iterate's gap minus this one's, so each iteration costs one K-product (in gap) and one LU
-    solve. With an active set, the set is decided at the first iterate and held while Newton
-    converges; a converged iterate whose set would change goes on with the new set and the
-    matrix updated in the slots that changed (``_update_for_set``; a fresh factorisation when
-    too many did).
+def _positive(h):
+    """Whether every gap is positive (not NaN)."""
+    for i in range(h.size):
+        if not (h[i] > 0.0):
+            return False
+    return True
+
+
+@jit
+def _admissible(h):
+    """Whether every gap is positive and finite (a Newton iterate's)."""
+    for i in range(h.size):
+        if not (h[i] > 0.0) or not np.isfinite(h[i]):
+            return False
+    return True
+
+
+@jit
+def _newton(grid, phys, step, rtol, film, fac, work):
+    """Solve the step ``step`` (state.Step) from the predictor in ``work.y`` by chord Newton
+    (module docstring), reusing the LU while ``bh`` stays within 30 % of the ``bh`` it was
+    factorised at. The gap update of an iterate is the next iterate's gap minus this one's, so
+    each iteration costs one K-product (in gap) and one LU solve. With an active set, the set is
+    decided at the first iterate and held while Newton converges; a converged iterate whose set
+    would change goes on with the new set and the matrix updated in the slots that changed
+    (``_update_for_set``; a fresh factorisation when too many did).
 
     Returns
     -------
-    outcome, lu_valid, bh_lu, fresh
-        ``CONVERGED``, ``DIVERGED`` or ``SINGULAR``; whether the LU is still usable, the ``bh``
-        it was factorised at, and whether it was factorised in this attempt.
+    outcome, fresh
+        ``CONVERGED``, ``DIVERGED`` or ``SINGULAR``; whether the LU was factorised in this
+        attempt (its state in ``fac``).
     """
-    n = s.size
-    m = n + 2
+    bh = step.bh
+    y, w, h = work.y, work.w, work.h
     fresh = False
-    if (not lu_valid) or abs(bh / bh_lu - 1.0) > 0.3:
-        model.surface_gap(s, influence, phys, y, marks, scalars, w, h)
-        for i in range(n):
-            if not (h[i] > 0.0):  # the predictor's gap is not admissible: a smaller step
-                return DIVERGED, lu_valid, bh_lu, True
-        lu_valid = _factorise(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells,
-                              scalars, fac, dres_dh, counters)
-        bh_lu = bh
+    if (not fac.valid[0]) or abs(bh / fac.bh[0] - 1.0) > 0.3:
+        model.surface_gap(grid, phys, y, film, w, h)
+        if not _positive(h):  # the predictor's gap is not admissible: a smaller step
+            return DIVERGED, True
+        _factorise(grid, phys, bh, y, h, film, fac, work)
         fresh = True
-        if not lu_valid:
-            return SINGULAR, lu_valid, bh_lu, fresh
+        if not fac.valid[0]:
+            return SINGULAR, fresh
     active_set = model.has_active_set(phys)
-    p_abs = model.pressure_scale(scalars)
+    p_abs = model.pressure_scale(film)
     converged = False
     pending = False  # converged, if the active set of the iterate is settled
     norm_prev = 0.0
     first = True
     set_changes = 0
-    model.surface_gap(s, influence, phys, y, marks, scalars, w, h)
+    model.surface_gap(grid, phys, y, film, w, h)
     it = 0
     while it < MAX_NEWTON or (pending and it == MAX_NEWTON):
         it += 1
-        bad = False
-        for i in range(n):
-            if not (h[i] > 0.0) or not np.isfinite(h[i]):
-                bad = True
-        if bad:
+        if not _admissible(h):
             break
-        model.step_residual(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist,
-                            v_hist, y, marks, cells, scalars, it == 1 or pending, q, w, h, res)
+        model.step_residual(grid, phys, step, y, film, it == 1 or pending, work.q, w, h,
+                            work.res)
         if active_set:
-            same = model.settled(marks)
+            same = model.settled(film)
             if pending and same:
                 converged = True
                 break
@@ -258,29 +334,12 @@ def _newton(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist
                     break
                 first = True
                 it = 1
-                if not _update_for_set(s, s_face, area, weight, influence, phys, bh, y, h, marks,
-                                       cells, scalars, fac, dres_dh, counters):
-                    lu_valid = _factorise(s, s_face, area, weight, influence, phys, bh, y, h,
-                                          marks, cells, scalars, fac, dres_dh, counters)
-                    bh_lu = bh
+                if not _update_for_set(grid, phys, bh, y, h, film, fac, work):
+                    _factorise(grid, phys, bh, y, h, film, fac, work)
                     fresh = True
-                    if not lu_valid:
-                        break
-        for k in range(m):
-            res[k] = -res[k]
-        _solve(fac, res)
-        model.split_update(res, marks, cells, phys)
-        for k in range(m):
-            y[k] += res[k]
-        counters[NEWTON] += 1
-        for i in range(n):
-            dh[i] = h[i]
-        model.surface_gap(s, influence, phys, y, marks, scalars, w, h)
-        for i in range(n):
-            dh[i] = h[i] - dh[i]
-        dp_film, p = model.film_change(res[:n], dh, y, h, marks, scalars, phys, dp)
-        norm = _norm(dp_film, res[n], res[n + 1], dh, p, y[n], y[n + 1], h, rtol, p_abs)
-        norm = model.update_norm(norm, cells, phys, rtol)
+                if not fac.valid[0]:
+                    break
+        norm = _newton_update(grid, phys, rtol, p_abs, film, fac, work)
         if not np.isfinite(norm):
             break
         done = False
@@ -298,42 +357,68 @@ def _newton(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist
                 break
             pending = True
         norm_prev = norm
-    if active_set and not lu_valid:
-        return SINGULAR, lu_valid, bh_lu, fresh
-    return (CONVERGED if converged else DIVERGED), lu_valid, bh_lu, fresh
+    if active_set and not fac.valid[0]:
+        return SINGULAR, fresh
+    return (CONVERGED if converged else DIVERGED), fresh
 
 
 @jit
-def _local_error(influence, phys, y, y_pred, err_fac, h, marks, scalars, rtol, res, kdp, dh,
-                 scale):
+def _newton_update(grid, phys, rtol, p_abs, film, fac, work):
+    """One Newton update of the iterate from the residual in ``work.res`` (the gap follows):
+    returns the update's norm (``_norm``, with the film model's measure of its pressures)."""
+    y, w, h, res, dh = work.y, work.w, work.h, work.res, work.dh
+    n = h.size
+    m = n + 2
+    for k in range(m):
+        res[k] = -res[k]
+    _solve(fac, res)
+    model.split_update(res, film, phys)
+    for k in range(m):
+        y[k] += res[k]
+    work.counters[NEWTON] += 1
+    for i in range(n):
+        dh[i] = h[i]
+    model.surface_gap(grid, phys, y, film, w, h)
+    for i in range(n):
+        dh[i] = h[i] - dh[i]
+    dp_film, p = model.film_change(res[:n], dh, y, h, film, phys, work.kdp)
+    norm = _norm(dp_film, res[n], res[n + 1], dh, p, y[n], y[n + 1], h, rtol, p_abs)
+    return model.update_norm(norm, film, phys, rtol)
+
+
+@jit
+def _local_error(grid, phys, err_fac, rtol, film, work):
     """The step's local error in units of the tolerance (``_norm`` of ``err_fac (y - y_pred)``,
     the pressures' part as the film model measures it: model/step.py, ``step_error``); 0 for the
-    first step, which has no history to compare with. ``res``, ``kdp``, ``dh`` and ``scale`` are
-    work space."""
+    first step, which has no history to compare with. ``res``, ``kdp``, ``dh`` and ``scale`` of
+    ``work`` are work space."""
     if err_fac == 0.0:
         return 0.0
+    y, y_pred, h, res, kdp, dh = work.y, work.y_pred, work.h, work.res, work.kdp, work.dh
     n = h.size
     m = n + 2
     for k in range(m):
         res[k] = err_fac * (y[k] - y_pred[k])
-    matvec(influence, res[:n], kdp)
+    matvec(grid.influence, res[:n], kdp)
     for i in range(n):
         dh[i] = res[n] + kdp[i]
-    p_scale = scale if model.step_error(y, y_pred, err_fac, h, marks, scalars, phys, res[:n], dh,
-                                        scale) else y[:n]
+    p_scale = work.scale if model.step_error(y, y_pred, err_fac, h, film, phys, res[:n], dh,
+                                             work.scale) else y[:n]
     return _norm(res[:n], res[n], res[n + 1], dh, p_scale, y[n], y[n + 1], h, 1.0,
-                 model.pressure_scale(scalars)) / rtol
+                 model.pressure_scale(film)) / rtol
 
 
 @jit
-def _record(row, t, s, area, weight, y, w, h, strain, dissipated, marks, cells, scalars, phys):
-    """The series row of the accepted state ``y`` at ``t`` (gap ``h``, deflection ``w``); returns
-    the largest ``|W|`` that can still relax and the radius the terminal events see
-    (model/step.py: ``relaxing_deflection``, ``record``)."""
+def _record(row, t, grid, phys, y, w, h, strain, dissipated, film):
+    """The series row of the accepted state ``y`` at ``t`` (gap ``h``, deflection ``w``, strain
+    energy ``strain``, energy dissipated so far ``dissipated``); returns the largest ``|W|`` that
+    can still relax and the radius the terminal events see (model/step.py:
+    ``relaxing_deflection``, ``record``)."""
+    s = grid.s
     n = s.size
     x = y[n]
     v = y[n + 1]
-    p = model.film_pressure(y, scalars, phys)
+    p = model.film_pressure(y, film, phys)
     imin = 0
     wmax = 0.0
     pmax = p[0]
@@ -347,7 +432,7 @@ def _record(row, t, s, area, weight, y, w, h, strain, dissipated, marks, cells, 
     row[_T] = t
     row[_X] = x
     row[_V] = v
-    row[_F] = model.total_force(weight, y, scalars, phys)
+    row[_F] = model.total_force(grid.weight, y, film, phys)
     row[_W0] = w[0]
     row[_H_MIN] = h[imin]
     row[_R_H_MIN] = np.sqrt(2.0 * s[imin])
@@ -358,9 +443,8 @@ def _record(row, t, s, area, weight, y, w, h, strain, dissipated, marks, cells, 
     row[_W_ABSMAX] = wmax
     row[_P_MAX] = pmax
     row[_P_MIN] = pmin
-    r_event = model.record(row, s, area, weight, p, h, pmax, pmin, marks, cells, scalars, phys,
-                           PRESSURE_SCALE)
-    return model.relaxing_deflection(w, wmax, scalars, phys), r_event
+    r_event = model.record(row, grid, p, h, pmax, pmin, film, phys, PRESSURE_SCALE)
+    return model.relaxing_deflection(w, wmax, film, phys), r_event
 
 
 @jit
@@ -373,42 +457,41 @@ def _step_factor(err):
 
 
 @jit
-def _attempt(s, s_face, area, weight, influence, phys, rtol, dt, dt_min, max_steps, t0, t1, t2,
-             n_hist, y0, y1, y2, h0, h1, y, y_pred, marks, cells, scalars, q, w, h, res, c_hist,
-             dh, kdp, scale, fac, dres_dh, lu_valid, bh_lu, counters):
-    """Attempt steps from the accepted state ``y0`` at ``t0`` until one is accepted (its solution
-    in ``y``, gap ``h``) or the loop must stop: a diverged Newton halves the step once its
-    Jacobian was fresh, a non-positive gap halves it, an error above the tolerance shrinks it.
+def _attempt(grid, phys, control, hist, dt, film, fac, work):
+    """Attempt steps from the accepted state ``hist.y0`` at ``hist.t[0]`` until one is accepted
+    (its solution in ``work.y``, gap ``work.h``) or the loop must stop: a diverged Newton halves
+    the step once its Jacobian was fresh, a non-positive gap halves it, an error above the
+    tolerance shrinks it.
 
     Returns
     -------
-    status, accepted, dt, err, lu_valid, bh_lu
-        ``RUNNING`` or the failure; whether a step was accepted, its size and error; the LU's
-        state.
+    status, accepted, dt, err
+        ``RUNNING`` or the failure; whether a step was accepted, its size and error.
     """
-    n = s.size
+    counters = work.counters
+    y0, y1 = hist.y0, hist.y1
+    t0, t1, t2 = hist.t[0], hist.t[1], hist.t[2]
+    n_hist = hist.n[0]
+    n = work.h.size
     status = RUNNING
     err = 0.0
     accepted = False
     while not accepted:
-        if counters[STEPS] >= max_steps:
+        if counters[STEPS] >= control.max_steps:
             status = MAX_STEPS
             break
-        if dt < dt_min:
+        if dt < control.dt_min:
             status = STEP_UNDERFLOW
             break
         a1, a2, b = _bdf2(dt, t0, t1, n_hist)
-        bh = b * dt
-        model.content_history(a1, a2, y0, y1, h0, h1, cells, scalars, phys, c_hist)
+        model.content_history(a1, a2, y0, y1, hist.h0, hist.h1, film, phys, work.c_hist)
         x_hist = a1 * y0[n] + a2 * y1[n]
         v_hist = a1 * y0[n + 1] + a2 * y1[n + 1]
-        err_fac = _predict(dt, t0, t1, t2, n_hist, y0, y1, y2, y_pred)
-        y[:] = y_pred
-        model.start_attempt(y, marks, cells, phys)
-
-        outcome, lu_valid, bh_lu, fresh = _newton(
-            s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist, rtol, y,
-            marks, cells, scalars, q, w, h, res, dh, kdp, fac, dres_dh, lu_valid, bh_lu, counters)
+        err_fac = _predict(dt, t0, t1, t2, n_hist, y0, y1, hist.y2, work.y_pred)
+        work.y[:] = work.y_pred
+        model.start_attempt(work.y, film, phys)
+        step = Step(b * dt, work.c_hist, x_hist, v_hist)
+        outcome, fresh = _newton(grid, phys, step, control.rtol, film, fac, work)
         if outcome == SINGULAR:
             status = NONFINITE
             break
@@ -416,19 +499,13 @@ def _attempt(s, s_face, area, weight, influence, phys, rtol, dt, dt_min, max_ste
             if fresh:
                 dt *= 0.5
                 counters[REJECTED] += 1
-            lu_valid = False
+            fac.valid[0] = False
             continue
-
-        positive = True
-        for i in range(n):
-            if not (h[i] > 0.0):
-                positive = False
-        if not positive:
+        if not _positive(work.h):
             dt *= 0.5
             counters[REJECTED] += 1
             continue
-        err = _local_error(influence, phys, y, y_pred, err_fac, h, marks, scalars, rtol, res,
-                           kdp, dh, scale)
+        err = _local_error(grid, phys, err_fac, control.rtol, film, work)
         if not np.isfinite(err):
             status = NONFINITE
             break
@@ -437,24 +514,63 @@ def _attempt(s, s_face, area, weight, influence, phys, rtol, dt, dt_min, max_ste
             counters[REJECTED] += 1
             continue
         accepted = True
-    return status, accepted, dt, err, lu_valid, bh_lu
+    return status, accepted, dt, err
 
 
 @jit
-def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, t_init,
-              dissipated_init, rtol, dt_init, dt_min, max_steps, stop_kind, stop_params,
-              save_profiles):
-    """Integrate from ``(T, X, V, P) = (t_init, x_init, v_init, p_init)`` until the terminal event
-    ``stop_kind`` with ``stop_params`` (events.py) or a failure. ``phys`` is
-    ``Physics.as_array()``.
+def _history(grid, start):
+    """The history at the start: every slot the initial state (never read uninitialised: 0 *
+    NaN garbage is NaN)."""
+    s = grid.s
+    n = s.size
+    m = n + 2
+    y0 = np.empty(m)
+    y0[:n] = start.p
+    y0[n] = start.x
+    y0[n + 1] = start.v
+    w = np.empty(n)
+    h = np.empty(n)
+    gap(s, grid.influence, start.x, start.p, w, h)
+    t = np.empty(3)
+    t[:] = start.t
+    return History(y0, y0.copy(), y0.copy(), h, h.copy(), t, np.ones(1, dtype=np.int64))
+
+
+@jit
+def _shift(hist, dt, work):
+    """The accepted step of size ``dt`` (``work.y``, ``work.h``) becomes the newest state."""
+    hist.y2[:] = hist.y1
+    hist.y1[:] = hist.y0
+    hist.y0[:] = work.y
+    hist.h1[:] = hist.h0
+    hist.h0[:] = work.h
+    hist.t[2] = hist.t[1]
+    hist.t[1] = hist.t[0]
+    hist.t[0] = hist.t[0] + dt
+    hist.n[0] = min(hist.n[0] + 1, 3)
+    work.counters[STEPS] += 1
+
+
+@jit
+def _series(rows, n, save_profiles):
+    """The series and the profiles (``integrate``), NaN until written, ``rows`` rows each."""
+    n_prof = rows if save_profiles else 0
+    return _rows(rows, N_SERIES), _rows(n_prof, n), _rows(n_prof, n), _rows(n_prof, n - 1)
+
+
+@jit
+def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles):
+    """Integrate on the grid ``grid`` (grid.py: ``Nodes``) from ``start`` (``Start``) with the
+    step control ``control`` (``Control``) until the terminal event ``stop_kind`` with
+    ``stop_params`` (events.py) or a failure. ``phys`` is ``Physics.as_array()``.
 
     Returns
     -------
     status : int
         ``OK``, ``MAX_STEPS``, ``STEP_UNDERFLOW`` or ``NONFINITE``.
-    counters : (5,) int64
+    counters : (6,) int64
         ``COUNTERS``: accepted steps, rejected steps, Newton iterations, LU factorisations,
-        Jacobians.
+        Jacobians, low-rank updates.
     series : (rows, N_SERIES) float
         One row per accepted step (the first is the initial state); columns ``SERIES``.
     pressure, deformation : (rows, N) float
@@ -463,113 +579,63 @@ def integrate(s, s_face, area, weight, influence, phys, x_init, v_init, p_init, 
         The cells' fluid fraction ``theta`` at each row (model/step.py: 1 in full cells) when
         ``save_profiles``, else (0, N-1).
     """
-    n = s.size
-    m = n + 2
-    # current and past solutions y = (P, X, V), and gaps
-    y0 = np.empty(m)
-    y0[:n] = p_init
-    y0[n] = x_init
-    y0[n + 1] = v_init
-    y1 = y0.copy()  # history slots: never read uninitialised (0 * NaN garbage is NaN)
-    y2 = y0.copy()
-    w = np.empty(n)
-    h = np.empty(n)
-    gap(s, influence, x_init, p_init, w, h)
-    h0 = h.copy()
-    h1 = h.copy()
-    t0 = t_init
-    t1 = t_init
-    t2 = t_init
-    n_hist = 1
-
-    y = np.empty(m)
-    y_pred = np.empty(m)
-    res = np.empty(m)
-    q = np.empty(n - 1)
-    c_hist = np.empty(n)
-    dh = np.empty(n)
-    kdp = np.empty(n)
-    scale = np.empty(n)
-    fac = _factorisation(m)
-    dres_dh = np.empty((n, 3))
-    lu_valid = False
-    bh_lu = 1.0
-
+    n = grid.s.size
+    hist = _history(grid, start)
+    work = _work(n)
+    fac = _factorisation(n + 2)
+    w, h, q = work.w, work.h, work.q
+    h[:] = hist.h0
     rows = 256
-    series = _rows(rows, N_SERIES)
-    n_prof = rows if save_profiles else 0
-    p_hist = _rows(n_prof, n)
-    w_hist = _rows(n_prof, n)
-    theta_hist = _rows(n_prof, n - 1)
-    counters = np.zeros(len(COUNTERS), dtype=np.int64)
-
+    series, p_hist, w_hist, theta_hist = _series(rows, n, save_profiles)
     # initial row
-    face_fluxes(s, s_face, y0[:n], h, phys, q)
-    marks, cells, scalars = model.new_state(q)
-    model.surface_gap(s, influence, phys, y0, marks, scalars, w, h)  # with a contact load, if any
-    model.begin(scalars, phys)
-    h0[:] = h
-    h1[:] = h
-    strain, diss_rate = model.energies(s, s_face, weight, phys, y0, w, h, q, scalars)
-    dissipated = dissipated_init
+    face_fluxes(grid.s, grid.s_face, hist.y0[:n], h, phys, q)
+    film = model.new_film(q)
+    model.surface_gap(grid, phys, hist.y0, film, w, h)  # with a contact load, if any
+    model.begin(film, phys)
+    hist.h0[:] = h
+    hist.h1[:] = h
+    strain, diss_rate = model.energies(grid, phys, hist.y0, w, h, q, film)
+    dissipated = start.dissipated
     n_rows = 0
-
-    dt = dt_init
+    dt = control.dt_init
     status = RUNNING
     while True:
-        # ---- record the accepted state (also the initial one) -------------------------------
-        if n_rows == rows:
+        if n_rows == rows:  # ---- record the accepted state (also the initial one) ----------
             rows *= 2
             series = _grow(series, rows)
             if save_profiles:
-                p_hist = _grow(p_hist, rows)
-                w_hist = _grow(w_hist, rows)
-                theta_hist = _grow(theta_hist, rows)
-        wmax, r_event = _record(series[n_rows], t0, s, area, weight, y0, w, h, strain, dissipated,
-                                marks, cells, scalars, phys)
+                p_hist, w_hist, theta_hist = (_grow(p_hist, rows), _grow(w_hist, rows),
+                                              _grow(theta_hist, rows))
+        wmax, r_event = _record(series[n_rows], hist.t[0], grid, phys, hist.y0, w, h, strain,
+                                dissipated, film)
         if save_profiles:
-            p_hist[n_rows] = model.film_pressure(y0, scalars, phys)
+            p_hist[n_rows] = model.film_pressure(hist.y0, film, phys)
             w_hist[n_rows] = w
-            theta_hist[n_rows] = model.fluid_fraction(cells)
+            theta_hist[n_rows] = model.fluid_fraction(film)
         n_rows += 1
         if status != RUNNING:
             break
-        if reached(stop_kind, stop_params, counters[STEPS], y0[n], y0[n + 1], wmax, r_event):
+        if reached(stop_kind, stop_params, work.counters[STEPS], hist.y0[n], hist.y0[n + 1],
+                   wmax, r_event):
             status = OK
             break
-
         # ---- attempt steps until one is accepted ---------------------------------------------
-        status, accepted, dt, err, lu_valid, bh_lu = _attempt(
-            s, s_face, area, weight, influence, phys, rtol, dt, dt_min, max_steps, t0, t1, t2,
-            n_hist, y0, y1, y2, h0, h1, y, y_pred, marks, cells, scalars, q, w, h, res, c_hist,
-            dh, kdp, scale, fac, dres_dh, lu_valid, bh_lu, counters)
-
+        status, accepted, dt, err = _attempt(grid, phys, control, hist, dt, film, fac, work)
         if not accepted:
             # record the last accepted state with the failure status, then stop; w and h (and
             # the active set) hold the rejected trial's, so restore the state's and recompute
-            model.start_attempt(y0, marks, cells, phys)
-            model.surface_gap(s, influence, phys, y0, marks, scalars, w, h)
+            model.start_attempt(hist.y0, film, phys)
+            model.surface_gap(grid, phys, hist.y0, film, w, h)
             continue
-
-        # ---- shift history -------------------------------------------------------------------
-        y2[:] = y1
-        y1[:] = y0
-        y0[:] = y
-        h1[:] = h0
-        h0[:] = h
-        t2 = t1
-        t1 = t0
-        t0 = t0 + dt
-        n_hist = min(n_hist + 1, 3)
-        counters[STEPS] += 1
-
-        face_fluxes(s, s_face, model.film_pressure(y0, scalars, phys), h, phys, q)
-        model.accept(s, area, weight, y0, w, h0, h1, q, dt, marks, cells, scalars, phys)
-        strain_new, diss_new = model.energies(s, s_face, weight, phys, y0, w, h, q, scalars)
+        _shift(hist, dt, work)
+        y0 = hist.y0
+        face_fluxes(grid.s, grid.s_face, model.film_pressure(y0, film, phys), h, phys, q)
+        model.accept(grid, y0, w, hist.h0, hist.h1, q, dt, film, phys)
+        strain_new, diss_new = model.energies(grid, phys, y0, w, h, q, film)
         dissipated += 0.5 * (diss_rate + diss_new) * dt
         strain = strain_new
         diss_rate = diss_new
         dt *= _step_factor(err)
-
     kept = min(n_rows, p_hist.shape[0])
-    return status, counters, series[:n_rows], p_hist[:kept], w_hist[:kept], theta_hist[:kept]
+    return (status, work.counters, series[:n_rows], p_hist[:kept], w_hist[:kept],
+            theta_hist[:kept])

@@ -128,7 +128,7 @@ def asperity_energy(h, phys):
 
 
 @jit
-def contact_gap(s, influence, x, y, c, t_set, h_set, held, phys, pa, slope, p, w, h):
+def contact_gap(grid, x, y, contact, held, phys, w, h):
     """The gap and the film pressure of a rough film (docs/solver.md, "Surface roughness").
 
     The slot ``y_i`` of each node holds its total surface load ``T_i = P_i + p_a(H_i)``. Where
@@ -137,10 +137,14 @@ def contact_gap(s, influence, x, y, c, t_set, h_set, held, phys, pa, slope, p, w
     (``held``: a JFO cavity, whose unknown is its liquid fraction) has ``P_i = -Pi``; where its
     asperities touch, its load ``-Pi + p_a(H_i)`` depends on the gap it makes, and those cells'
     gaps are solved together by Newton from the gap ``h`` holds on entry (the previous iterate's;
-    any value, it is clipped into ``(0, sigma]``); their slots receive their loads. Writes
-    ``p_a`` into ``pa``, ``dp_a/dH`` into ``slope`` (what the Jacobian and the Newton's norm
-    read at this gap), ``P`` into ``p``, ``W`` into ``w``, ``H`` into ``h``; returns False when
-    that Newton did not converge."""
+    any value, it is clipped into ``(0, sigma]``); their slots receive their loads. Reads the
+    unloading's ``c``, ``T_set``, ``H_set`` from ``contact`` (model/state.py: ``Contact``) and
+    writes ``p_a`` into its ``pa``, ``dp_a/dH`` into its ``slope`` (what the Jacobian and the
+    Newton's norm read at this gap), ``P`` into its ``p_film``; ``W`` into ``w``, ``H`` into
+    ``h``; returns False when that Newton did not converge."""
+    s, influence = grid.s, grid.influence
+    c, t_set, h_set = contact.load_scale[0], contact.t_set, contact.h_set
+    pa, slope, p = contact.pa, contact.slope, contact.p_film
     n = s.size
     sigma = phys[ROUGHNESS]
     load = np.empty(n)

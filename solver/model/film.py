@@ -8,7 +8,8 @@ Dimensionless, scale ``x1`` (docs/model.md, "Scales"). In ``s = R^2/2`` the Reyn
 
 integrated over finite volumes (integration/grid.py). The terms, one function each:
 
-- ``face_flux``: the flux between nodes ``i`` and ``i+1``,
+- ``flux_law`` (the formula) and ``face_flux`` (its drive): the flux between nodes ``i`` and
+  ``i+1``,
   ``q_f = (P_{i+1} - P_i) s_f H_i^2 H_{i+1}^2 / (3 (s_{i+1} - s_i) (H_i + H_{i+1}))``, which
   holds ``s`` at its face value and integrates ``1/H^3`` across the face with ``H`` linear in ``s``:
   exact for the rigid pressure ``3V/H^2`` on any grid, so the stretched far field costs no accuracy;
@@ -41,37 +42,60 @@ NO_FLOOR, REYNOLDS, JFO = (float(CAVITATION_MODELS.index(m)) for m in ("off", "r
 
 # ---- the terms ------------------------------------------------------------------------------------
 @jit
+def flux_law(s_lo, s_hi, s_f, h_lo, h_hi, dp):
+    """The flux through the face at ``s_f`` between nodes ``lo`` and ``hi`` driven by the
+    pressure difference ``dp``, ``q_f = dp s_f H_lo^2 H_hi^2 / (3 (s_hi - s_lo) (H_lo + H_hi))``,
+    its conductance ``dq/d(dp)`` and its partial derivatives in the gaps: the one place the
+    formula is written (``face_flux``, ``face_fluxes`` and ``jacobian`` call it).
+
+    Returns
+    -------
+    q, dq_ddp, dq_dh_lo, dq_dh_hi : float
+    """
+    ds3 = 3.0 * (s_hi - s_lo)
+    sum_h = h_lo + h_hi
+    q = s_f * h_lo * h_lo * h_hi * h_hi / (ds3 * sum_h) * dp
+    k = s_f / ds3
+    c = k * h_lo * h_lo * h_hi * h_hi / sum_h  # the conductance dq/d(dp)
+    dq_dh_lo = dp * k * h_hi * h_hi * h_lo * (h_lo + 2.0 * h_hi) / (sum_h * sum_h)
+    dq_dh_hi = dp * k * h_lo * h_lo * h_hi * (h_hi + 2.0 * h_lo) / (sum_h * sum_h)
+    return q, c, dq_dh_lo, dq_dh_hi
+
+
+@jit
 def face_flux(s_lo, s_hi, s_f, p_lo, p_hi, h_lo, h_hi, phys):
-    """Flux ``q_f`` through the face at ``s_f`` between nodes ``lo`` and ``hi``, and its partial
-    derivatives. The pressure difference that drives it is ``Int rho_bar/mu_bar dP``
-    (model/liquid.py: ``kirchhoff_difference``), ``P_hi - P_lo`` for the classic film: with it
-    the film is isoviscous in the Kirchhoff variable, and the face stays exact for the rigid
+    """Flux ``q_f`` through the face at ``s_f`` between nodes ``lo`` and ``hi`` (``flux_law``),
+    and its partial derivatives. The pressure difference that drives it is ``Int rho_bar/mu_bar
+    dP`` (model/liquid.py: ``kirchhoff_difference``), ``P_hi - P_lo`` for the classic film: with
+    it the film is isoviscous in the Kirchhoff variable, and the face stays exact for the rigid
     Barus film as it is for the classic one.
 
     Returns
     -------
     q, dq_dp_lo, dq_dp_hi, dq_dh_lo, dq_dh_hi : float
     """
-    ds3 = 3.0 * (s_hi - s_lo)
-    sum_h = h_lo + h_hi
     dp, ddp_lo, ddp_hi = kirchhoff_difference(p_lo, p_hi, phys)
-    q = s_f * h_lo * h_lo * h_hi * h_hi / (ds3 * sum_h) * dp
-    k = s_f / ds3
-    c = k * h_lo * h_lo * h_hi * h_hi / sum_h  # the conductance dq/d(dp)
-    dq_dh_lo = dp * k * h_hi * h_hi * h_lo * (h_lo + 2.0 * h_hi) / (sum_h * sum_h)
-    dq_dh_hi = dp * k * h_lo * h_lo * h_hi * (h_hi + 2.0 * h_lo) / (sum_h * sum_h)
+    q, c, dq_dh_lo, dq_dh_hi = flux_law(s_lo, s_hi, s_f, h_lo, h_hi, dp)
     return q, c * ddp_lo, c * ddp_hi, dq_dh_lo, dq_dh_hi
 
 
 @jit
 def face_dissipation(s_lo, s_hi, s_f, p_lo, p_hi, h_lo, h_hi, q, phys):
     """``Int J dP/ds ds`` over the face interval for the face's mass flux ``q`` (``J = q/rho_bar``
-    the volume flux): with ``q ~ s`` and ``H`` linear in ``s`` as in ``face_flux`` it is
+    the volume flux): with ``q ~ s`` and ``H`` linear in ``s`` as in ``flux_law`` it is
     ``q Int dP/rho_bar s_bar / s_f``, ``s_bar`` the mean of ``s`` under ``H^-3`` (exact for the
     rigid classic film; the plain ``q dP`` overestimates it on stretched cells). The viscosity
-    does not enter: the volume flux is the same through the whole face interval."""
+    does not enter: the volume flux is the same through the whole face interval; at constant
+    density ``Int dP/rho_bar`` is ``P_hi - P_lo`` (model/liquid.py: ``volume_difference``)."""
+    return dissipation_law(s_lo, s_hi, s_f, h_lo, h_hi, q, volume_difference(p_lo, p_hi, phys))
+
+
+@jit
+def dissipation_law(s_lo, s_hi, s_f, h_lo, h_hi, q, dp):
+    """``face_dissipation`` for the pressure work ``dp = Int dP/rho_bar`` per unit volume: ``q dp
+    s_bar / s_f``, the one place the formula is written."""
     s_bar = s_lo + (s_hi - s_lo) * h_lo / (h_lo + h_hi)
-    return q * volume_difference(p_lo, p_hi, phys) * s_bar / s_f
+    return q * dp * s_bar / s_f
 
 
 @jit
@@ -249,31 +273,33 @@ def strain_energy(weight, s_last, p, w, phys):
 @jit
 def face_fluxes(s, s_face, p, h, phys, q_out):
     """Face fluxes ``q_f`` of every face into ``q_out`` (N-1 entries). The liquid's law is
-    decided once, outside the loop: for an isoviscous liquid the drive is ``P_hi - P_lo`` and
-    the loop is ``face_flux``'s formula, in the same order of operations, which the compiler
-    vectorises (a call per face cost 20x the loop, measured: benchmarks/solver.md)."""
+    decided once, outside the loop: for an isoviscous liquid the drive is ``P_hi - P_lo``
+    (``kirchhoff_difference``'s value there) and the loop, ``flux_law`` inlined, is one the
+    compiler vectorises (the liquid's law called per face cost 20x the loop, measured:
+    benchmarks/solver.md)."""
     if isoviscous(phys):
         for f in range(s.size - 1):
-            h_lo = h[f]
-            h_hi = h[f + 1]
-            q_out[f] = s_face[f] * h_lo * h_lo * h_hi * h_hi / (
-                3.0 * (s[f + 1] - s[f]) * (h_lo + h_hi)) * (p[f + 1] - p[f])
+            q_out[f] = flux_law(s[f], s[f + 1], s_face[f], h[f], h[f + 1], p[f + 1] - p[f])[0]
         return
     for f in range(s.size - 1):
         q_out[f] = face_flux(s[f], s[f + 1], s_face[f], p[f], p[f + 1], h[f], h[f + 1], phys)[0]
 
 
 @jit
-def residual(s, s_face, area, weight, phys, bh, c_hist, x_hist, v_hist, x, v, p, theta, h, q, res):
+def residual(grid, phys, step, x, v, p, theta, h, q, res):
     """Scaled residual of one implicit step with the film equation in every cell: the cell's
     liquid content ``cell_content(theta_i, H_i)`` against its history, ``theta H - C_hist =
     bh dq/ds`` (``C_hist`` the BDF combination of the content at the accepted states; full cells
     have ``theta = 1``, and ``1 * H = H`` bit for bit), the far-field boundary row,
     ``X - X_hist = -bh V`` and ``V - V_hist = -bh F/(3 St)``. ``q`` receives the face fluxes.
     ``constrain`` then replaces the rows of Reynolds-cavitated cells; the JFO film keeps these
-    rows in its cavitated cells, where the unknown is ``theta``."""
+    rows in its cavitated cells, where the unknown is ``theta``. ``grid`` is the scene's
+    (integration/grid.py: ``Nodes``), ``step`` the attempt's ``bh`` and history (model/state.py:
+    ``Step``)."""
+    s, area = grid.s, grid.area
+    bh, c_hist = step.bh, step.c_hist
     n = s.size
-    face_fluxes(s, s_face, p, h, phys, q)
+    face_fluxes(s, grid.s_face, p, h, phys, q)
     if phys[DENSITY] == CONSTANT:  # the content is theta H (cell_content with rho = 1)
         for i in range(n - 1):
             dq = q[i] - (q[i - 1] if i > 0 else 0.0)
@@ -283,8 +309,8 @@ def residual(s, s_face, area, weight, phys, bh, c_hist, x_hist, v_hist, x, v, p,
             dq = q[i] - (q[i - 1] if i > 0 else 0.0)
             res[i] = cell_content(theta[i], h[i], p[i], phys)[0] - c_hist[i] - bh / area[i] * dq
     res[n - 1] = far_field_row(p[n - 2], p[n - 1], h[n - 2], h[n - 1])[0]
-    res[n] = x - x_hist + bh * v
-    res[n + 1] = v - v_hist + bh * film_force(weight, p) / (3.0 * phys[ST])
+    res[n] = x - step.x_hist + bh * v
+    res[n + 1] = v - step.v_hist + bh * film_force(grid.weight, p) / (3.0 * phys[ST])
 
 
 @jit
@@ -326,37 +352,32 @@ def constrain(p, res, active, phys):
 
 
 @jit
-def jacobian(s, s_face, area, weight, influence, phys, bh, p, theta, h, active, jac, dres_dh,
-             dh_dx, force_dp, force_dx, dp_dh):
+def jacobian(grid, phys, bh, p, theta, h, active, link, jac, dres_dh):
     """Jacobian of ``residual`` with respect to the slots ``(y, X, V)`` into ``jac`` (N+2, N+2),
     from the terms' partial derivatives.
 
     The cell rows depend on the gap at three nodes, and the gap on every slot through ``K``:
-    ``J = (dres/dH) K + dres/dP``, with ``dres_i/dH_i`` the content's ``theta_i``. ``influence``
-    is ``dH/dy`` (``K``, or a rough film's, model/contact.py), ``dh_dx`` is ``dH/dX`` (ones
-    without contact), ``force_dp`` and ``force_dx`` the force's derivatives (``weight`` and 0
-    without contact); ``dp_dh`` (empty: ``y = P``) is ``dP/dH`` of a film whose pressure is not
-    its slot (a rough film's slot holds the total load, ``P = y - p_a(H)``: ``J = (dres/dH +
-    dres/dP dP/dH) dH/dy + dres/dP``). Cavitated cells
+    ``J = (dres/dH) K + dres/dP``, with ``dres_i/dH_i`` the content's ``theta_i``. ``link``
+    (model/state.py: ``Coupling``) holds ``dH/dy`` (``K``, or a rough film's, model/contact.py),
+    ``dH/dX`` (ones without contact), the force's derivatives (``weight`` and 0 without
+    contact), and ``dP/dH`` (empty: ``y = P``) of a film whose pressure is not its slot (a rough
+    film's slot holds the total load, ``P = y - p_a(H)``: ``J = (dres/dH + dres/dP dP/dH) dH/dy
+    + dres/dP``). Cavitated cells
     (``active``, N-1 entries): under the Reynolds condition their rows are their constraint's;
     under JFO their rows stay the content rows and their slot is ``theta_i`` (``P_i = -Pi``
     fixed), so the slot's column is ``d row_i / d theta_i = H_i e_i``. ``dres_dh`` (N, 3) is work
     space (columns i-1, i, i+1)."""
+    s, s_face, area, force_dp = grid.s, grid.s_face, grid.area, link.force_dp
     n = s.size
     jac[:, :] = 0.0
     dres_dh[:, :] = 0.0
     classic_flux = isoviscous(phys)
     for f in range(n - 1):
-        if classic_flux:  # face_flux's partials with the drive P_hi - P_lo, without the call
-            h_lo = h[f]
-            h_hi = h[f + 1]
-            k = s_face[f] / (3.0 * (s[f + 1] - s[f]))
-            sum_h = h_lo + h_hi
-            dq_dpj = k * h_lo * h_lo * h_hi * h_hi / sum_h
-            dq_dpi = -dq_dpj
-            dp = p[f + 1] - p[f]
-            dq_dhi = dp * k * h_hi * h_hi * h_lo * (h_lo + 2.0 * h_hi) / (sum_h * sum_h)
-            dq_dhj = dp * k * h_lo * h_lo * h_hi * (h_hi + 2.0 * h_lo) / (sum_h * sum_h)
+        if classic_flux:  # face_flux with the isoviscous drive P_hi - P_lo, decided once
+            _, c, dq_dhi, dq_dhj = flux_law(s[f], s[f + 1], s_face[f], h[f], h[f + 1],
+                                            p[f + 1] - p[f])
+            dq_dpi = -c
+            dq_dpj = c
         else:
             _, dq_dpi, dq_dpj, dq_dhi, dq_dhj = face_flux(s[f], s[f + 1], s_face[f], p[f],
                                                           p[f + 1], h[f], h[f + 1], phys)
@@ -392,11 +413,31 @@ def jacobian(s, s_face, area, weight, influence, phys, bh, p, theta, h, active, 
                 jac[i, :] = 0.0
                 dres_dh[i, :] = 0.0
                 jac[i, i] = cell_constraint(p[i], phys)[1]
+    _through_gap(link, jac, dres_dh)
+    jac[n, n] = 1.0
+    jac[n, n + 1] = bh
+    for j in range(n):
+        jac[n + 1, j] = bh * force_dp[j] / (3.0 * phys[ST])
+    jac[n + 1, n] = bh * link.force_dx / (3.0 * phys[ST])
+    jac[n + 1, n + 1] = 1.0
+    if jfo:  # a cavitated cell's slot is theta (P = -Pi fixed): its column is d row_i/d theta_i
+        for i in range(n - 1):
+            if active[i]:
+                jac[:, i] = 0.0
+                jac[i, i] = cell_content(theta[i], h[i], p[i], phys)[1]
+
+
+@jit
+def _through_gap(link, jac, dres_dh):
+    """The gap's part of the film rows' Jacobian (``jacobian``): the chain rule through ``H = X +
+    s + K P`` (``link.dh_dy``, ``link.dh_dx``), from the rows' gap partials ``dres_dh`` (N, 3),
+    to which the pressure partials add first where ``P`` follows the gap (``link.dp_dh``)."""
+    n = dres_dh.shape[0]
+    influence, dh_dx, dp_dh = link.dh_dy, link.dh_dx, link.dp_dh
     if dp_dh.size:  # P = y - p_a(H): the pressure partials reach the gap too
         for i in range(n):
             for k in range(max(i - 1, 0), min(i + 2, n)):
                 dres_dh[i, k - i + 1] += jac[i, k] * dp_dh[k]
-    # chain rule through H = X + s + K P
     for i in range(n):
         lo = i - 1 if i > 0 else 0
         hi_ = i + 1 if i < n - 1 else n - 1
@@ -408,17 +449,6 @@ def jacobian(s, s_face, area, weight, influence, phys, bh, p, theta, h, active, 
                 for j in range(n):
                     jac[i, j] += d * influence[k, j]
         jac[i, n] = dx
-    jac[n, n] = 1.0
-    jac[n, n + 1] = bh
-    for j in range(n):
-        jac[n + 1, j] = bh * force_dp[j] / (3.0 * phys[ST])
-    jac[n + 1, n] = bh * force_dx / (3.0 * phys[ST])
-    jac[n + 1, n + 1] = 1.0
-    if jfo:  # a cavitated cell's slot is theta (P = -Pi fixed): its column is d row_i/d theta_i
-        for i in range(n - 1):
-            if active[i]:
-                jac[:, i] = 0.0
-                jac[i, i] = cell_content(theta[i], h[i], p[i], phys)[1]
 
 
 @jit
@@ -429,11 +459,10 @@ def energy_rates(s, s_face, weight, phys, x, p, w, h, q):
     n = s.size
     strain = strain_energy(weight, s[n - 1], p, w, phys)
     diss = 0.0
-    if phys[DENSITY] == CONSTANT:  # face_dissipation with the volume difference P_hi - P_lo
+    if phys[DENSITY] == CONSTANT:  # the volume difference is P_hi - P_lo: decided once
         for f in range(n - 1):
-            h_lo = h[f]
-            s_bar = s[f] + (s[f + 1] - s[f]) * h_lo / (h_lo + h[f + 1])
-            diss += q[f] * (p[f + 1] - p[f]) * s_bar / s_face[f]
+            diss += dissipation_law(s[f], s[f + 1], s_face[f], h[f], h[f + 1], q[f],
+                                    p[f + 1] - p[f])
     else:
         for f in range(n - 1):
             diss += face_dissipation(s[f], s[f + 1], s_face[f], p[f], p[f + 1], h[f], h[f + 1],

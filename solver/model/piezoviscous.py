@@ -395,14 +395,7 @@ def approach(x_from, v_from, t_from, stokes, beta, switch, glass_margin=GLASS_MA
     RigidApproach
         The path, its end state and event, and its peaks.
     """
-    if not (x_from > 0.0 and v_from > 0.0 and stokes > 0.0 and beta >= 0.0 and switch > 0.0):
-        raise ValueError(f"approach needs x_from > 0, v_from > 0, St > 0, beta >= 0, switch > 0; "
-                         f"got {x_from!r}, {v_from!r}, {stokes!r}, {beta!r}, {switch!r}")
-    if not glass_margin > 1.0:
-        raise ValueError(f"glass_margin = {glass_margin!r} must be > 1 (the rigid film ends at the "
-                         "glass gap itself)")
-    if samples < 2:
-        raise ValueError(f"samples = {samples!r} must be at least 2")
+    _check_approach(x_from, v_from, stokes, beta, switch, glass_margin, samples)
     f = _path_functions(x_from, stokes, beta, switch, glass_margin)
     y0 = [float(v_from)]
     started = [name for name, (g, _) in f.thresholds.items() if g(0.0, y0) >= 0.0]
@@ -432,6 +425,18 @@ def approach(x_from, v_from, t_from, stokes, beta, switch, glass_margin=GLASS_MA
         t=t_s, x=x_s, v=v_s, p_axis=rigid_pressure(0.0, x_s, v_s, beta),
         force=rigid_force(x_s, v_s, beta) / 3.0, w0=axis_deflection(x_s, v_s, beta), event=event,
         x_end=float(x_s[-1]), v_end=float(v_end), t_end=float(t_s[-1]), peaks=peaks)
+
+
+def _check_approach(x_from, v_from, stokes, beta, switch, glass_margin, samples):
+    """``approach``'s arguments, each refused with what it must be."""
+    if not (x_from > 0.0 and v_from > 0.0 and stokes > 0.0 and beta >= 0.0 and switch > 0.0):
+        raise ValueError(f"approach needs x_from > 0, v_from > 0, St > 0, beta >= 0, switch > 0; "
+                         f"got {x_from!r}, {v_from!r}, {stokes!r}, {beta!r}, {switch!r}")
+    if not glass_margin > 1.0:
+        raise ValueError(f"glass_margin = {glass_margin!r} must be > 1 (the rigid film ends at the "
+                         "glass gap itself)")
+    if samples < 2:
+        raise ValueError(f"samples = {samples!r} must be at least 2")
 
 
 def _path_functions(x_from, stokes, beta, switch, glass_margin):
@@ -480,10 +485,27 @@ def _path_functions(x_from, stokes, beta, switch, glass_margin):
         z = z_of(u, v)
         return s_of(z) / (stokes * v), min(z, 1.0)
 
-    # with A increasing along the path (it does while z < 1 - 1/e: d ln S/d ln z < 0.19 < 1),
-    # ln z rises while A < 2: z and the axis pressure peak at A = 2, the force at A = (1 + 2 sig)/
-    # (1 + sig) (classic: V = 1/St), W(0) at A = (1.5 + 2 gam)/(1 + gam), W(0)/X at (2.5 + 2 gam)/
-    # (1 + gam) (classic: V = 0.4/St); sig, gam the log-slopes of S and G
+    d_pressure, d_force, d_deflection, d_handover = _peak_events(rate)
+    for ev, terminal, direction in ((handover, True, 1.0), (glass, True, 1.0), (rest, True, -1.0),
+                                    (d_handover, False, -1.0), (d_pressure, False, -1.0),
+                                    (d_force, False, -1.0), (d_deflection, False, -1.0)):
+        ev.terminal, ev.direction = terminal, direction
+    thresholds = {"handover": (handover, d_handover)}
+    if beta > 0.0:
+        thresholds["glass"] = (glass, d_pressure)
+    return SimpleNamespace(rhs=rhs, handover=handover, glass=glass, rest=rest,
+                           d_pressure=d_pressure, d_force=d_force, d_deflection=d_deflection,
+                           d_handover=d_handover, thresholds=thresholds)
+
+
+def _peak_events(rate):
+    """The derivatives of the thresholds' logs along the path (``_path_functions``; ``rate(u,
+    V)`` gives ``A = -d ln V/du`` and ``z``), whose zeros are the peaks. With A increasing along
+    the path (it does while z < 1 - 1/e: d ln S/d ln z < 0.19 < 1), ln z rises while A < 2: z
+    and the axis pressure peak at A = 2, the force at A = (1 + 2 sig)/(1 + sig) (classic: V =
+    1/St), W(0) at A = (1.5 + 2 gam)/(1 + gam), W(0)/X at (2.5 + 2 gam)/(1 + gam) (classic: V =
+    0.4/St); sig, gam the log-slopes of S and G."""
+
     def d_pressure(u, y):
         if y[0] <= 0.0:
             return -1.0
@@ -508,16 +530,7 @@ def _path_functions(x_from, stokes, beta, switch, glass_margin):
         a, z = rate(u, y[0])
         return 2.5 - a + _deflection_log_slope(z) * (2.0 - a)
 
-    for ev, terminal, direction in ((handover, True, 1.0), (glass, True, 1.0), (rest, True, -1.0),
-                                    (d_handover, False, -1.0), (d_pressure, False, -1.0),
-                                    (d_force, False, -1.0), (d_deflection, False, -1.0)):
-        ev.terminal, ev.direction = terminal, direction
-    thresholds = {"handover": (handover, d_handover)}
-    if beta > 0.0:
-        thresholds["glass"] = (glass, d_pressure)
-    return SimpleNamespace(rhs=rhs, handover=handover, glass=glass, rest=rest,
-                           d_pressure=d_pressure, d_force=d_force, d_deflection=d_deflection,
-                           d_handover=d_handover, thresholds=thresholds)
+    return d_pressure, d_force, d_deflection, d_handover
 
 
 def _path_end(sol, t_events, thresholds, u_stop=None):

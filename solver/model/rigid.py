@@ -205,14 +205,24 @@ def law_onset_separation(x_start, stokes, slope, tol):
     ``None`` when the path never gets there (``slope = 0``: the classic film)."""
     if slope <= 0.0:
         return None
-    log_c = math.log(3.0 * slope / tol) - 2.0 * math.log(x_start)
+    return _rigid_onset(x_start, stokes, math.log(3.0 * slope / tol) - 2.0 * math.log(x_start),
+                        2.0)
 
-    def log_ratio(u):  # ln(slope P(0) / tol) at u = ln(X0/X), V = 1 - u/St
-        return log_c + math.log1p(-u / stokes) + 2.0 * u
+
+def _rigid_onset(x_start, stokes, log_c, power):
+    """First separation on the rigid path from ``(x_start, 1)`` where ``c V X^-power`` reaches 1
+    (``log_c = ln c - power ln X0``): with ``u = ln(X0/X)`` and ``V = 1 - u/St``, the root of
+    ``log_c + ln(1 - u/St) + power u`` below its peak at ``u = St - 1/power``, found in logs
+    (``exp(power u)`` overflows at large St). ``x_start`` when it is reached at the start,
+    ``None`` when the path never gets there (the law's onset, ``law_onset_separation``, and the
+    hand-over, ``handover_separation``)."""
+
+    def log_ratio(u):
+        return log_c + math.log1p(-u / stokes) + power * u
 
     if log_ratio(0.0) >= 0.0:
         return x_start
-    u_peak = stokes - 0.5  # P(0) = 3V/X^2 peaks there (approach_peaks)
+    u_peak = stokes - 1.0 / power
     if u_peak <= 0.0 or log_ratio(u_peak) < 0.0:
         return None
     u = optimize.brentq(log_ratio, 0.0, u_peak, xtol=1e-14, rtol=1e-14)
@@ -264,19 +274,8 @@ def handover_separation(x_start, stokes, threshold):
     Returns ``None`` when the rigid path never deforms that much (the scene is rigid only).
     With ``u = ln(X0/X)``, ``W(0)/X = c (1 - u/St) X0^-2.5 exp(2.5 u)`` peaks at ``u = St - 0.4``.
     """
-
-    log_c = math.log(HANDOVER_COEFF) - 2.5 * math.log(x_start) - math.log(threshold)
-
-    def log_ratio(u):  # ln(W(0)/X / threshold), in logs: exp(2.5 u) overflows at large St
-        return log_c + math.log1p(-u / stokes) + 2.5 * u
-
-    if log_ratio(0.0) >= 0.0:
-        return x_start
-    u_peak = stokes - 0.4
-    if u_peak <= 0.0 or log_ratio(u_peak) < 0.0:
-        return None
-    u = optimize.brentq(log_ratio, 0.0, u_peak, xtol=1e-14, rtol=1e-14)
-    return x_start * math.exp(-u)
+    return _rigid_onset(x_start, stokes, math.log(HANDOVER_COEFF) - 2.5 * math.log(x_start)
+                        - math.log(threshold), 2.5)
 
 
 # ---- closed forms of the hand-over criterion (used by the scene checks and reports) ------------

@@ -8,9 +8,9 @@ touch (model/contact.py); a JFO cavity's slot its liquid fraction. Everything a 
 needs the loop to do goes through the functions here, which read the physics array ``phys``
 (solver/physics.py) and decide:
 
-- ``new_state``, ``begin``: the film's own state beyond ``y`` (``marks``, ``cells``,
-  ``scalars`` below), which the loop carries and hands back but never reads, and its history
-  at the first state;
+- ``new_film`` (model/state.py), ``begin``: the film's own state beyond ``y``, named records
+  (``Film``: a ``Cavity`` and a ``Contact``), which the loop carries and hands back but never
+  reads, and its history at the first state;
 - ``surface_gap``, ``film_pressure``, ``total_force``, ``energies``: the gap and deflection of
   a state, its film pressure (what the loop records and its fluxes carry), the force on the
   spheres, the strain energy and dissipation rate;
@@ -47,28 +47,8 @@ from .film import (JFO, NO_FLOOR, cavity_edge, cell_content, compression_work, c
                    energy_rates, film_force, gap, jacobian, jfo_void, residual, strain_energy,
                    update_cavity, update_cavity_jfo, void_work)
 from .liquid import CONSTANT, isoviscous, kirchhoff_difference
+from .state import Coupling, new_film  # noqa: F401 (new_film: the contract's start)
 
-# rows of ``marks`` (bool, one entry per cell): the cavitated cells of the current iterate, of the
-# Jacobian the loop solves with, of the last accepted state, and of the Jacobian it factorised
-# (which low-rank updates correct to ACTIVE_LU)
-ACTIVE, ACTIVE_LU, ACTIVE0, ACTIVE_BASE = 0, 1, 2, 3
-# rows of ``cells`` (float, one entry per cell): the liquid fraction theta of the iterate and of
-# the last two accepted states (1 in full cells, and in every cell but a JFO cavity's), the
-# fraction's Newton update, the gap where each cell cavitated (the void volume), the face fluxes
-# of the last accepted state
-THETA, THETA0, THETA1, DTHETA, H_ONSET, Q_PREV = 0, 1, 2, 3, 4, 5
-# entries of ``scalars``: the work against the floor so far, the absolute pressure error scale,
-# the largest pressure seen, the accepted state's cavity radius; for a rough film the solids'
-# unloading scale c (model/contact.py: 1 while they load, e_dry^2 once they unload), whether
-# they touched on approach, the energy lost in the solids; then blocks of one entry per node:
-# the contact pressure p_a and the film pressure P of the last gap computed, the load T_set,
-# the permanent set (1 - c) K T_set and the gap H_set where the solids began to unload, the
-# film pressure of the last two accepted states, the scale film_change measures it by, and
-# the contact law's slope dp_a/dH at the last gap computed
-WORKED, P_ABS, P_SEEN, R_EDGE, LOAD_SCALE, TOUCHED, SOLID_LOST = 0, 1, 2, 3, 4, 5, 6
-NODE_BLOCKS = 7
-PA, P_FILM, T_SET, W_SET, H_SET, P_ACC0, P_ACC1, P_SCALE, SLOPE = 0, 1, 2, 3, 4, 5, 6, 7, 8
-N_BLOCKS = 9
 # a rough film's Newton measures the change of its film pressure against its own size or this
 # fraction of the asperities' pressure, whichever is larger (film_change)
 CONTACT_SHARE = 0.01
@@ -77,30 +57,6 @@ _R_CAV, _V_VOID = SERIES_INDEX["cavity_radius"], SERIES_INDEX["void_volume"]
 _W_VOID, _E_C = SERIES_INDEX["void_work"], SERIES_INDEX["E_c"]
 _E_A, _LOST, _F_A = SERIES_INDEX["E_a"], SERIES_INDEX["solid_loss"], SERIES_INDEX["F_contact"]
 _V = SERIES_INDEX["V"]
-
-
-@jit
-def new_state(q):
-    """The film's state at the start (``q`` the face fluxes of the initial state): no cavity,
-    full cells."""
-    cells_n = q.size
-    marks = np.zeros((4, cells_n), dtype=np.bool_)
-    cells = np.zeros((6, cells_n))
-    cells[THETA, :] = 1.0
-    cells[THETA0, :] = 1.0
-    cells[THETA1, :] = 1.0
-    cells[Q_PREV, :] = q
-    scalars = np.zeros(NODE_BLOCKS + N_BLOCKS * (cells_n + 1))
-    scalars[LOAD_SCALE] = 1.0
-    # Absolute part of the pressure error scale. With a floor the film carries almost no
-    # pressure once it has cavitated (|P| ~ Pi over the whole rebound), and a scale relative to
-    # the instantaneous pressure made the steps collapse to 1e-9 where the last full cells at the
-    # axis drained: pressures far below the collision's peak move neither the gap nor the force
-    # (both in the norm on their own), so they count as absolute below a fraction of the largest
-    # pressure seen so far, from the film's first cavity on (``record``). The classic film (and
-    # a film that never cavitates) keeps its instantaneous scale.
-    scalars[P_ABS] = 1e-12
-    return marks, cells, scalars
 
 
 @jit
@@ -116,66 +72,57 @@ def rough(phys):
 
 
 @jit
-def node_block(scalars, k):
-    """Block ``k`` (``PA``, ``T_SET``, ``W_SET``, ``H_SET``) of ``scalars``: one entry per
-    node."""
-    n = (scalars.size - NODE_BLOCKS) // N_BLOCKS
-    return scalars[NODE_BLOCKS + k * n:NODE_BLOCKS + (k + 1) * n]
-
-
-@jit
-def surface_gap(s, influence, phys, y, marks, scalars, w, h):
+def surface_gap(grid, phys, y, film, w, h):
     """The deflection ``W`` and gap ``H`` of the iterate ``y`` into ``w``, ``h``: ``W = K y``
     (film.gap), and for a rough film the contact pressure and film pressure they imply
     (contact.contact_gap, whose cells held at the floor are a JFO cavity's, solved from the gap
     ``h`` holds; a contact solve that fails leaves ``h`` NaN, which the loop treats as a failed
     iterate)."""
-    n = s.size
+    n = grid.s.size
     if not rough(phys):
-        gap(s, influence, y[n], y[:n], w, h)
+        gap(grid.s, grid.influence, y[n], y[:n], w, h)
         return
-    if not contact_gap(s, influence, y[n], y, scalars[LOAD_SCALE], node_block(scalars, T_SET),
-                       node_block(scalars, H_SET), held_cells(marks, phys, n), phys,
-                       node_block(scalars, PA), node_block(scalars, SLOPE),
-                       node_block(scalars, P_FILM), w, h):
+    if not contact_gap(grid, y[n], y, film.contact, held_cells(film.cavity, phys, n), phys, w,
+                       h):
         h[:] = np.nan
 
 
 @jit
-def held_cells(marks, phys, n):
+def held_cells(cavity, phys, n):
     """The nodes whose slot is not their load (a JFO cavity's cells, held at the floor)."""
     held = np.zeros(n, dtype=np.bool_)
     if phys[CAVITATION] == JFO:
-        held[:n - 1] = marks[ACTIVE]
+        held[:n - 1] = cavity.active
     return held
 
 
 @jit
-def film_pressure(y, scalars, phys):
+def film_pressure(y, film, phys):
     """The film pressure of the state whose gap ``surface_gap`` computed last: the slots
     themselves for a smooth film (no copy), ``y - p_a`` where rough surfaces touch."""
     n = y.size - 2
     if not rough(phys):
         return y[:n]
-    return node_block(scalars, P_FILM)
+    return film.contact.p_film
 
 
 @jit
-def begin(scalars, phys):
+def begin(film, phys):
     """The film's history at the first state (whose gap ``surface_gap`` computed last): a rough
     film's film pressure of the accepted states (``content_history``)."""
     if rough(phys):
-        node_block(scalars, P_ACC0)[:] = node_block(scalars, P_FILM)
-        node_block(scalars, P_ACC1)[:] = node_block(scalars, P_FILM)
+        contact = film.contact
+        contact.p_acc0[:] = contact.p_film
+        contact.p_acc1[:] = contact.p_film
 
 
 @jit
-def relaxing_deflection(w, w_absmax, scalars, phys):
+def relaxing_deflection(w, w_absmax, film, phys):
     """The largest ``|W|`` the terminal events wait to relax (``w_absmax``, ``max |W|``): a rough
     film's permanent set (model/contact.py) never relaxes, so ``max |W - (1 - c) K T_set|``."""
-    if not rough(phys) or scalars[LOAD_SCALE] == 1.0:
+    if not rough(phys) or film.contact.load_scale[0] == 1.0:
         return w_absmax
-    w_set = node_block(scalars, W_SET)
+    w_set = film.contact.w_set
     out = 0.0
     for i in range(w.size):
         out = max(out, abs(w[i] - w_set[i]))
@@ -183,56 +130,56 @@ def relaxing_deflection(w, w_absmax, scalars, phys):
 
 
 @jit
-def total_force(weight, y, scalars, phys):
+def total_force(weight, y, film, phys):
     """``Int (P + p_a) R dR``, the force on the spheres (film.film_force), with the film and
     contact pressures of the last ``surface_gap``."""
     n = weight.size
     if not rough(phys):
         return film_force(weight, y[:n])
-    return film_force(weight, node_block(scalars, P_FILM)) \
-        + film_force(weight, node_block(scalars, PA))
+    return film_force(weight, film.contact.p_film) + film_force(weight, film.contact.pa)
 
 
 @jit
-def energies(s, s_face, weight, phys, y, w, h, q, scalars):
+def energies(grid, phys, y, w, h, q, film):
     """Strain energy and dissipation rate of the state (film.energy_rates): for a rough film the
     strain energy of the total load ``P + p_a`` on the elastic part of ``W`` (less the permanent
     set)."""
+    s = grid.s
     n = s.size
-    p = film_pressure(y, scalars, phys)
-    strain, diss = energy_rates(s, s_face, weight, phys, y[n], p, w, h, q)
+    p = film_pressure(y, film, phys)
+    strain, diss = energy_rates(s, grid.s_face, grid.weight, phys, y[n], p, w, h, q)
     if rough(phys):
-        pa, w_set = node_block(scalars, PA), node_block(scalars, W_SET)
-        strain = strain_energy(weight, s[n - 1], p + pa, w - w_set, phys)
+        pa, w_set = film.contact.pa, film.contact.w_set
+        strain = strain_energy(grid.weight, s[n - 1], p + pa, w - w_set, phys)
     return strain, diss
 
 
 @jit
-def fluid_fraction(cells):
+def fluid_fraction(film):
     """The accepted state's liquid fraction per cell (the profile the loop saves)."""
-    return cells[THETA0]
+    return film.cavity.theta0
 
 
 @jit
-def pressure_scale(scalars):
-    """The absolute part of the pressure error scale (``new_state``)."""
-    return scalars[P_ABS]
+def pressure_scale(film):
+    """The absolute part of the pressure error scale (``state.new_film``)."""
+    return film.cavity.p_abs[0]
 
 
 @jit
-def content_history(a1, a2, y0, y1, h0, h1, cells, scalars, phys, out):
+def content_history(a1, a2, y0, y1, h0, h1, film, phys, out):
     """``a1 C(state 0) + a2 C(state 1)`` per cell (``C = rho_bar theta H``, ``film.cell_content``),
-    and the same combination of the boundary node's gap, into ``out`` (``scalars``: a rough
-    film's film pressure of the two states, whose slots hold their loads)."""
+    and the same combination of the boundary node's gap, into ``out`` (a rough film's film
+    pressure of the two states from its ``Contact``: its slots hold their loads)."""
     n = out.size
-    theta0, theta1 = cells[THETA0], cells[THETA1]
+    theta0, theta1 = film.cavity.theta0, film.cavity.theta1
     if phys[DENSITY] == CONSTANT:  # C = theta H (rho = 1)
         for i in range(n - 1):
             out[i] = a1 * (theta0[i] * h0[i]) + a2 * (theta1[i] * h1[i])
     else:
         p0, p1 = y0, y1
         if rough(phys):
-            p0, p1 = node_block(scalars, P_ACC0), node_block(scalars, P_ACC1)
+            p0, p1 = film.contact.p_acc0, film.contact.p_acc1
         for i in range(n - 1):
             out[i] = a1 * cell_content(theta0[i], h0[i], p0[i], phys)[0] \
                 + a2 * cell_content(theta1[i], h1[i], p1[i], phys)[0]
@@ -240,13 +187,14 @@ def content_history(a1, a2, y0, y1, h0, h1, cells, scalars, phys, out):
 
 
 @jit
-def start_attempt(y, marks, cells, phys):
+def start_attempt(y, film, phys):
     """A step attempt of a JFO film starts from the accepted cavity, its cells' slots at the
     floor; the Reynolds film keeps the iterate's set."""
     if phys[CAVITATION] != JFO:
         return
-    active, active0 = marks[ACTIVE], marks[ACTIVE0]
-    theta, theta0 = cells[THETA], cells[THETA0]
+    cavity = film.cavity
+    active, active0 = cavity.active, cavity.active0
+    theta, theta0 = cavity.theta, cavity.theta0
     for i in range(active.size):
         active[i] = active0[i]
         theta[i] = theta0[i]
@@ -255,28 +203,26 @@ def start_attempt(y, marks, cells, phys):
 
 
 @jit
-def contact_motion(weight, phys, bh, scalars, res):
+def contact_motion(weight, phys, bh, film, res):
     """The contact load's part of the motion row of ``film.residual``: ``bh F_a / (3 St)``, with
     the contact pressure of the last ``surface_gap`` (nothing for a smooth film)."""
     if rough(phys):
-        res[weight.size + 1] += bh * film_force(weight, node_block(scalars, PA)) \
-            / (3.0 * phys[ST])
+        res[weight.size + 1] += bh * film_force(weight, film.contact.pa) / (3.0 * phys[ST])
 
 
 @jit
-def step_residual(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, v_hist, y,
-                  marks, cells, scalars, decide, q, w, h, res):
-    """The scaled residual of the step at the iterate ``y`` (``film.residual``) into ``res``;
-    where ``decide``, the active set is decided first from it (a JFO switch moves slots to the
-    floor, so the gap ``w, h`` and the rows follow); the rows of a Reynolds cavity are replaced by
-    their constraint. ``q`` receives the face fluxes. ``w``, ``h`` (and a rough film's contact
-    and film pressures) must be ``surface_gap``'s of ``y``."""
-    n = s.size
-    p = film_pressure(y, scalars, phys)
-    theta, active = cells[THETA], marks[ACTIVE]
-    residual(s, s_face, area, weight, phys, bh, c_hist, x_hist, v_hist, y[n], y[n + 1], p, theta,
-             h, q, res)
-    contact_motion(weight, phys, bh, scalars, res)
+def step_residual(grid, phys, step, y, film, decide, q, w, h, res):
+    """The scaled residual of the step ``step`` (state.Step) at the iterate ``y``
+    (``film.residual``) into ``res``; where ``decide``, the active set is decided first from it
+    (a JFO switch moves slots to the floor, so the gap ``w, h`` and the rows follow); the rows
+    of a Reynolds cavity are replaced by their constraint. ``q`` receives the face fluxes.
+    ``w``, ``h`` (and a rough film's contact and film pressures) must be ``surface_gap``'s of
+    ``y``."""
+    n = grid.s.size
+    p = film_pressure(y, film, phys)
+    theta, active = film.cavity.theta, film.cavity.active
+    residual(grid, phys, step, y[n], y[n + 1], p, theta, h, q, res)
+    contact_motion(grid.weight, phys, step.bh, film, res)
     if not has_active_set(phys):
         return
     jfo = phys[CAVITATION] == JFO
@@ -285,15 +231,14 @@ def step_residual(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, 
             was = active.copy()
             if update_cavity_jfo(p, theta, phys, active):
                 if rough(phys):  # a switched slot holds the load at the floor
-                    pa = node_block(scalars, PA)
+                    pa = film.contact.pa
                     for i in range(n - 1):
                         if active[i] != was[i]:
                             y[i] = -phys[PI] + pa[i]
-                surface_gap(s, influence, phys, y, marks, scalars, w, h)
-                p = film_pressure(y, scalars, phys)
-                residual(s, s_face, area, weight, phys, bh, c_hist, x_hist, v_hist, y[n],
-                         y[n + 1], p, theta, h, q, res)
-                contact_motion(weight, phys, bh, scalars, res)
+                surface_gap(grid, phys, y, film, w, h)
+                p = film_pressure(y, film, phys)
+                residual(grid, phys, step, y[n], y[n + 1], p, theta, h, q, res)
+                contact_motion(grid.weight, phys, step.bh, film, res)
         else:
             update_cavity(p, res, phys, active)
     if not jfo:
@@ -301,9 +246,9 @@ def step_residual(s, s_face, area, weight, influence, phys, bh, c_hist, x_hist, 
 
 
 @jit
-def settled(marks):
+def settled(film):
     """Whether the iterate's active set is the one the factorised Jacobian was built with."""
-    active, active_lu = marks[ACTIVE], marks[ACTIVE_LU]
+    active, active_lu = film.cavity.active, film.cavity.active_lu
     for i in range(active.size):
         if active[i] != active_lu[i]:
             return False
@@ -311,50 +256,49 @@ def settled(marks):
 
 
 @jit
-def step_jacobian(s, s_face, area, weight, influence, phys, bh, y, h, marks, cells, scalars, jac,
-                  dres_dh):
+def step_jacobian(grid, phys, bh, y, h, film, jac, dres_dh):
     """The Jacobian of ``step_residual`` at ``y`` into ``jac`` (``film.jacobian``), recording the
     active set it is built with. A rough film's film pressure follows the gap where its slot is
     the load (contact.contact_slopes); its gap follows the slots through ``c K`` while the solids
     unload, and a touching JFO cavity's gap and the force through its contact
     (contact.contact_derivatives)."""
-    n = s.size
+    n = grid.s.size
+    cavity = film.cavity
     if rough(phys):
-        c, slope = scalars[LOAD_SCALE], node_block(scalars, SLOPE)
-        held = held_cells(marks, phys, n)
+        c, slope = film.contact.load_scale[0], film.contact.slope
+        held = held_cells(cavity, phys, n)
         dp_dh = np.empty(n)
         m = contact_slopes(slope, held, dp_dh)
-        p = node_block(scalars, P_FILM)
+        p = film.contact.p_film
         if m == 0 and c == 1.0:
-            jacobian(s, s_face, area, weight, influence, phys, bh, p, cells[THETA], h,
-                     marks[ACTIVE], jac, dres_dh, np.ones(n), weight, 0.0, dp_dh)
+            link = Coupling(grid.influence, np.ones(n), grid.weight, 0.0, dp_dh)
         else:
             k_eff = np.empty((n, n))
             dh_dx = np.empty(n)
             force_dp = np.empty(n)
-            force_dx = contact_derivatives(influence, weight, slope, c, held, m, k_eff, dh_dx,
-                                           force_dp)
-            jacobian(s, s_face, area, weight, k_eff, phys, bh, p, cells[THETA], h,
-                     marks[ACTIVE], jac, dres_dh, dh_dx, force_dp, force_dx, dp_dh)
+            force_dx = contact_derivatives(grid.influence, grid.weight, slope, c, held, m, k_eff,
+                                           dh_dx, force_dp)
+            link = Coupling(k_eff, dh_dx, force_dp, force_dx, dp_dh)
+        jacobian(grid, phys, bh, p, cavity.theta, h, cavity.active, link, jac, dres_dh)
     else:
-        jacobian(s, s_face, area, weight, influence, phys, bh, y[:n], cells[THETA], h,
-                 marks[ACTIVE], jac, dres_dh, np.ones(n), weight, 0.0, np.empty(0))
-    marks[ACTIVE_LU, :] = marks[ACTIVE]
+        link = Coupling(grid.influence, np.ones(n), grid.weight, 0.0, np.empty(0))
+        jacobian(grid, phys, bh, y[:n], cavity.theta, h, cavity.active, link, jac, dres_dh)
+    cavity.active_lu[:] = cavity.active
 
 
 @jit
-def mark_factorised(marks):
+def mark_factorised(film):
     """The Jacobian just built (``step_jacobian``) is the one the loop factorises."""
-    marks[ACTIVE_BASE, :] = marks[ACTIVE_LU]
+    film.cavity.active_base[:] = film.cavity.active_lu
 
 
 @jit
-def changed_slots(marks, slots):
+def changed_slots(film, slots):
     """The slots whose rows and columns differ between the factorised Jacobian and the one for
     the iterate's active set (a cell that cavitated or refilled since the factorisation), into
     ``slots`` as far as it reaches; returns their number."""
     k = 0
-    active, base = marks[ACTIVE], marks[ACTIVE_BASE]
+    active, base = film.cavity.active, film.cavity.active_base
     for i in range(active.size):
         if active[i] != base[i]:
             if k < slots.size:
@@ -364,12 +308,13 @@ def changed_slots(marks, slots):
 
 
 @jit
-def split_update(res, marks, cells, phys):
+def split_update(res, film, phys):
     """Take the Newton update of the slots that hold another unknown out of ``res``: a JFO
     cavity's slot updates its liquid fraction theta (kept >= 0: a dry cell), not ``P``."""
     if phys[CAVITATION] != JFO:
         return
-    active, theta, dtheta = marks[ACTIVE], cells[THETA], cells[DTHETA]
+    cavity = film.cavity
+    active, theta, dtheta = cavity.active, cavity.theta, cavity.dtheta
     for i in range(active.size):
         dtheta[i] = 0.0
         if active[i]:
@@ -379,7 +324,7 @@ def split_update(res, marks, cells, phys):
 
 
 @jit
-def film_change(dy, dh, y, h, marks, scalars, phys, dp):
+def film_change(dy, dh, y, h, film, phys, dp):
     """The change of the film pressure over a Newton update of the slots by ``dy`` that moved the
     gap by ``dh`` (to ``h``), and the scale it is measured against: the slots' own change and
     values for a smooth film (no copy). A rough film whose slots hold the load: ``dP = dy -
@@ -391,9 +336,10 @@ def film_change(dy, dh, y, h, marks, scalars, phys, dp):
     n = h.size
     if not rough(phys):
         return dy, y[:n]
-    held = held_cells(marks, phys, n)
-    p, pa = node_block(scalars, P_FILM), node_block(scalars, PA)
-    scale, slope = node_block(scalars, P_SCALE), node_block(scalars, SLOPE)
+    held = held_cells(film.cavity, phys, n)
+    contact = film.contact
+    p, pa = contact.p_film, contact.pa
+    scale, slope = contact.p_scale, contact.slope
     for i in range(n):
         dp[i] = dy[i]
         if not held[i]:
@@ -403,18 +349,18 @@ def film_change(dy, dh, y, h, marks, scalars, phys, dp):
 
 
 @jit
-def update_norm(norm, cells, phys, rtol):
+def update_norm(norm, film, phys, rtol):
     """The Newton norm with the fractions' updates (absolute) of ``split_update``."""
     if phys[CAVITATION] != JFO:
         return norm
-    dtheta = cells[DTHETA]
+    dtheta = film.cavity.dtheta
     for i in range(dtheta.size):
         norm = max(norm, abs(dtheta[i]) / rtol)
     return norm
 
 
 @jit
-def step_error(y, y_pred, err_fac, h, marks, scalars, phys, perr, dh, scale):
+def step_error(y, y_pred, err_fac, h, film, phys, perr, dh, scale):
     """Adjust the local error estimate of a converged step. On entry ``perr`` holds the pressure
     part ``err_fac (y - y_pred)`` and ``dh`` the gap's.
 
@@ -440,19 +386,11 @@ def step_error(y, y_pred, err_fac, h, marks, scalars, phys, perr, dh, scale):
     n = perr.size
     rough_in_time = False
     if has_active_set(phys):
-        active, active0 = marks[ACTIVE], marks[ACTIVE0]
-        open_cavity = scalars[R_EDGE] > 0.0
-        refilled = False
-        if phys[CAVITATION] == JFO:
-            for i in range(active.size):
-                refilled = refilled or (active0[i] and not active[i])
-        for i in range(active.size):
-            open_cavity = open_cavity or active[i]
-        rough_in_time = open_cavity or refilled
+        rough_in_time = _cavity_in_time(film.cavity, phys)
         if rough_in_time:
             for i in range(n):
                 perr[i] = 0.0
-        if refilled:
+        if _refilled(film.cavity, phys):
             for i in range(n):
                 dh[i] = 0.0
     kirchhoff = not isoviscous(phys) and not rough_in_time and not rough(phys)
@@ -464,7 +402,28 @@ def step_error(y, y_pred, err_fac, h, marks, scalars, phys, perr, dh, scale):
 
 
 @jit
-def record(row, s, area, weight, p, h, pmax, pmin, marks, cells, scalars, phys, floor_fraction):
+def _refilled(cavity, phys):
+    """Whether a JFO cavity's cell refilled in this step (its pressure jumps: ``step_error``)."""
+    refilled = False
+    if phys[CAVITATION] == JFO:
+        active, active0 = cavity.active, cavity.active0
+        for i in range(active.size):
+            refilled = refilled or (active0[i] and not active[i])
+    return refilled
+
+
+@jit
+def _cavity_in_time(cavity, phys):
+    """Whether the pressure is not smooth in time over this step (``step_error``): a cavity open
+    at its start or end, or a JFO cell that refilled in it."""
+    open_cavity = cavity.r_edge[0] > 0.0
+    for i in range(cavity.active.size):
+        open_cavity = open_cavity or cavity.active[i]
+    return open_cavity or _refilled(cavity, phys)
+
+
+@jit
+def record(row, grid, p, h, pmax, pmin, film, phys, floor_fraction):
     """The model's columns of the series row of an accepted state (cavity radius and void volume,
     work against the floor, compression energy; contact force, asperity energy and the energy
     lost in the solids), every one on every row, and the error scale's update from the largest
@@ -472,21 +431,19 @@ def record(row, s, area, weight, p, h, pmax, pmin, marks, cells, scalars, phys, 
     terminal events see: the cavity's, tiny but positive for a JFO cavity of axis cells alone
     (whose edge radius is zero); ``events.HELD`` while a rough film holds its contact and
     ``events.ENDED`` when it rests on its asperities (contact.contact_state)."""
-    theta0 = cells[THETA0]
-    row[_E_C] = compression_work(area, p, h, theta0, phys)
-    row[_W_VOID] = scalars[WORKED]
+    cavity, contact = film.cavity, film.contact
+    row[_E_C] = compression_work(grid.area, p, h, cavity.theta0, phys)
+    row[_W_VOID] = cavity.worked[0]
     row[_F_A] = 0.0
     row[_E_A] = 0.0
-    row[_LOST] = scalars[SOLID_LOST]
+    row[_LOST] = contact.solid_lost[0]
     # a rough film near contact holds the coupled phase as a cavity does, and ends it at rest
     state = FREE
     if rough(phys):
-        row[_F_A] = film_force(weight, node_block(scalars, PA))
-        row[_E_A] = asperity_work(weight, h, scalars[LOAD_SCALE], node_block(scalars, H_SET),
-                                  phys)
+        row[_F_A] = film_force(grid.weight, contact.pa)
+        row[_E_A] = asperity_work(grid.weight, h, contact.load_scale[0], contact.h_set, phys)
         state = contact_state(h, row[_V], phys)
-    r_event = cavity_columns(row, s, area, p, h, pmax, pmin, marks, cells, scalars, phys,
-                             floor_fraction)
+    r_event = cavity_columns(row, grid, p, h, pmax, pmin, cavity, phys, floor_fraction)
     if state == REST:
         return ENDED
     if state == HOLD:
@@ -495,7 +452,7 @@ def record(row, s, area, weight, p, h, pmax, pmin, marks, cells, scalars, phys, 
 
 
 @jit
-def cavity_columns(row, s, area, p, h, pmax, pmin, marks, cells, scalars, phys, floor_fraction):
+def cavity_columns(row, grid, p, h, pmax, pmin, cavity, phys, floor_fraction):
     """The cavity's columns of the series row (radius and void volume; 0 for a film without a
     floor) and the error scale's update (``record``); returns the radius the terminal events
     see."""
@@ -503,22 +460,23 @@ def cavity_columns(row, s, area, p, h, pmax, pmin, marks, cells, scalars, phys, 
         row[_R_CAV] = 0.0
         row[_V_VOID] = 0.0
         return 0.0
-    active0, h_onset = marks[ACTIVE0], cells[H_ONSET]
-    r_cav = cavity_edge(s, p, active0, phys)
+    area = grid.area
+    active0, h_onset = cavity.active0, cavity.h_onset
+    r_cav = cavity_edge(grid.s, p, active0, phys)
     jfo = phys[CAVITATION] == JFO
     v_void = 0.0
     if jfo:
-        v_void = jfo_void(area, cells[THETA0], h, active0)
+        v_void = jfo_void(area, cavity.theta0, h, active0)
     else:
         for i in range(active0.size):
             if active0[i]:
                 v_void += area[i] * (h[i] - h_onset[i])
     row[_R_CAV] = r_cav
     row[_V_VOID] = v_void
-    scalars[R_EDGE] = r_cav
-    scalars[P_SEEN] = max(scalars[P_SEEN], pmax, -pmin)
+    cavity.r_edge[0] = r_cav
+    cavity.p_seen[0] = max(cavity.p_seen[0], pmax, -pmin)
     if r_cav > 0.0:
-        scalars[P_ABS] = max(scalars[P_ABS], floor_fraction * scalars[P_SEEN])
+        cavity.p_abs[0] = max(cavity.p_abs[0], floor_fraction * cavity.p_seen[0])
     r_event = r_cav
     if jfo:
         for i in range(active0.size):
@@ -528,61 +486,62 @@ def cavity_columns(row, s, area, p, h, pmax, pmin, marks, cells, scalars, phys, 
 
 
 @jit
-def accept(s, area, weight, y0, w, h0, h1, q, dt, marks, cells, scalars, phys):
+def accept(grid, y0, w, h0, h1, q, dt, film, phys):
     """The model's state after an accepted step (``y0`` its solution, ``w`` and ``h0`` its
     deflection and gap, ``h1`` the previous one's, ``q`` its face fluxes): the work against the
     floor (JFO: ``Pi dV_void`` exactly, film.jfo_void; Reynolds: film.void_work), the fractions'
     history, where new cavity cells opened, and the accepted cavity; for a rough film, the onset
     of the solids' unloading (``unload``) and the history of its film pressure."""
     if rough(phys):
-        unload(s, weight, y0, w, h0, scalars, phys)
-        node_block(scalars, P_ACC1)[:] = node_block(scalars, P_ACC0)
-        node_block(scalars, P_ACC0)[:] = node_block(scalars, P_FILM)
+        contact = film.contact
+        unload(grid, y0, w, h0, contact, phys)
+        contact.p_acc1[:] = contact.p_acc0
+        contact.p_acc0[:] = contact.p_film
     if not has_active_set(phys):
         return
-    active, active0 = marks[ACTIVE], marks[ACTIVE0]
-    theta, theta0, theta1 = cells[THETA], cells[THETA0], cells[THETA1]
-    h_onset, q_prev = cells[H_ONSET], cells[Q_PREV]
+    cavity = film.cavity
+    active, active0 = cavity.active, cavity.active0
+    theta, theta0, theta1 = cavity.theta, cavity.theta0, cavity.theta1
+    area = grid.area
     if phys[CAVITATION] == JFO:
-        scalars[WORKED] += 2.0 * phys[PI] * (jfo_void(area, theta, h0, active)
-                                             - jfo_void(area, theta0, h1, active0)) \
+        cavity.worked[0] += 2.0 * phys[PI] * (jfo_void(area, theta, h0, active)
+                                              - jfo_void(area, theta0, h1, active0)) \
             / (3.0 * phys[ST])
     else:
-        scalars[WORKED] += void_work(area, h0, h1, q, q_prev, dt, active, phys)
+        cavity.worked[0] += void_work(area, h0, h1, q, cavity.q_prev, dt, active, phys)
     theta1[:] = theta0
     theta0[:] = theta
     for i in range(active.size):
         if active[i] and not active0[i]:
-            h_onset[i] = h1[i]
+            cavity.h_onset[i] = h1[i]
     active0[:] = active
-    q_prev[:] = q
+    cavity.q_prev[:] = q
 
 
 @jit
-def unload(s, weight, y0, w, h, scalars, phys):
+def unload(grid, y0, w, h, contact, phys):
     """The losses in the solids (model/contact.py): once the asperities have carried load on
     approach (``V > 0``), the first accepted state with ``V <= 0`` starts the unloading along
     ``c = e_dry^2`` through its load ``T_set = P + p_a``, with the permanent set ``(1 - c) W``,
     and the asperities' from its gap ``H_set``; the strain and asperity energy the solids will
     not return, ``(1 - c) (E_s + E_a)``, is lost then."""
-    if phys[E_DRY] == 1.0 or scalars[LOAD_SCALE] != 1.0:
+    if phys[E_DRY] == 1.0 or contact.load_scale[0] != 1.0:
         return
-    n = s.size
-    pa, p = node_block(scalars, PA), node_block(scalars, P_FILM)
-    contact = False
+    n = grid.s.size
+    pa, p = contact.pa, contact.p_film
+    touching = False
     for i in range(n):
-        contact = contact or pa[i] > 0.0
-    if contact and y0[n + 1] > 0.0:
-        scalars[TOUCHED] = 1.0
-    if scalars[TOUCHED] == 0.0 or y0[n + 1] > 0.0:
+        touching = touching or pa[i] > 0.0
+    if touching and y0[n + 1] > 0.0:
+        contact.touched[0] = 1.0
+    if contact.touched[0] == 0.0 or y0[n + 1] > 0.0:
         return
     c = phys[E_DRY] * phys[E_DRY]
-    t_set, w_set = node_block(scalars, T_SET), node_block(scalars, W_SET)
-    h_set = node_block(scalars, H_SET)
+    t_set, w_set, h_set = contact.t_set, contact.w_set, contact.h_set
     for i in range(n):
         t_set[i] = p[i] + pa[i]
         w_set[i] = (1.0 - c) * w[i]
         h_set[i] = h[i]
-    scalars[SOLID_LOST] += (1.0 - c) * (strain_energy(weight, s[n - 1], t_set, w, phys)
-                                        + asperity_work(weight, h, 1.0, h_set, phys))
-    scalars[LOAD_SCALE] = c
+    contact.solid_lost[0] += (1.0 - c) * (strain_energy(grid.weight, grid.s[n - 1], t_set, w, phys)
+                                          + asperity_work(grid.weight, h, 1.0, h_set, phys))
+    contact.load_scale[0] = c
