@@ -151,81 +151,103 @@ def run_sweep(sweep, *, store=None, runner: str | None = DEFAULT_RUNNER, workers
     if warm_up is None:
         warm_up = solve is solve_scene
     overrides = dict(sweep.overrides)
-    # the executor's settings and a scheduler file are checked before the store is touched
-    address = check_runner(runner, workers, address, scheduler_file, connect_seconds,
-                           wait_workers)
-    if address is not None:  # the scheduler answers before any store or lock is made
-        target = address + (f" (from {scheduler_file})" if scheduler_file else "")
-        if progress is not None:
-            print(f"checking the dask scheduler at {target}...", file=progress, flush=True)
-        probe_scheduler(address, connect_seconds, target)
+    address = _check_executor(runner, workers, address, scheduler_file, connect_seconds,
+                              wait_workers, progress)
     runner_kw = {} if wait_workers is None else {"wait_workers": wait_workers}
     if connect_seconds is not None:
         runner_kw["connect_seconds"] = connect_seconds
     with SweepStore.open(sweep, store, add_sweep=add_sweep, **kwargs) as st:
         summary = Summary(name=sweep.name, store=st.shown, shape=sweep.shape,
                           axes=sweep.axis_names)
-        summary.repaired = len(st.damage)
-        summary.repaired_coords = tuple(sorted(st.damage.coords))
-        summary.journal_skipped = st.journal_skipped
-        if st.damage and progress is not None:
-            print(f"store {st.shown} is damaged: {st.damage_text}; "
-                  "those cells are computed again", file=progress, flush=True)
-        if progress is not None and sweep.n_scenes >= PLANNING_NOTE:
-            print(f"store {st.shown} ready; listing the scenes it lacks...", file=progress,
-                  flush=True)
-        cells = st.cells(sweep)
-
-        def plan():
-            status = st.status_of(cells)
-            rerun = (status == 0) | (retry_failed & (status >= 2))
-            return [c for c, r in zip(cells, rerun) if r]
-
-        todo = plan()
-        if todo:
-            st.require_writable()  # before any solve, not at the first merge
-            late = st.load_all()  # the variables planning did not need, before any solve
-            if late:  # cells damaged in a way only decoding finds: computed again too
-                summary.repaired += late
-                todo = plan()
-        summary.scenes, summary.cached = len(cells), len(cells) - len(todo)
+        cells, todo = _plan(st, sweep, summary, retry_failed, progress)
         if todo and sweep.fast_path and solve is solve_scene:
             solve = _master_solve(sweep, progress)
         if todo:
             jobs = [(cell, (st.scene(cell), sweep.accuracy, overrides)) for cell in todo]
-            bar = Progress(len(jobs), stream=progress)
             warm_fn = _Warm(sweep.accuracy, overrides) if warm_up else None
             if warm_up and progress is not None:  # the warm-up compiles on a fresh install
                 from ..environment import compile_notice
 
                 compile_notice(progress)
-            try:
-                with open_runner(choose_runner(runner, len(jobs)), workers, address, None,
-                                 warm=warm_fn,
-                                 stream=progress, **runner_kw) as run:
-                    summary.runner = run.description
-                    if progress is not None:
-                        print(f"{len(jobs)} scenes to compute ({summary.cached} cached) on "
-                              f"{run.description}", file=progress, flush=True)
-                    bar.start = time.monotonic()
-                    for cell, rec in run.unordered(solve, jobs):
-                        if isinstance(rec, BaseException):
-                            rec = {"status": "error", "model": "unknown",
-                                   "message": f"task failed: {type(rec).__name__}: {rec}"}
-                        st.record(cell, rec)
-                        summary.computed += 1
-                        summary.computed_failed += rec.get("status") != "ok"
-                        summary.rigid_computed += rec.get("model") == "rigid"
-                        bar.update(rec.get("status"), rec.get("model"))
-            finally:
-                bar.close()
-            # what the store kept, not what the workers said (it turns a record from a worker
-            # with another installation into an error)
-            stored = st.status_of([cell for cell, _ in jobs])
-            summary.computed_failed = int(np.sum(stored >= 2))
+            runner_at = open_runner(choose_runner(runner, len(jobs)), workers, address, None,
+                                    warm=warm_fn, stream=progress, **runner_kw)
+            _compute(st, summary, jobs, solve, runner_at, progress)
         _count(summary, st, cells)
     summary.wall_s = time.monotonic() - t0
     return summary
+
+
+def _check_executor(runner, workers, address, scheduler_file, connect_seconds, wait_workers,
+                    progress):
+    """The executor's settings and a scheduler file, checked before the store is touched; a
+    scheduler must answer before any store or lock is made. Returns its address (None:
+    local)."""
+    address = check_runner(runner, workers, address, scheduler_file, connect_seconds,
+                           wait_workers)
+    if address is not None:
+        target = address + (f" (from {scheduler_file})" if scheduler_file else "")
+        if progress is not None:
+            print(f"checking the dask scheduler at {target}...", file=progress, flush=True)
+        probe_scheduler(address, connect_seconds, target)
+    return address
+
+
+def _plan(st, sweep, summary: Summary, retry_failed: bool, progress):
+    """``(cells, todo)``: every cell of the sweep and those the store lacks (or holds as failed,
+    with ``retry_failed``); damaged cells are computed again and counted in ``summary``."""
+    summary.repaired = len(st.damage)
+    summary.repaired_coords = tuple(sorted(st.damage.coords))
+    summary.journal_skipped = st.journal_skipped
+    if st.damage and progress is not None:
+        print(f"store {st.shown} is damaged: {st.damage_text}; "
+              "those cells are computed again", file=progress, flush=True)
+    if progress is not None and sweep.n_scenes >= PLANNING_NOTE:
+        print(f"store {st.shown} ready; listing the scenes it lacks...", file=progress,
+              flush=True)
+    cells = st.cells(sweep)
+
+    def lacking():
+        status = st.status_of(cells)
+        rerun = (status == 0) | (retry_failed & (status >= 2))
+        return [c for c, r in zip(cells, rerun) if r]
+
+    todo = lacking()
+    if todo:
+        st.require_writable()  # before any solve, not at the first merge
+        late = st.load_all()  # the variables planning did not need, before any solve
+        if late:  # cells damaged in a way only decoding finds: computed again too
+            summary.repaired += late
+            todo = lacking()
+    summary.scenes, summary.cached = len(cells), len(cells) - len(todo)
+    return cells, todo
+
+
+def _compute(st, summary: Summary, jobs, solve, runner_at, progress) -> None:
+    """Solve ``jobs`` (``[(cell, args)]``) on the runner ``runner_at`` (an ``open_runner``
+    context) and record each in the store as it finishes, counting into ``summary``."""
+    bar = Progress(len(jobs), stream=progress)
+    try:
+        with runner_at as run:
+            summary.runner = run.description
+            if progress is not None:
+                print(f"{len(jobs)} scenes to compute ({summary.cached} cached) on "
+                      f"{run.description}", file=progress, flush=True)
+            bar.start = time.monotonic()
+            for cell, rec in run.unordered(solve, jobs):
+                if isinstance(rec, BaseException):
+                    rec = {"status": "error", "model": "unknown",
+                           "message": f"task failed: {type(rec).__name__}: {rec}"}
+                st.record(cell, rec)
+                summary.computed += 1
+                summary.computed_failed += rec.get("status") != "ok"
+                summary.rigid_computed += rec.get("model") == "rigid"
+                bar.update(rec.get("status"), rec.get("model"))
+    finally:
+        bar.close()
+    # what the store kept, not what the workers said (it turns a record from a worker with
+    # another installation into an error)
+    stored = st.status_of([cell for cell, _ in jobs])
+    summary.computed_failed = int(np.sum(stored >= 2))
 
 
 def check_store_name(path, label: str = "store") -> None:

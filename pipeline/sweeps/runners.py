@@ -361,47 +361,56 @@ def open_runner(kind: str | None = DEFAULT_RUNNER, workers: int | None = None,
     """
     address = check_runner(kind, workers, address, scheduler_file, connect_seconds,
                            wait_workers)
-    local = address is None
     stream = sys.stderr if stream is None else stream
     if warm is not None:
         warm()  # compile once, here: writes the on-disk numba cache the workers will load
-    if local and kind == "serial":
+    if address is not None:
+        target = address + (f" (from {scheduler_file})" if scheduler_file else "")
+        with _scheduler_runner(address, target, workers, warm, wait_workers, stream,
+                               connect_seconds) as run:
+            yield run
+    elif kind == "serial":
         yield Runner("serial (this process)")
-        return
-    if local and kind == "threads":
+    elif kind == "threads":
         with _thread_runner(workers or default_workers()) as run:
             yield run
-        return
+    else:
+        with _cluster_runner(workers or default_workers(), warm) as run:
+            yield run
 
+
+@contextmanager
+def _scheduler_runner(address, target, workers, warm, wait_workers, stream, connect_seconds):
+    """A runner on an existing dask scheduler at ``address`` (``target``: how it was named)."""
+    if stream is not None:
+        print(f"waiting for the dask scheduler at {target} (up to {connect_seconds:g} s)...",
+              file=stream, flush=True)
+    # when the scheduler goes away, the client logs every failed reconnect and every closed
+    # comm with a traceback (before the loss reaches this thread); the runner reports it as
+    # one line (SchedulerLost). Task failures still arrive as records.
+    _quiet_dask(("distributed.client", "distributed.comm", "distributed.core",
+                 "distributed.batched", "tornado.application", "asyncio"),
+                level=logging.CRITICAL)
+    probe_scheduler(address, connect_seconds, target)
+    client = _connect(address, connect_seconds, target)
+    try:
+        # at least one worker: a scheduler without workers would take the scenes and never
+        # run them
+        _wait_for_workers(client, workers or 1, wait_workers, stream)
+        yield _dask_runner(client, f"dask scheduler {client.scheduler.address}", warm)
+    except BaseException:
+        _quiet_dask()  # closing a client of a lost scheduler logs tracebacks
+        _close_quietly(client)
+        raise
+    else:
+        client.close()
+
+
+@contextmanager
+def _cluster_runner(n: int, warm):
+    """A runner on a local dask cluster of ``n`` single-threaded worker processes."""
     from dask.distributed import Client, LocalCluster
 
-    if not local:
-        target = address + (f" (from {scheduler_file})" if scheduler_file else "")
-        if stream is not None:
-            print(f"waiting for the dask scheduler at {target} (up to {connect_seconds:g} s)...",
-                  file=stream, flush=True)
-        # when the scheduler goes away, the client logs every failed reconnect and every closed
-        # comm with a traceback (before the loss reaches this thread); the runner reports it as
-        # one line (SchedulerLost). Task failures still arrive as records.
-        _quiet_dask(("distributed.client", "distributed.comm", "distributed.core",
-                     "distributed.batched", "tornado.application", "asyncio"),
-                    level=logging.CRITICAL)
-        probe_scheduler(address, connect_seconds, target)
-        client = _connect(address, connect_seconds, target)
-        try:
-            # at least one worker: a scheduler without workers would take the scenes and never
-            # run them
-            _wait_for_workers(client, workers or 1, wait_workers, stream)
-            yield _dask_runner(client, f"dask scheduler {client.scheduler.address}", warm)
-        except BaseException:
-            _quiet_dask()  # closing a client of a lost scheduler logs tracebacks
-            _close_quietly(client)
-            raise
-        else:
-            client.close()
-        return
-
-    n = workers or default_workers()
     # no dashboard; the scheduler still serves a small HTTP endpoint, on port 8787 unless told
     # otherwise, and warns when another cluster holds that port: use a free local port instead
     with _workers_ignore_sigint():
