@@ -32,7 +32,7 @@ import numpy as np
 from .model import outer_flow
 
 __all__ = ["OuterFlow", "DEFAULT", "resistance_integral", "handover_defect", "far_restitution",
-           "history_coefficient", "history_restitution"]
+           "history_coefficient", "history_restitution", "outer_tables", "OuterTables"]
 
 X0_OVER_A = 0.01  # the scene layer's default near-field start (docs/scenes.md)
 X_REF_OVER_A = 0.1  # where e_far reads the speeds by default (docs/model.md says why)
@@ -224,7 +224,7 @@ def history_coefficient(stokes: float, density_ratio: float) -> float:
     return 3.0 / math.sqrt(2.0 * math.pi) * math.sqrt(density_ratio / stokes)
 
 
-class _Tables:
+class OuterTables:
     """``R(x)``, ``C(x)`` and ``C'(x)`` on a log grid of the gap (``x/a`` from 1e-3 to 100),
     interpolated in ``ln x`` (``x R``, ``C`` smooth there; 400 points a decade: 1e-7 relative)."""
 
@@ -235,15 +235,25 @@ class _Tables:
         self.c = np.array([outer_flow.added_mass(geometry, g, ratios=ratios) for g in gaps])
         self.dc = np.gradient(self.c, self.u) / gaps
 
+        # plain lists and the uniform step: one lookup is called thousands of times per outer
+        # phase (np.interp on a scalar costs ~10x this)
+        self._rows = list(zip(self.xr.tolist(), self.c.tolist(), self.dc.tolist()))
+        self._u0, self._du = float(self.u[0]), float(self.u[1] - self.u[0])
+
     def __call__(self, gap):
-        u = math.log(gap)
-        return (np.interp(u, self.u, self.xr) / gap, np.interp(u, self.u, self.c),
-                np.interp(u, self.u, self.dc))
+        """``(R, C, dC/d(x/a))`` at ``x/a = gap``, linear in ``ln x`` between the nodes
+        (constant beyond the ends, as ``np.interp``)."""
+        w = (math.log(gap) - self._u0) / self._du
+        k = min(max(int(math.floor(w)), 0), len(self._rows) - 2)
+        w = min(max(w - k, 0.0), 1.0)
+        (r0, c0, d0), (r1, c1, d1) = self._rows[k], self._rows[k + 1]
+        return ((r0 + w * (r1 - r0)) / gap, c0 + w * (c1 - c0), d0 + w * (d1 - d0))
 
 
 @functools.lru_cache(maxsize=4)
-def _tables(geometry: str, ratios=outer_flow.UNIT_RATIOS) -> _Tables:
-    return _Tables(geometry, ratios)
+def outer_tables(geometry: str, ratios=outer_flow.UNIT_RATIOS) -> OuterTables:
+    """The ``OuterTables`` of ``geometry`` (cached: built once per process and shape)."""
+    return OuterTables(geometry, ratios)
 
 
 def _history_step(times, speeds, t_new):
@@ -330,7 +340,7 @@ def history_restitution(result, outer=None, coefficient=None):
         return 0.0
     stokes, phi = result.physics.St, outer.density_ratio
     b = history_coefficient(stokes, phi) if coefficient is None else coefficient
-    tables = _tables(outer.geometry, outer.ratios)
+    tables = outer_tables(outer.geometry, outer.ratios)
     near = near_field_history(result, outer.x0_over_a)
     if near is None:
         return 0.0
