@@ -171,7 +171,9 @@ def test_whole_trajectory_energy_closes():
                               "added_mass_handover")) >= 0.0
     assert 0.01 * a < tr.rebound_height < 20 * a
     assert all(t1 > t0 for t0, t1 in zip(tr.t, tr.t[1:]))
-    assert tr.gap[tr.phases["departure"]] == pytest.approx(0.01 * a, rel=1e-9)
+    # the near field's last sample is the hand-back at x0, the departure's first lies beyond
+    k = tr.phases["departure"]
+    assert tr.gap[k - 1] == pytest.approx(0.01 * a, rel=1e-9) and tr.gap[k] > 0.01 * a
 
 
 def test_the_reading_returns_a_known_speed():
@@ -197,3 +199,56 @@ def test_the_reading_returns_a_known_speed():
     assert np.allclose(np.diff(ft), 3e-3 / (tj.FRAMES_PER_WINDOW * u_c))
     # no samples before the contact: no approach speed
     assert math.isnan(tj.observed_restitution(t2, depart, 3e-3, x_r)[0])
+
+
+# ---- ehd scene --trajectory -----------------------------------------------------------------
+
+def _cli(*args):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "pipeline.cli", "scene", *args],
+                          capture_output=True, text=True, timeout=900)
+
+
+GLYCEROL = "examples/steel_ball_glass_wall_glycerol.toml"
+
+
+@pytest.mark.parametrize("args, needle", [
+    (["--release-gap-over-a", "0.005"], "release_gap = 7.5e-06 m: must lie beyond the near-field"),
+    (["--release-gap", "0 m"], "release_gap"),
+    (["--release-gap-over-a", "200"], "at most 100 a = 0.15 m"),
+    (["--release-speed", "-1 m/s"], "release_speed"),
+    (["--release-speed", "2 m/s", "--drag-law", "stokes"], "drag_law = 'stokes': the Reynolds"),
+    (["--release-gap", "1 cm", "--release-gap-over-a", "3"], "not both"),
+])
+def test_cli_bad_release_exits_2_with_one_line(args, needle, tmp_path):
+    out = _cli(GLYCEROL, "--trajectory", str(tmp_path / "t.csv"), *args)
+    assert out.returncode == 2, out.stderr
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and needle in lines[0] and "Traceback" not in out.stderr
+    assert not (tmp_path / "t.csv").exists()
+
+
+def test_cli_trajectory_of_a_bouncing_sphere(tmp_path):
+    # Gondret et al.'s St 152 run settling from 40 a: the CSV (t_s, gap_m, ...), the figure and
+    # the JSON keys of the contract; the arriving speed is the scene's v0
+    import csv
+    import json
+
+    path = tmp_path / "t.csv"
+    out = _cli("--material1", "chrome_steel", "--radius1", "1.5 mm", "--wall", "--material2",
+               "glass", "--fluid", "silicone_oil_11cst", "--v0", "0.585 m/s", "--accuracy",
+               "fast", "--trajectory", str(path), "--release-gap-over-a", "40", "--json",
+               "--plot", str(tmp_path / "fig"))
+    assert out.returncode in (0, 1), out.stderr
+    d = json.loads(out.stdout)
+    rows = list(csv.DictReader(path.open()))
+    assert {"t_s", "gap_m", "speed_m_per_s", "phase"} <= set(rows[0])
+    gaps = [float(r["gap_m"]) for r in rows]
+    assert gaps[0] == pytest.approx(40 * 1.5e-3, rel=1e-12)
+    assert d["drag_law"] == "schiller-naumann" and d["release_speed_is_settling"]
+    assert d["inputs"]["v0_m_per_s"] == pytest.approx(d["arrival_speed_m_per_s"], rel=1e-12)
+    assert 0.0 < d["e_observed"] < 1.0 and d["rebound_height_m"] == pytest.approx(
+        max(gaps[gaps.index(min(gaps)):]), rel=1e-12)
+    assert (tmp_path / "fig" / "trajectory.png").exists()

@@ -252,10 +252,20 @@ def cmd_scene(args) -> int:
     from ..cli_shared import check_output_paths, numerics_overrides
 
     check_output_paths(plot=args.plot)
+    from .trajectory import trajectory_asked
+
+    whole = None
     try:
         # profiles only for the figures: the pressure extremes come from the solver
-        result = run_scene(scene, accuracy=args.accuracy, save_profiles=bool(args.plot),
-                           **numerics_overrides(args))
+        if trajectory_asked(args):  # the scene at the speed its release arrives with
+            from .trajectory import run_trajectory
+
+            result, *whole = run_trajectory(scene, args, args.accuracy,
+                                            save_profiles=bool(args.plot),
+                                            **numerics_overrides(args))
+        else:
+            result = run_scene(scene, accuracy=args.accuracy, save_profiles=bool(args.plot),
+                               **numerics_overrides(args))
     except ValueError as exc:
         raise _usage_error(str(exc)) from None
     except ArithmeticError as exc:  # a numerical failure inside the solver: report, no traceback
@@ -270,6 +280,10 @@ def cmd_scene(args) -> int:
     if reason:  # an overflow is no result: a failed scene with its reason
         d.update(status="error", message=reason)
         failed = True
+    if whole:
+        from .trajectory import write_trajectory
+
+        d.update(write_trajectory(whole, args, failed))
     if args.json:
         print(json.dumps(d))
         for w in d["warnings"]:
@@ -448,6 +462,9 @@ def _build_scene(sub) -> None:
                    help="write the scene's figures (PNG and PDF) into DIR")
     p.add_argument("--strict", action="store_true",
                    help="exit 1 when any validity check warns")
+    from .trajectory import add_trajectory_flags
+
+    add_trajectory_flags(p)
     p.set_defaults(func=cmd_scene)
 
 
