@@ -226,7 +226,11 @@ def history_coefficient(stokes: float, density_ratio: float) -> float:
 
 class OuterTables:
     """``R(x)``, ``C(x)`` and ``C'(x)`` on a log grid of the gap (``x/a`` from 1e-3 to 100),
-    interpolated in ``ln x`` (``x R``, ``C`` smooth there; 400 points a decade: 1e-7 relative)."""
+    interpolated in ``ln x`` (``x R``, ``C`` smooth there) by cubic Hermite polynomials with the
+    nodes' slopes from ``np.gradient`` (400 points a decade: 1e-7 relative or better). Hermite
+    rather than linear: its first derivative is continuous, so an adaptive integrator
+    (solver/trajectory.py) is not held to one step per node by the kinks of a linear
+    interpolant (38 steps instead of 426 from 100 a down to 0.01 a, measured)."""
 
     def __init__(self, geometry: str, ratios=outer_flow.UNIT_RATIOS):
         self.u = np.linspace(math.log(1e-3), math.log(MAX_OVER_A), 2001)
@@ -234,20 +238,24 @@ class OuterTables:
         self.xr = np.array([g * outer_flow.resistance(geometry, g, ratios=ratios) for g in gaps])
         self.c = np.array([outer_flow.added_mass(geometry, g, ratios=ratios) for g in gaps])
         self.dc = np.gradient(self.c, self.u) / gaps
-
         # plain lists and the uniform step: one lookup is called thousands of times per outer
         # phase (np.interp on a scalar costs ~10x this)
-        self._rows = list(zip(self.xr.tolist(), self.c.tolist(), self.dc.tolist()))
+        values = (self.xr, self.c, self.dc)
+        slopes = [np.gradient(v, self.u) for v in values]
+        self._rows = list(zip(*(v.tolist() for v in values), *(d.tolist() for d in slopes)))
         self._u0, self._du = float(self.u[0]), float(self.u[1] - self.u[0])
 
     def __call__(self, gap):
-        """``(R, C, dC/d(x/a))`` at ``x/a = gap``, linear in ``ln x`` between the nodes
-        (constant beyond the ends, as ``np.interp``)."""
+        """``(R, C, dC/d(x/a))`` at ``x/a = gap``, cubic Hermite in ``ln x`` between the nodes
+        (the end nodes' values beyond the ends)."""
         w = (math.log(gap) - self._u0) / self._du
         k = min(max(int(math.floor(w)), 0), len(self._rows) - 2)
-        w = min(max(w - k, 0.0), 1.0)
-        (r0, c0, d0), (r1, c1, d1) = self._rows[k], self._rows[k + 1]
-        return ((r0 + w * (r1 - r0)) / gap, c0 + w * (c1 - c0), d0 + w * (d1 - d0))
+        s = min(max(w - k, 0.0), 1.0)
+        p, q = self._rows[k], self._rows[k + 1]
+        h00, h01 = (1.0 + 2.0 * s) * (1.0 - s) ** 2, s * s * (3.0 - 2.0 * s)
+        h10, h11 = s * (1.0 - s) ** 2 * self._du, s * s * (s - 1.0) * self._du
+        xr, c, dc = (h00 * p[i] + h10 * p[i + 3] + h01 * q[i] + h11 * q[i + 3] for i in range(3))
+        return xr / gap, c, dc
 
 
 @functools.lru_cache(maxsize=4)

@@ -293,8 +293,8 @@ def trajectory(outer: Outer, release_gap: float, release_speed: float, x0: float
         # booked, the end's potential energy is taken at x0)
         energy["end"] = outer.weight * x0 + 0.5 * mass0 * share["kinetic"] * v0 * v0
     return Trajectory(t=np.concatenate(t), gap=np.concatenate(gap), speed=np.concatenate(speed),
-                      phases=phases, v0=v0, x0=x0, collision=c, rebound_height=rebound, energy=energy,
-                      status=c.status)
+                      phases=phases, v0=v0, x0=x0, collision=c, rebound_height=rebound,
+                      energy=energy, status=c.status)
 
 
 def _energy(outer, gap, speed):
@@ -325,7 +325,7 @@ def check_release(outer: Outer, release_gap: float, release_speed: float, x0: fl
 
 
 # ---- the restitution as experiments read it (docs/model.md, "Reading e as experiments do") -------
-READ_WINDOW_OVER_A = 2.0  # the samples fitted: gaps up to one diameter (2 a) from the wall
+READ_WINDOW_OVER_A = 3.0  # the samples fitted: gaps up to 1.5 diameters (3 a) from the wall
 READ_GAP_OVER_A = 0.1  # where the fitted speeds are compared
 FRAMES_PER_WINDOW = 20  # a computed trajectory is sampled like a film: 20 frames across the window
 
@@ -359,13 +359,18 @@ def fitted_speed(t, gap, window, reading_gap):
 
 def observed_restitution(t, gap, window, reading_gap):
     """``(u_in, u_out, e, rebound)`` read from a sampled trajectory as experiments read theirs:
-    split at the lowest gap (the first contact), fit each side over the gaps up to ``window``
-    (the departure only up to the top of the bounce, its largest gap), compare the fitted speeds
-    at ``reading_gap``: ``e = u_out / u_in``; ``rebound`` the largest gap after the contact.
-    ``u_in`` NaN when there are no approach samples (then ``e`` is too)."""
+    split at the first local minimum of the gap (the first contact; that sample itself, which
+    may lie on either side of a contact between two frames, is left out of both fits), fit each
+    side over the gaps up to ``window`` (the departure only up to the top of the bounce, its
+    largest gap), compare the fitted speeds at ``reading_gap``: ``e = u_out / u_in``;
+    ``rebound`` the largest gap after the contact (0 when it never rises again). ``u_in`` NaN
+    when there are fewer than 3 approach samples (then ``e`` is too)."""
     t, gap = np.asarray(t, dtype=float), np.asarray(gap, dtype=float)
-    k = int(np.argmin(gap))
+    rising = np.nonzero(np.diff(gap) > 0.0)[0]
+    if rising.size == 0:  # it never rises: no bounce
+        return fitted_speed(t, gap, window, reading_gap), 0.0, 0.0, 0.0
+    k = int(rising[0])
     top = k + int(np.argmax(gap[k:]))
-    u_in = fitted_speed(t[:k + 1], gap[:k + 1], window, reading_gap)
-    u_out = fitted_speed(t[k:top + 1], gap[k:top + 1], window, reading_gap) if top > k else 0.0
-    return u_in, u_out, u_out / u_in, float(gap[top] if top > k else 0.0)
+    u_in = fitted_speed(t[:k], gap[:k], window, reading_gap)
+    u_out = fitted_speed(t[k + 1:top + 1], gap[k + 1:top + 1], window, reading_gap)
+    return u_in, u_out, u_out / u_in, float(gap[top])
