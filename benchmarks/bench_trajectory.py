@@ -163,7 +163,7 @@ def figure(data: dict, curves: dict, out: Path) -> None:
                 # time from the first contact; the measured points shifted so that their first
                 # rebound point lies on the computed departure (the files' origin is arbitrary)
                 k0 = int(np.argmin(tr.gap))
-                first = int(np.argmin(gap))
+                first = int(np.nonzero(np.diff(gap) > 0.0)[0][0])  # the first contact
                 dep_t, dep_x = tr.t[k0:] - tr.t[k0], tr.gap[k0:]
                 top = int(np.argmax(dep_x))
                 shift = np.interp(gap[first], dep_x[:top + 1], dep_t[:top + 1]) - t[first] \
