@@ -252,3 +252,35 @@ def test_cli_trajectory_of_a_bouncing_sphere(tmp_path):
     assert 0.0 < d["e_observed"] < 1.0 and d["rebound_height_m"] == pytest.approx(
         max(gaps[gaps.index(min(gaps)):]), rel=1e-12)
     assert (tmp_path / "fig" / "trajectory.png").exists()
+
+
+def test_report_lines_of_a_trajectory():
+    from pipeline.scenes.trajectory import trajectory_summary
+
+    d = {"release_gap_m": 0.06, "release_speed_m_per_s": 0.57, "release_speed_is_settling": True,
+         "drag_law": "schiller-naumann", "arrival_speed_m_per_s": 0.536, "e_observed": 0.819,
+         "observed_speed_out_m_per_s": 0.456, "observed_speed_in_m_per_s": 0.556,
+         "observed_reading_gap_m": 1.5e-4, "rebound_height_m": 9.3e-3}
+    text = trajectory_summary(d, "t.csv")
+    assert "e_observed = 0.8190" in text and "(settling)" in text and "written to t.csv" in text
+    assert "top of the first bounce 0.0093 m" in text
+
+
+@pytest.mark.parametrize("radius2, density2", [(1e-3, 2500.0), (2e-3, 7800.0)])
+def test_two_spheres_arrive_with_v0_from_the_outer_start(radius2, density2):
+    # two free spheres (equal, or the unequal pair at zero momentum) without gravity: the same
+    # check as the wall's, against far_field's "spheres" / "pair" reading (1e-6)
+    a1, m1 = _sphere()
+    m2 = density2 * 4.0 / 3.0 * math.pi * radius2 ** 3
+    geometry = "spheres" if radius2 == a1 and m2 == m1 else "pair"
+    outer = tj.Outer(geometry, a1, m1, radius2, m2, 800.0, 1.0, 0.0, "stokes")
+    assert outer.weight == 0.0
+    a, st = outer.a, 20.0
+    v0 = st * 6 * math.pi * outer.viscosity * a * a / outer.m
+    ratios = {} if geometry == "spheres" else {"radius_ratio": radius2 / a1,
+                                                "mass_ratio": m2 / m1}
+    reading = ff.OuterFlow(geometry=geometry, x0_over_a=0.01, start_over_a=1.0,
+                           density_ratio=outer.phi, **ratios)
+    start = reading.approach_speed(st) * v0
+    _, x, u, _, ended = tj.motion(outer, a, -start, until_gap=0.01 * a)
+    assert ended == "gap" and -u[-1] == pytest.approx(v0, rel=1e-6)

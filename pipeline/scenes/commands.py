@@ -290,6 +290,10 @@ def cmd_scene(args) -> int:
             print(f"warning: [{w['check']}] {w['message']}", file=sys.stderr)
     else:
         print(format_report(d))
+        if whole:
+            from .trajectory import trajectory_summary
+
+            print(trajectory_summary(d, args.trajectory))
     if args.plot and not failed:
         from ..plots.scene_plots import plot_scene, si_scales
 

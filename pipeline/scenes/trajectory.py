@@ -18,7 +18,7 @@ from .scene_file import _GAP, _SPEED
 from .units import to_si
 
 __all__ = ["add_trajectory_flags", "trajectory_asked", "run_trajectory", "trajectory_keys",
-           "trajectory_csv", "write_trajectory", "check_trajectory_path", "STANDARD_GRAVITY", "DEFAULT_RELEASE_GAP_OVER_A", "DRAG_CHOICES"]
+           "trajectory_csv", "write_trajectory", "check_trajectory_path", "trajectory_summary", "STANDARD_GRAVITY", "DEFAULT_RELEASE_GAP_OVER_A", "DRAG_CHOICES"]
 
 STANDARD_GRAVITY = 9.80665  # m/s^2 (the conventional value; sphere 1 above body 2)
 DEFAULT_RELEASE_GAP_OVER_A = 10.0  # where the sphere starts by default: 10 a above the wall
@@ -205,3 +205,23 @@ def write_trajectory(whole, args, failed) -> dict:
         with guarded_dir(args.plot, f"--plot {args.plot}"):
             plot_trajectory(tr, args.plot, reading=read)
     return trajectory_keys(read)
+
+
+def trajectory_summary(d: dict, path=None) -> str:
+    """The report's lines on the trajectory (``d`` the JSON object with ``trajectory_keys``)."""
+    def num(v, spec):
+        return "-" if v is None else format(v, spec)
+
+    speed = num(d["release_speed_m_per_s"], ".4g")
+    lines = [f"trajectory: released at {num(d['release_gap_m'], '.4g')} m with {speed} m/s"
+             f"{' (settling)' if d['release_speed_is_settling'] else ''}, drag "
+             f"{d['drag_law']}; arrives at x0 with {num(d['arrival_speed_m_per_s'], '.4g')} m/s "
+             "(the scene's v0)",
+             f"  e_observed = {num(d['e_observed'], '.4f')} (speeds "
+             f"{num(d['observed_speed_out_m_per_s'], '.4g')} / "
+             f"{num(d['observed_speed_in_m_per_s'], '.4g')} m/s at "
+             f"{num(d['observed_reading_gap_m'], '.3g')} m), top of the first bounce "
+             f"{num(d['rebound_height_m'], '.4g')} m"]
+    if path is not None:
+        lines.append(f"  written to {path}")
+    return "\n".join(lines)
