@@ -29,6 +29,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE))
 
+import harness  # noqa: E402
 from bench_experiments import _CLASSIC, _INPUTS, RUNS, load  # noqa: E402
 
 DATA = HERE.parent.parent / "shared" / "data" / "gondret2002"
@@ -185,8 +186,9 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--data", default=str(DATA), help=f"the measured files' folder (default {DATA})")
     args = p.parse_args(argv)
+    load_start = harness.load_now()
     data, curves = measure(Path(args.data))
-    (HERE / "trajectory.json").write_text(json.dumps(data, indent=1) + "\n")
+    data = harness.write_json(HERE / "trajectory.json", data, load_start)
     (HERE / "trajectory.md").write_text(report(data))
     figure(data, curves, HERE / "trajectory.png")
     print(report(data))
