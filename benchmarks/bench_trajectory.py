@@ -17,7 +17,6 @@ writes benchmarks/trajectory.json, trajectory.md and trajectory.png.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 import time
