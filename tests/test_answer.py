@@ -77,9 +77,11 @@ def test_speed_input_errors_are_one_line(table, tmp_path, capsys):
         scene_from_dict(beads(v0="0.1 m/s"), table)
     with pytest.raises(ValueError, match="approach_speed"):
         scene_from_dict(beads(approach_speed="-1 m/s"), table)
-    unequal = beads(body2={"material": "glass", "radius": "2 mm"})
-    with pytest.raises(SceneError, match="approach_speed needs the outer flow"):
-        scene_from_dict(unequal, table)
+    # two unequal spheres map it through their own outer flow (geometry "pair")
+    unequal = scene_from_dict(beads(body2={"material": "glass", "radius": "2 mm"}), table)
+    assert unequal.outer_flow().geometry == "pair"
+    assert unequal.outer_flow().approach_speed(unequal.stokes) * unequal.v0 == \
+        pytest.approx(0.15, rel=1e-12)
     # a flag for one speed replaces the file's other speed
     path = tmp_path / "s.toml"
     path.write_text('v0 = "0.1 m/s"\n[body1]\nmaterial = "glass"\nradius = "1 mm"\n'

@@ -154,20 +154,22 @@ def _integrate_motion(outer, e0, stokes):
     # M(x) = m (1 + phi C(x)): M x'' + (1/2) M'(x) x'^2 = -R x' / St (dimensionless: x in a,
     # v in v0, t in a/v0), integrated in x from x0 outwards for the approach (backwards in
     # time) and the departure; M' by central differences of C (step 1e-6 x)
-    g, phi = outer.geometry, outer.density_ratio
+    g, phi, ratios = outer.geometry, outer.density_ratio, outer.ratios
 
     def mass(x):
-        return 1.0 + phi * of.added_mass(g, x)
+        return 1.0 + phi * of.added_mass(g, x, ratios=ratios)
 
     def dmass(x):
         dx = 1e-6 * x
         return (mass(x + dx) - mass(x - dx)) / (2.0 * dx)
 
     def approach(x, v):  # x' = -v, x'' = v dv/dx: M v dv/dx + (1/2) M' v^2 = R v / St
-        return [-0.5 * dmass(x) / mass(x) * v[0] + of.resistance(g, x) / (stokes * mass(x))]
+        return [-0.5 * dmass(x) / mass(x) * v[0]
+                + of.resistance(g, x, ratios=ratios) / (stokes * mass(x))]
 
     def departure(x, u):  # x' = +u, x'' = u du/dx: M u du/dx + (1/2) M' u^2 = -R u / St
-        return [-0.5 * dmass(x) / mass(x) * u[0] - of.resistance(g, x) / (stokes * mass(x))]
+        return [-0.5 * dmass(x) / mass(x) * u[0]
+                - of.resistance(g, x, ratios=ratios) / (stokes * mass(x))]
 
     span = (outer.x0_over_a, outer.x_ref_over_a)
     v = integrate.solve_ivp(approach, span, [1.0], rtol=1e-11, atol=1e-13).y[0, -1]
@@ -188,6 +190,27 @@ def test_e_far_solves_the_equation_of_motion_with_added_mass(geometry, phi):
             _integrate_motion(outer, e0, stokes), abs=1e-7)
 
 
+@pytest.mark.parametrize("ratios", [(0.25, 0.1), (3.0, 40.0)])
+def test_e_far_of_an_unequal_pair_solves_its_equation_of_motion(ratios):
+    # the pair's R and C (outer_flow.pair_resistance, pair_added_mass) in the same energy
+    # equation, against the direct integration: 1e-7 as above
+    outer = ff.OuterFlow(geometry="pair", x0_over_a=0.01, x_ref_over_a=0.3, density_ratio=0.2,
+                         radius_ratio=ratios[0], mass_ratio=ratios[1])
+    assert outer.restitution(0.6, 30.0) == pytest.approx(_integrate_motion(outer, 0.6, 30.0),
+                                                         abs=1e-7)
+
+
+def test_e_far_of_an_equal_pair_is_the_equal_spheres():
+    # equal radii and masses through pair_forces and the image chain: the equal spheres' e_far
+    # (1e-9: pair_forces' precision, module docstring of outer_flow)
+    for phi in (0.0, 0.5):
+        pair = ff.OuterFlow(geometry="pair", density_ratio=phi)
+        assert pair.restitution(0.7, 40.0) == pytest.approx(
+            ff.OuterFlow(geometry="spheres", density_ratio=phi).restitution(0.7, 40.0), rel=1e-9)
+        assert pair.approach_speed(40.0) == pytest.approx(
+            ff.OuterFlow(geometry="spheres", density_ratio=phi).approach_speed(40.0), rel=1e-9)
+
+
 def test_added_mass_raises_e_far():
     # the added mass carries momentum through the outer phase: at the same near-field result
     # the spheres keep more of it (the resistance integral is divided by sqrt(M/m) > 1)
@@ -206,6 +229,9 @@ def test_added_mass_raises_e_far():
     (dict(density_ratio=math.nan), "density_ratio = nan: must be a finite number"),
     (dict(start_over_a=math.inf), "start_over_a = inf: must be a finite number"),
     (dict(geometry="cylinder"), "outer geometry = 'cylinder'"),
+    (dict(geometry="pair", radius_ratio=0.0), "radius_ratio = 0: must be > 0"),
+    (dict(geometry="pair", mass_ratio=math.inf), "mass_ratio = inf: must be a finite number"),
+    (dict(geometry="wall", mass_ratio=2.0), "mass_ratio = 2: only the 'pair' outer geometry"),
 ])
 def test_bad_outer_flow(kwargs, needle):
     with pytest.raises(ValueError) as info:
@@ -273,8 +299,14 @@ def test_scene_outer_flow():
                             "density": "7797 kg/m^3"}).outer_flow()
     assert spheres.geometry == "spheres"
     assert spheres.density_ratio == pytest.approx(965.0 / 7797.0, rel=1e-12)
-    # unequal spheres: not modelled (None)
-    assert _scene(body2={"material": "glass", "radius": "1 mm"}).outer_flow() is None
+    # unequal spheres: the pair's relative motion, sphere 2 over sphere 1
+    pair = _scene(body2={"material": "glass", "radius": "1 mm"}).outer_flow()
+    assert pair.geometry == "pair" and pair.radius_ratio == pytest.approx(1.0 / 3.0, rel=1e-12)
+    assert pair.mass_ratio == pytest.approx(2480.0 / 7797.0 / 27.0, rel=1e-12)
+    # equal radii, unequal masses: the pair too (the equal-spheres resistance assumes symmetry)
+    heavy = _scene(body2={"material": "chrome_steel", "radius": "3 mm",
+                          "density": "9000 kg/m^3"}).outer_flow()
+    assert heavy.geometry == "pair" and heavy.radius_ratio == pytest.approx(1.0, rel=1e-12)
 
 
 def test_scene_json_says_which_e_for_which_dem_code():
@@ -293,6 +325,21 @@ def test_scene_json_says_which_e_for_which_dem_code():
     text = format_report(d)
     assert "far-field restitution e_far" in text and "dry DEM takes e_far" in text
     assert "resolved CFD-DEM takes e_wet" in text
+
+
+def test_scene_json_has_e_far_for_unequal_spheres():
+    # two unequal spheres: e_far through the pair's resistance and added mass (no longer null),
+    # the same reading of the same near-field result, below e_wet (the outer flow only takes)
+    from pipeline.scenes.run import run_scene
+
+    r = run_scene(_scene(body2={"material": "chrome_steel", "radius": "6 mm"}), accuracy="fast",
+                  cavitation=None)  # St 54: it rebounds
+    d = r.to_dict()
+    assert d["outer_geometry"] == "pair" and r.outer.geometry == "pair"
+    assert d["e_far"] == pytest.approx(r.outer.restitution(r.collision.e_x0, r.collision.St),
+                                       rel=1e-12)
+    assert 0.0 < d["e_far"] < d["e_wet"] and d["outer_start_speed_m_per_s"] > 0.0
+    assert any("two unequal spheres" in n for n in r.notes)
 
 
 def test_export_rows_carry_e_far():

@@ -223,3 +223,74 @@ def test_bad_gap_refused(bad):
         of.wall_resistance(bad)
     with pytest.raises(ValueError, match="gap"):
         of.equal_spheres_resistance(bad)
+
+
+# ---- two free spheres of any radii and masses: their relative motion (pair_resistance) --------
+
+@pytest.mark.parametrize("gap", [1e-3, 0.05, 1.0, 20.0])
+def test_pair_of_equal_spheres_is_the_equal_spheres_result(gap):
+    # equal radii and masses: the zero-momentum motion is the symmetric one; 1e-9: pair_forces'
+    # 4x4 solve (module docstring); the image chain and the sinh series both to ~1e-12 of C
+    assert of.pair_resistance(gap, 1.0, 1.0) == pytest.approx(of.equal_spheres_resistance(gap),
+                                                              rel=1e-9)
+    assert of.pair_added_mass(gap, 1.0, 1.0) == pytest.approx(of.equal_spheres_added_mass(gap),
+                                                              rel=1e-11)
+
+
+@pytest.mark.parametrize("gap", [1e-3, 0.1, 2.0])
+def test_pair_tends_to_the_wall(gap):
+    # a2/a1 = 1e4, m2/m1 = 1e12: sphere 2 is a wall at rest up to O(a1/a2) = 1e-4 (its
+    # curvature over the gap's extent) -> 1e-3 relative bounds it with margin; the pair's C is
+    # per rho_f V1 / (2 m), twice the wall's per rho_f V1 / m1
+    assert of.pair_resistance(gap, 1e4, 1e12) == pytest.approx(of.wall_resistance(gap), rel=1e-3)
+    assert of.pair_added_mass(gap, 1e4, 1e12) == pytest.approx(2.0 * of.wall_added_mass(gap),
+                                                               rel=1e-3)
+
+
+@pytest.mark.parametrize("ratio, masses", [(0.5, 0.3), (2.0, 1.0), (4.0, 20.0)])
+def test_pair_small_gap_limit_jeffrey_onishi(ratio, masses):
+    # near contact R = a/x + g ln(a/x) + O(1): the film's forces on the two spheres are equal and
+    # opposite to that order, so whatever the masses R is the single sphere's with the other at
+    # rest, g = (1 + 7 l + l^2) / (5 (1 + l)^2) (Jeffrey & Onishi's g2 in the reduced radius).
+    # x R/a -> 1 with the O(x ln x) remainder (2e-3 at 1e-4), and the slope of R - a/x against
+    # ln(a/x) between 1e-3 and 1e-4 is g up to the O(x ln x) term (as the test above: 5e-3)
+    lam = ratio
+    g = (1 + 7 * lam + lam ** 2) / (5 * (1 + lam) ** 2)
+    assert of.pair_log(lam) == pytest.approx(g, rel=1e-15)
+    assert 1e-4 * of.pair_resistance(1e-4, lam, masses) == pytest.approx(1.0, abs=2e-3)
+    slope = (of.pair_resistance(1e-4, lam, masses) - 1e4
+             - of.pair_resistance(1e-3, lam, masses) + 1e3) / math.log(10.0)
+    assert slope == pytest.approx(g, abs=5e-3)
+
+
+@pytest.mark.parametrize("ratio, masses", [(0.5, 0.3), (3.0, 5.0)])
+def test_pair_far_field_reflections(ratio, masses):
+    # far apart, by reflections (each sphere in the other's Stokeslet, (3/2)(a_j/d) u_j, and that
+    # reflected back): f1 = -(u1 (1 + k) - (3/2)(a2/d) u2), f2 = -(u2 (1 + k) - (3/2)(a1/d) u1),
+    # k = (9/4) a1 a2 / d^2, so with u1 = m/m1 = s1, u2 = -m/m2 = -s2:
+    # R a = (s1^2 + l s2^2)(1 + k) + 3 (l/d) s1 s2 + O(d^-3) (Faxen terms and the third
+    # reflection). The remainder must fall like d^-3: its ratio between d and 2d is 8 (within
+    # [6, 10]: the next order's share)
+    lam = ratio
+    a = lam / (1 + lam)
+    s1, s2 = masses / (1 + masses), 1 / (1 + masses)
+
+    def remainder(d):
+        k = 2.25 * lam / d ** 2
+        expected = ((s1 ** 2 + lam * s2 ** 2) * (1 + k) + 3 * lam / d * s1 * s2) / a
+        return of.pair_resistance((d - 1 - lam) / a, lam, masses) - expected
+
+    r1, r2 = remainder(60.0), remainder(120.0)
+    assert abs(r1) < 20.0 / 60.0 ** 3
+    assert 6.0 < r1 / r2 < 10.0
+    # the added mass far away: the isolated spheres' (1/2 each, weighted by V_i u_i^2)
+    c = (s1 ** 2 + lam ** 3 * s2 ** 2)  # 4 T / (rho V1 v^2), T = sum rho V_i u_i^2 / 4
+    assert of.pair_added_mass(1e6, lam, masses) == pytest.approx(c, rel=1e-9)
+
+
+def test_pair_bad_ratios_refused():
+    for bad in (0.0, -1.0, math.inf, math.nan):
+        with pytest.raises(ValueError, match="radius_ratio must be a finite number > 0"):
+            of.pair_resistance(0.1, bad, 1.0)
+        with pytest.raises(ValueError, match="mass_ratio must be a finite number > 0"):
+            of.pair_added_mass(0.1, 1.0, bad)

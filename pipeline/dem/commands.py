@@ -296,10 +296,8 @@ def cmd_restitution(args) -> int:
     if args.threshold:
         from pipeline.scenes.threshold import format_threshold, sticking_threshold
 
-        # in the e of each kind of code: dry DEM (e_far, where there is an outer flow) and
-        # resolved CFD-DEM (e_wet)
-        keys = ("e_far", "e_wet") if scene.outer_flow() is not None else ("e_wet",)
-        for key in keys:
+        # in the e of each kind of code: dry DEM (e_far) and resolved CFD-DEM (e_wet)
+        for key in ("e_far", "e_wet"):
             thresholds.append(sticking_threshold(scene, args.vary, args.accuracy,
                                                  start=args.start, stop=args.stop, n=args.n,
                                                  results=results, key=key))

@@ -217,16 +217,10 @@ PATHS = {"v0": ("impact speed v0", "m/s"), "approach_speed": ("approach speed", 
 
 def approach_speed_of(scene) -> float:
     """The scene's approach speed at the outer start [m/s]: given, or what arrives at ``x0``
-    with its ``v0`` (``OuterFlow.approach_speed``); refused for two unequal spheres."""
-    from pipeline.scenes.scene import SceneError
-
+    with its ``v0`` (``OuterFlow.approach_speed``)."""
     if scene.approach_speed is not None:
         return scene.approach_speed
-    outer = scene.outer_flow()
-    if outer is None:
-        raise SceneError("--vary approach_speed needs the outer flow, modelled for a sphere "
-                         "and a wall or two equal spheres: vary v0 for two unequal spheres")
-    return outer.approach_speed(scene.stokes) * scene.v0
+    return scene.outer_flow().approach_speed(scene.stokes) * scene.v0
 
 
 def path_value(scene, vary: str) -> float:

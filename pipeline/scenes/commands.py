@@ -306,7 +306,11 @@ def cmd_scene(args) -> int:
     from ..cli_shared import check_output_paths, numerics_overrides
 
     check_output_paths(plot=args.plot)
-    if scene.stops_outside:  # the outer flow stops the spheres: no film collision to solve
+    from .trajectory import trajectory_asked
+
+    whole = None
+    if scene.stops_outside and not trajectory_asked(args):
+        # the outer flow stops the spheres: no film collision to solve
         from .run import stopped_result
 
         d = stopped_result(scene, ranges=not args.no_range)
@@ -317,8 +321,19 @@ def cmd_scene(args) -> int:
         return 0
     try:
         # profiles only for the figures: the pressure extremes come from the solver
-        result = run_scene(scene, accuracy=args.accuracy, save_profiles=bool(args.plot),
-                           ranges=not args.no_range, **numerics_overrides(args))
+        if trajectory_asked(args):  # the scene at the speed its release arrives with
+            from .answer import answer
+            from .trajectory import run_trajectory
+
+            result, *whole = run_trajectory(scene, args, args.accuracy,
+                                            save_profiles=bool(args.plot),
+                                            **numerics_overrides(args))
+            # the range of the scene at its arriving speed (not of every near-field solve)
+            result.answer = answer(result, args.accuracy, numerics_overrides(args),
+                                   ranges=not args.no_range)
+        else:
+            result = run_scene(scene, accuracy=args.accuracy, save_profiles=bool(args.plot),
+                               ranges=not args.no_range, **numerics_overrides(args))
     except ValueError as exc:
         raise _usage_error(str(exc)) from None
     except ArithmeticError as exc:  # a numerical failure inside the solver: report, no traceback
@@ -333,12 +348,20 @@ def cmd_scene(args) -> int:
     if reason:  # an overflow is no result: a failed scene with its reason
         d.update(status="error", message=reason)
         failed = True
+    if whole:
+        from .trajectory import write_trajectory
+
+        d.update(write_trajectory(whole, args, failed))
     if args.json:
         print(json.dumps(d))
         for w in d["warnings"]:
             print(f"warning: [{w['check']}] {w['message']}", file=sys.stderr)
     else:
         print(format_report(d))
+        if whole:
+            from .trajectory import trajectory_summary
+
+            print(trajectory_summary(d, args.trajectory))
     if args.plot and not failed:
         from ..plots.scene_plots import plot_scene, si_scales
 
@@ -520,6 +543,9 @@ def _build_scene(sub) -> None:
                         "onset, pressure-viscosity); e_for_dem_range and the others are then null")
     p.add_argument("--strict", action="store_true",
                    help="exit 1 when any validity check warns")
+    from .trajectory import add_trajectory_flags
+
+    add_trajectory_flags(p)
     p.set_defaults(func=cmd_scene)
 
 

@@ -258,7 +258,7 @@ def run_scene(scene: Scene, accuracy: str = "standard", sensitivity_solves: bool
                          "constant" if auto_dens else None, "off" if auto_rough else None)
     overrides = {k: v for k, v in overrides.items() if v is not None}
     overrides.setdefault("save_profiles", False)
-    outer = scene.outer_flow()  # None: two unequal spheres (no e_far)
+    outer = scene.outer_flow()
     overrides["outer"] = outer
     c = collide(base, accuracy=accuracy, **overrides)
     # the base film's pressure extremes [Pa, gauge], when it was solved
@@ -295,15 +295,10 @@ def run_scene(scene: Scene, accuracy: str = "standard", sensitivity_solves: bool
     notes += pressure_notes(scene, base_p_max, base)
     if scene.sound_speed is None:
         notes.append("elastic-wave check skipped: no density known for either solid")
-    if outer is None:
-        notes.append("e_far not computed: the outer flow is modelled for a sphere and a wall or "
-                     "two equal spheres only (solver/far_field.py)")
-    elif outer.geometry == "spheres" and not math.isclose(
-            scene.body1.mass, scene.body2.mass, rel_tol=1e-9):
-        notes.append("e_far: the two spheres' masses differ; the outer flow treats their "
-                     "relative motion with the reduced mass and the symmetric resistance, exact "
-                     "for equal masses only")
-    if outer is not None and scene.fluid.density is None:
+    if outer.geometry == "pair":
+        notes.append("e_far: two unequal spheres, their relative motion at zero momentum (the "
+                     "drag on the pair's centre of mass left out; docs/model.md)")
+    if scene.fluid.density is None:
         notes.append("e_far without added mass: the fluid has no density")
     result = SceneResult(scene=scene, collision=c, warnings=warnings, notes=notes,
                          peak_pressure=p_max, min_pressure=p_min, sensitivity=sensitivity,

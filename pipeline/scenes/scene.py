@@ -353,13 +353,14 @@ class Scene:
     # ---- the outer flow: how e_far reads the near-field result (solver/far_field.py) -----------
     @property
     def outer_geometry(self) -> str | None:
-        """``"wall"``, ``"spheres"`` (two equal radii) or None (unequal spheres: the outer flow
-        of two unequal free spheres is not modelled, e_far is not computed)."""
+        """``"wall"``, ``"spheres"`` (two equal radii and masses) or ``"pair"`` (two free spheres
+        of any radii and masses, solver/model/outer_flow.py ``pair_resistance``)."""
         if self.body2.wall:
             return "wall"
-        if math.isclose(self.body1.radius, self.body2.radius, rel_tol=1e-9):
+        if math.isclose(self.body1.radius, self.body2.radius, rel_tol=1e-9) and math.isclose(
+                self.body1.mass, self.body2.mass, rel_tol=1e-9):
             return "spheres"
-        return None
+        return "pair"
 
     @property
     def outer_start_distance(self) -> float:
@@ -388,17 +389,19 @@ class Scene:
         return rho_f * volume * share / self.reduced_mass
 
     def outer_flow(self):
-        """The ``solver.far_field.OuterFlow`` of the scene, or None (``outer_geometry``)."""
+        """The ``solver.far_field.OuterFlow`` of the scene (``outer_geometry``)."""
         from solver.far_field import OuterFlow
 
         geometry = self.outer_geometry
-        if geometry is None:
-            return None
         a = self.reduced_radius
+        ratios = {}
+        if geometry == "pair":
+            ratios = {"radius_ratio": self.body2.radius / self.body1.radius,
+                      "mass_ratio": self.body2.mass / self.body1.mass}
         return OuterFlow(geometry=geometry, x0_over_a=self.x0 / a,
                          x_ref_over_a=self.x_ref_distance / a,
                          start_over_a=self.outer_start_distance / a,
-                         density_ratio=self.density_ratio)
+                         density_ratio=self.density_ratio, **ratios)
 
     # ---- scales of the dimensionless solution -----------------------------------------------
     @property

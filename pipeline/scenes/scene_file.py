@@ -345,9 +345,6 @@ def at_approach_speed(scene: Scene, approach: float) -> Scene:
     spheres before ``x0`` (``Scene.stops_outside``)."""
     import dataclasses
 
-    outer = scene.outer_flow()  # built with v0 = the approach speed: St is that speed's
-    if outer is None:
-        raise SceneError("approach_speed needs the outer flow, modelled for a sphere and a wall "
-                         "or two equal spheres: give v0 (the speed at x0) for two unequal spheres")
+    outer = scene.outer_flow()
     v0 = approach * max(0.0, outer.arrival_speed(scene.stokes_of(approach)))
     return dataclasses.replace(scene, v0=v0, approach_speed=approach)

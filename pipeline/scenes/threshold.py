@@ -141,7 +141,7 @@ def sticking_threshold(scene, vary: str = "v0", accuracy: str = "standard", *,
     from pipeline.dem.export import scene_path
 
     at = scene_path(scene, vary, [factor])[0]
-    approach = None if at.outer_flow() is None else path_value(at, "approach_speed")
+    approach = path_value(at, "approach_speed")
     return Threshold(St_c=at.stokes, factor=factor, value=path_value(at, vary),
                      bracket=(lo, hi), solves=solves, approach_speed=approach, **common)
 

@@ -23,6 +23,8 @@ i.e. ``F / (6 pi mu a1 u) = (sinh alpha / 3) sum_n (a_n + b_n + c_n + d_n)``.
   ``equal_spheres_resistance`` (the same problem as a sphere approaching a free surface, Brenner
   1961; Maude 1961).
 - Two spheres of any sizes and velocities: the 4x4 system per ``n``, ``pair_forces``.
+- Two free spheres of any sizes and masses in their relative motion (zero momentum of the pair):
+  ``pair_resistance`` and ``pair_added_mass`` (docs/model.md, "Outer flow: two unequal spheres").
 
 Convergence: every term behaves like ``n^2 exp(-(2n+1) alpha)`` at large ``n`` (the exponentials
 of the solution decay as ``exp(-2 n alpha)`` away from the spheres), so past some ``n`` the ratio of
@@ -57,6 +59,7 @@ __all__ = [
     "wall_outer", "equal_spheres_outer", "wall_outer_regular", "equal_spheres_outer_regular",
     "alpha_wall", "alpha_equal", "GEOMETRIES", "resistance", "outer",
     "wall_added_mass", "equal_spheres_added_mass", "added_mass", "ZETA3",
+    "pair_log", "pair_velocities", "pair_resistance", "pair_added_mass", "log_coefficient",
 ]
 
 # coefficient of ln(a/x) in R (units of the module docstring): Cox & Brenner (1967) for the wall;
@@ -286,7 +289,9 @@ def equal_spheres_outer_regular(gap: float, tol: float = TOL) -> float:
 
 # ---- the outer phase: resistance by geometry, and the added mass of potential flow ----------------
 
-GEOMETRIES = ("wall", "spheres")  # a sphere and a plane wall; two equal spheres (head-on)
+GEOMETRIES = ("wall", "spheres", "pair")  # a sphere and a plane wall; two equal spheres;
+# two spheres of any radii and masses ("pair": needs ``ratios``, the radius and mass ratios)
+UNIT_RATIOS = (1.0, 1.0)
 
 ZETA3 = 1.2020569031595942  # Riemann zeta(3): the contact value of the image series below
 
@@ -297,17 +302,28 @@ def _check_geometry(geometry: str) -> str:
     return geometry
 
 
-def resistance(geometry: str, gap: float, tol: float = TOL) -> float:
+def resistance(geometry: str, gap: float, tol: float = TOL, ratios=UNIT_RATIOS) -> float:
     """``R = F / (6 pi mu a v)`` of ``geometry`` ("wall": ``wall_resistance``; "spheres": two
-    equal spheres, ``equal_spheres_resistance``) at gap ``x = gap * a``."""
+    equal spheres, ``equal_spheres_resistance``; "pair": ``pair_resistance`` with
+    ``ratios = (a2/a1, m2/m1)``) at gap ``x = gap * a``."""
     if _check_geometry(geometry) == "wall":
         return wall_resistance(gap, tol)
+    if geometry == "pair":
+        return pair_resistance(gap, *ratios, tol=tol)
     return equal_spheres_resistance(gap, tol)
 
 
-def outer(geometry: str, gap: float, tol: float = TOL) -> float:
+def outer(geometry: str, gap: float, tol: float = TOL, ratios=UNIT_RATIOS) -> float:
     """``R - a/x`` of ``geometry``: what the exact resistance adds to the film's ``a/x``."""
-    return resistance(geometry, gap, tol) - 1.0 / _check_gap(gap)
+    return resistance(geometry, gap, tol, ratios) - 1.0 / _check_gap(gap)
+
+
+def log_coefficient(geometry: str, ratios=UNIT_RATIOS) -> float:
+    """The coefficient of ``ln(a/x)`` in ``R`` near contact (``WALL_LOG``, ``EQUAL_LOG``,
+    ``pair_log``)."""
+    if _check_geometry(geometry) == "wall":
+        return WALL_LOG
+    return pair_log(ratios[0]) if geometry == "pair" else EQUAL_LOG
 
 
 def wall_added_mass(gap: float, tol: float = TOL) -> float:
@@ -349,9 +365,102 @@ def equal_spheres_added_mass(gap: float, tol: float = TOL) -> float:
     return wall_added_mass(_check_gap(gap) / 4.0, tol)
 
 
-def added_mass(geometry: str, gap: float, tol: float = TOL) -> float:
-    """``C`` of ``geometry`` at gap ``x = gap * a`` (``wall_added_mass`` or
-    ``equal_spheres_added_mass``)."""
+def added_mass(geometry: str, gap: float, tol: float = TOL, ratios=UNIT_RATIOS) -> float:
+    """``C`` of ``geometry`` at gap ``x = gap * a`` (``wall_added_mass``,
+    ``equal_spheres_added_mass`` or ``pair_added_mass`` with ``ratios = (a2/a1, m2/m1)``)."""
     if _check_geometry(geometry) == "wall":
         return wall_added_mass(gap, tol)
+    if geometry == "pair":
+        return pair_added_mass(gap, *ratios, tol=tol)
     return equal_spheres_added_mass(gap, tol)
+
+
+# ---- two free spheres of any radii and masses: their relative motion --------------------------
+
+def _check_ratios(radius_ratio: float, mass_ratio: float) -> tuple[float, float]:
+    out = []
+    for name, value in (("radius_ratio", radius_ratio), ("mass_ratio", mass_ratio)):
+        value = float(value)
+        if not (math.isfinite(value) and value > 0.0):
+            raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+        out.append(value)
+    return out[0], out[1]
+
+
+def pair_log(radius_ratio: float) -> float:
+    """Coefficient of ``ln(a/x)`` in ``pair_resistance`` near contact: Jeffrey & Onishi's (1984)
+    ``g2 = l (1 + 7 l + l^2) / (5 (1 + l)^3)`` (``l = a2/a1``, in ``F / (6 pi mu a1 u)``) in
+    units of the reduced radius, ``(1 + 7 l + l^2) / (5 (1 + l)^2)``: 9/20 at ``l = 1``, 1/5 as
+    ``l -> inf`` (the wall). The film's forces on the two spheres are equal and opposite to this
+    order, so it does not depend on the masses."""
+    lam, _ = _check_ratios(radius_ratio, 1.0)
+    return (1.0 + 7.0 * lam + lam * lam) / (5.0 * (1.0 + lam) ** 2)
+
+
+def pair_velocities(mass_ratio: float) -> tuple[float, float]:
+    """``(u1, u2)`` of two free spheres approaching each other at unit relative speed with zero
+    momentum (``m1 u1 + m2 u2 = 0``): ``u1 = m/m1``, ``u2 = -m/m2``, ``m`` the reduced mass."""
+    _, mu = _check_ratios(1.0, mass_ratio)
+    return mu / (1.0 + mu), -1.0 / (1.0 + mu)
+
+
+def pair_resistance(gap: float, radius_ratio: float, mass_ratio: float,
+                    tol: float = TOL) -> float:
+    """``R = Q / (6 pi mu a v)`` of two free spheres (radii ``a1``, ``a2 = radius_ratio a1``,
+    masses ``m2 = mass_ratio m1``) approaching each other at relative speed ``v`` with zero
+    momentum (``pair_velocities``), ``Q = m (F1/m1 - F2/m2)`` the generalised force of the
+    relative coordinate (``m dv/dt = -Q``; ``Q v`` is the power the fluid takes, ``-(F1 u1 + F2
+    u2)``), at gap ``x = gap * a``. From ``pair_forces`` (its precision). Equal spheres and
+    masses: ``equal_spheres_resistance``; ``a2, m2 -> inf``: ``wall_resistance``."""
+    lam, mu = _check_ratios(radius_ratio, mass_ratio)
+    u1, u2 = pair_velocities(mu)
+    f1, f2 = pair_forces(gap, lam, u1, u2, tol)
+    a = lam / (1.0 + lam)  # a1 = 1
+    # F_i / m_i over (6 pi mu a v / m): a_i f_i m / m_i, with m/m1 = u1, m/m2 = -u2
+    return -(f1 * u1 + lam * f2 * u2) / a
+
+
+def pair_added_mass(gap: float, radius_ratio: float, mass_ratio: float,
+                    tol: float = TOL) -> float:
+    """Added-mass coefficient ``C`` of two free spheres in the relative motion of
+    ``pair_velocities`` at unit relative speed, at gap ``x = gap * a``: the fluid's kinetic energy
+    is ``(1/2) m phi C v^2`` with ``phi = rho_f V1 / (2 m)`` (the scene's ``density_ratio`` of
+    two spheres), i.e. ``C = 4 T / (rho_f V1 v^2)``; two equal spheres and masses:
+    ``equal_spheres_added_mass``; a wall (``a2, m2 -> inf``): ``2 wall_added_mass``.
+
+    Potential flow: each sphere's own dipole ``-u_i a_i^3 / 2`` and the chain of its images in the
+    other sphere and back (an axial dipole ``q`` at distance ``f`` from the centre of a sphere of
+    radius ``b`` has the image ``-q (b/f)^3`` at the inverse point ``b^2/f``, Hicks 1880; Lamb
+    1932, art. 98). On sphere ``i`` (``n`` its outward normal) ``Int phi n_z dS =
+    V_i (3 E_i / 2 - u_i / 2)``, ``E_i`` the axial gradient at its centre of the dipoles inside
+    the other sphere, so ``T = (rho/2) sum_i V_i u_i (u_i / 2 - 3 E_i / 2)``. The images' terms
+    fall geometrically; they are added until the geometric tail bound is below ``tol``."""
+    lam, mu = _check_ratios(radius_ratio, mass_ratio)
+    gap = _check_gap(gap)
+    radius = (1.0, lam)
+    centre = (0.0, 1.0 + lam + gap * lam / (1.0 + lam))
+    velocity = pair_velocities(mu)
+    volume = (1.0, lam ** 3)
+    grad = [0.0, 0.0]  # E_1, E_2
+    for home in (0, 1):
+        q, z = -0.5 * velocity[home] * radius[home] ** 3, centre[home]
+        other = 1 - home
+        grad[other] += -2.0 * q / abs(centre[other] - z) ** 3
+        # what each term adds to T is V_other |term|; it falls by the same ratio each round trip
+        # (an image in the other sphere and its image back), so the tail is bounded from those
+        weights = [math.inf, math.inf]
+        for _ in range(_N_MAX):
+            home, other = other, home  # the image lies in the other sphere
+            f = abs(z - centre[home])
+            q = -q * (radius[home] / f) ** 3
+            z = centre[home] + math.copysign(radius[home] ** 2 / f, z - centre[home])
+            term = -2.0 * q / abs(centre[other] - z) ** 3
+            grad[other] += term
+            weight = volume[other] * abs(term)
+            ratio = weight / weights[other]  # 0 on the first term of each sphere: not yet known
+            weights[other] = weight
+            if 0.0 < ratio < 1.0 and max(weights) * ratio / (1.0 - ratio) < tol:
+                break
+        else:
+            raise FloatingPointError("pair added-mass image chain not converged")
+    return 2.0 * sum(v * u * (0.5 * u - 1.5 * e) for v, u, e in zip(volume, velocity, grad))

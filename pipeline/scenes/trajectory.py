@@ -1,0 +1,229 @@
+"""``ehd scene --trajectory``: the whole trajectory from a release, read as experiments read it.
+
+docs/scenes.md, "The whole trajectory". The release (where the sphere starts and how fast) is
+given by flags; the outer motion (solver/trajectory.py) brings it down to the scene's ``x0``,
+where the scene is solved as usual (``run_scene``) with ``v0`` the arriving speed; the departure
+is followed to the top of the first bounce. The trajectory is written as CSV (``t_s``, ``gap_m``,
+``speed_m_per_s``, ``phase``) and read for ``e_observed`` and ``rebound_height_m``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+
+from .scene import SceneError
+from .scene_file import _GAP, _SPEED
+from .units import to_si
+
+__all__ = ["add_trajectory_flags", "trajectory_asked", "run_trajectory", "trajectory_keys",
+           "trajectory_csv", "write_trajectory", "check_trajectory_path", "trajectory_summary", "STANDARD_GRAVITY", "DEFAULT_RELEASE_GAP_OVER_A", "DRAG_CHOICES"]
+
+STANDARD_GRAVITY = 9.80665  # m/s^2 (the conventional value; sphere 1 above body 2)
+DEFAULT_RELEASE_GAP_OVER_A = 10.0  # where the sphere starts by default: 10 a above the wall
+DRAG_CHOICES = ("auto", "stokes", "schiller-naumann", "clift-gauvin")
+_FLAGS = ("release_gap", "release_gap_over_a", "release_speed", "drag_law")
+
+
+def add_trajectory_flags(parser) -> None:
+    """The ``--trajectory FILE`` flag and the release's flags of ``ehd scene``."""
+    g = parser.add_argument_group("whole trajectory (docs/scenes.md, 'The whole trajectory')")
+    g.add_argument("--trajectory", metavar="FILE", default=None,
+                   help="compute the whole trajectory from the release and write it as CSV "
+                        "(t_s, gap_m, speed_m_per_s, phase); adds e_observed and "
+                        "rebound_height_m to the report")
+    g.add_argument("--release-gap", dest="release_gap", default=None,
+                   help="gap at the release, e.g. '3 cm' (default 10 a)")
+    g.add_argument("--release-gap-over-a", dest="release_gap_over_a", default=None,
+                   help="gap at the release over the reduced radius a")
+    g.add_argument("--release-speed", dest="release_speed", default=None,
+                   help="approach speed at the release, e.g. '0.2 m/s', or 'settling' (the "
+                        "terminal speed of the drag law, the default)")
+    g.add_argument("--drag-law", dest="drag_law", default=None, choices=DRAG_CHOICES,
+                   help="the isolated sphere's drag (default auto: the first of stokes, "
+                        "schiller-naumann, clift-gauvin whose Reynolds range holds the release)")
+
+
+def trajectory_asked(args) -> bool:
+    """A trajectory is computed when ``--trajectory`` or any release flag is given."""
+    return args.trajectory is not None or any(getattr(args, k) is not None for k in _FLAGS)
+
+
+def _outer(scene, law):
+    from solver.trajectory import Outer
+
+    b1, b2 = scene.body1, scene.body2
+    if scene.fluid.density is None:
+        raise SceneError("the trajectory needs the fluid's density (fluid.density, e.g. "
+                         "'998 kg/m^3'): buoyancy, added mass and the drag's Reynolds number")
+    geometry = scene.outer_geometry
+    return Outer(geometry, b1.radius, b1.mass, b2.radius, b2.mass, scene.fluid.density,
+                 scene.fluid.viscosity, STANDARD_GRAVITY, law)
+
+
+def _release(scene, args):
+    """``(gap [m], speed [m/s] or None for settling, law)`` from the flags."""
+    from solver.model import drag
+
+    a = scene.reduced_radius
+    if args.release_gap is not None and args.release_gap_over_a is not None:
+        raise SceneError("give release_gap or release_gap_over_a, not both")
+    if args.release_gap is not None:
+        gap = to_si(args.release_gap, _GAP, "release_gap")
+    elif args.release_gap_over_a is not None:
+        try:
+            gap = float(args.release_gap_over_a) * a
+        except ValueError:
+            raise SceneError(f"release_gap_over_a = {args.release_gap_over_a!r}: must be a "
+                             "number (the gap over a)") from None
+    else:
+        gap = DEFAULT_RELEASE_GAP_OVER_A * a
+    text = args.release_speed
+    speed = None if text in (None, "settling") else to_si(text, _SPEED, "release_speed")
+    law = args.drag_law or "auto"
+    if law == "auto":  # the first law whose range holds the release (checked again below)
+        for name in drag.DRAG_LAWS:
+            outer = _outer(scene, name)
+            fastest = max(speed or 0.0, _terminal(outer))
+            if all(re <= drag.DRAG_LAWS[name].re_max for re in outer.reynolds_numbers(fastest)):
+                law = name
+                break
+        else:
+            law = "clift-gauvin"
+    return gap, speed, law
+
+
+def _terminal(outer):
+    from solver.trajectory import terminal_speed
+
+    return terminal_speed(outer)
+
+
+def run_trajectory(scene, args, accuracy, **overrides):
+    """``(SceneResult at the arriving speed, solver Trajectory, reading dict, timings)``; bad
+    release input raises ``SceneError`` (one line naming the field and its range)."""
+    from solver import trajectory as tj
+
+    from .run import run_scene
+
+    check_trajectory_path(args.trajectory)
+    gap, speed, law = _release(scene, args)
+    outer = _outer(scene, law)
+    start = _terminal(outer) if speed is None else speed
+    try:
+        tj.check_release(outer, gap, start, scene.x0)
+    except ValueError as exc:
+        raise SceneError(str(exc)) from None
+    results = []
+
+    def near_field(v0):
+        # the arriving speed is the scene's v0 (not one mapped from an approach speed)
+        results.append(run_scene(dataclasses.replace(scene, v0=v0, approach_speed=None),
+                                 accuracy=accuracy,
+                                 **overrides))
+        return results[-1].collision
+
+    wall = time.perf_counter()
+    try:
+        tr = tj.trajectory(outer, gap, start, scene.x0, near_field)
+    except ValueError as exc:
+        raise SceneError(str(exc)) from None
+    wall = time.perf_counter() - wall
+    a = scene.reduced_radius
+    window, reading = tj.READ_WINDOW_OVER_A * a, tj.READ_GAP_OVER_A * a
+    ft, fg = tj.frames(tr.t, tr.gap, window, tr.v0)
+    u_in, u_out, e, _ = tj.observed_restitution(ft, fg, window, reading)
+    read = {"release_gap_m": gap, "release_speed_m_per_s": start,
+            "release_speed_is_settling": speed is None, "drag_law": law,
+            "arrival_speed_m_per_s": tr.v0, "e_observed": e,
+            "observed_speed_in_m_per_s": u_in, "observed_speed_out_m_per_s": u_out,
+            "observed_window_m": window, "observed_reading_gap_m": reading,
+            "rebound_height_m": tr.rebound_height,
+            "trajectory_energy_J": dict(tr.energy), "trajectory_energy_residual_J":
+                tr.energy_residual}
+    timings = {"trajectory_s": wall, "near_field_s": tr.collision.wall_s}
+    return results[-1], tr, read, timings
+
+
+def trajectory_keys(read: dict) -> dict:
+    """The JSON keys a trajectory adds to ``ehd scene --json`` (docs/scenes.md): finite numbers
+    or null."""
+    def num(v):
+        if isinstance(v, dict):
+            return {k: num(x) for k, x in v.items()}
+        if isinstance(v, (bool, str)) or v is None:
+            return v
+        return float(v) if math.isfinite(v) else None
+
+    return {k: num(v) for k, v in read.items()}
+
+
+def trajectory_csv(tr) -> str:
+    """The trajectory as CSV text: ``t_s,gap_m,speed_m_per_s,phase`` (``speed`` the gap's
+    rate, negative on the approach)."""
+    names = sorted(tr.phases, key=tr.phases.get)
+    starts = [tr.phases[n] for n in names]
+    rows = ["t_s,gap_m,speed_m_per_s,phase"]
+    phase = 0
+    for k, (t, x, u) in enumerate(zip(tr.t, tr.gap, tr.speed)):
+        while phase + 1 < len(starts) and k >= starts[phase + 1]:
+            phase += 1
+        rows.append(f"{t:.9e},{x:.9e},{u:.9e},{names[phase]}")
+    return "\n".join(rows) + "\n"
+
+
+def check_trajectory_path(path) -> None:
+    """PathError before any solve when ``--trajectory FILE`` cannot be written (a missing or
+    read-only folder, or a folder where the file should be)."""
+    import os
+    from pathlib import Path
+
+    from ..errors import PathError
+
+    if path is None:
+        return
+    parent = Path(path).parent
+    if not parent.is_dir():
+        raise PathError(f"--trajectory {path}: the directory {str(parent)!r} does not exist")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise PathError(f"--trajectory {path}: the directory {str(parent)!r} is not writable")
+    if Path(path).is_dir():
+        raise PathError(f"--trajectory {path}: is a directory, not a file")
+
+
+def write_trajectory(whole, args, failed) -> dict:
+    """Write the CSV (``--trajectory``) and the figure (``--plot``) of a computed trajectory;
+    return its JSON keys (``trajectory_keys``)."""
+    tr, read, timings = whole
+    if args.trajectory is not None:
+        from ..writes import write_all
+
+        write_all({args.trajectory: trajectory_csv(tr)}, "--trajectory")
+    if args.plot and not failed:
+        from ..plots.trajectory_plot import plot_trajectory
+        from ..writes import guarded_dir
+
+        with guarded_dir(args.plot, f"--plot {args.plot}"):
+            plot_trajectory(tr, args.plot, reading=read)
+    return trajectory_keys(read)
+
+
+def trajectory_summary(d: dict, path=None) -> str:
+    """The report's lines on the trajectory (``d`` the JSON object with ``trajectory_keys``)."""
+    def num(v, spec):
+        return "-" if v is None else format(v, spec)
+
+    speed = num(d["release_speed_m_per_s"], ".4g")
+    lines = [f"trajectory: released at {num(d['release_gap_m'], '.4g')} m with {speed} m/s"
+             f"{' (settling)' if d['release_speed_is_settling'] else ''}, drag "
+             f"{d['drag_law']}; arrives at x0 with {num(d['arrival_speed_m_per_s'], '.4g')} m/s "
+             "(the scene's v0)",
+             f"  e_observed = {num(d['e_observed'], '.4f')} (speeds "
+             f"{num(d['observed_speed_out_m_per_s'], '.4g')} / "
+             f"{num(d['observed_speed_in_m_per_s'], '.4g')} m/s at "
+             f"{num(d['observed_reading_gap_m'], '.3g')} m), top of the first bounce "
+             f"{num(d['rebound_height_m'], '.4g')} m"]
+    if path is not None:
+        lines.append(f"  written to {path}")
+    return "\n".join(lines)
