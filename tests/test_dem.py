@@ -489,13 +489,17 @@ def test_bad_for_is_one_line_before_any_solve(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
-def test_dry_export_of_unequal_spheres_is_refused_naming_cfd_dem(tmp_path, capsys):
-    scene = "tests/dem/glass_bead_steel_ball_water.toml"
-    out = tmp_path / "o"
-    line = _export_error(capsys, ["export-dem", scene, "--accuracy", "fast", "--n", "1",
-                                  "--out", str(out)])
-    assert "no e_far" in line and "--for cfd-dem" in line and "unequal" in line
-    assert not out.exists() or not any(out.iterdir())
+def test_dry_export_of_rows_without_e_far_is_refused_naming_cfd_dem():
+    """Every scene has an e_far now (unequal spheres too: outer geometry "pair"); rows without
+    one (a CSV or store made before it) are refused for --for dry, pointing at cfd-dem."""
+    from pipeline.cli import UsageError
+    from pipeline.dem.commands import check_rows
+
+    rows = [{"status": "ok", "e_far": "", "e_wet": 0.5, "geometry": "sphere-sphere"}]
+    with pytest.raises(UsageError, match="have no e_far; export the resolved CFD-DEM e_wet "
+                                         "with --for cfd-dem"):
+        check_rows(rows, "dry", "old.csv")
+    check_rows(rows, "cfd-dem", "old.csv")  # e_wet is there
 
 
 AIR = "examples/glass_bead_wall_air.toml"  # every film thinner than air's mean free path

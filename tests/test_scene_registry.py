@@ -44,14 +44,15 @@ def solved():
             for name, (data, overrides) in SCENES.items()}
 
 
-def test_a_scene_without_outer_flow_or_solve_has_null_keys(solved):
+def test_unequal_spheres_read_e_far_and_a_failed_scene_has_null_keys(solved):
     from pipeline.scenes.commands import format_report
 
+    # two unequal spheres: their own outer flow (geometry "pair") reads e_far
     d = solved["unequal spheres"].to_dict()
-    assert d["e_far"] is None and d["outer_start_speed_m_per_s"] is None
+    assert d["outer_geometry"] == "pair" and d["e_far"] is not None
+    assert d["outer_start_speed_m_per_s"] > 0.0
     assert d["e_wet"] is not None and d["closest_approach_nm"] > 0.0
-    assert "  far-field restitution e_far" in format_report(d)
-    assert "not computed (two unequal spheres)" in format_report(d)
+    assert "far-field restitution e_far" in format_report(d)
     # a failed scene: the film's results null (flags unknown too), the report says why; the
     # outer path's speed does not depend on the film
     r = solved["failed"]

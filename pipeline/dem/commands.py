@@ -92,12 +92,8 @@ def check_rows(rows, kind: str, source: str) -> None:
     if not missing:
         return
     col = DEM_KINDS[kind].e_column
-    why = ("two unequal spheres have no e_far yet (the outer flow is modelled for a sphere and "
-           "a wall or two equal spheres)" if missing[0]["geometry"] == "sphere-sphere"
-           else "the rows have none")
     raise UsageError(f"{source}: --for {kind} realises {col}, but {len(missing)} of {len(rows)} "
-                     f"rows have no {col}: {why}; export the resolved CFD-DEM e_wet with "
-                     "--for cfd-dem")
+                     f"rows have no {col}; export the resolved CFD-DEM e_wet with --for cfd-dem")
 
 
 def check_rows_between(scene, rows, fit_range, accuracy, progress):

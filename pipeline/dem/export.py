@@ -140,8 +140,7 @@ def check_stokes(st, lo: float, hi: float) -> list[float]:
 
 
 def missing_e(rows: list[dict], kind: str) -> list[dict]:
-    """The finished rows that lack the e ``kind`` realises (``e_far``: two unequal spheres have
-    none until the outer flow models them)."""
+    """The finished rows that lack the e ``kind`` realises (``e_far``: rows made before it)."""
     col = DEM_KINDS[kind].e_column
     return [r for r in rows if r["status"] in ("ok", "start_deformed") and r[col] == ""
             and math.isfinite(_num(r["e_wet"]))]

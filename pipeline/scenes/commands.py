@@ -289,9 +289,42 @@ def format_report(d: dict) -> str:
     return "\n".join(lines)
 
 
-def cmd_scene(args) -> int:
-    from .run import run_scene
+def _report_stopped(scene, args) -> int:
+    """The report of a scene whose outer flow stops the spheres before ``x0``: no film
+    collision to solve or draw."""
+    from .run import stopped_result
 
+    d = stopped_result(scene, ranges=not args.no_range)
+    print(json.dumps(d) if args.json else format_report(d))
+    if args.plot:
+        print(f"ehd scene: no figures in {args.plot}: the spheres stop before x0, so there is "
+              "no film collision to draw", file=sys.stderr)
+    return 0
+
+
+def _solve(scene, args):
+    """``(SceneResult, the trajectory's parts or None)``: the scene solved as asked, or, with
+    ``--trajectory``, at the speed its release arrives with (the range of that scene, not of
+    every near-field solve)."""
+    from ..cli_shared import numerics_overrides
+    from .run import run_scene
+    from .trajectory import trajectory_asked
+
+    numerics = numerics_overrides(args)
+    # profiles only for the figures: the pressure extremes come from the solver
+    if not trajectory_asked(args):
+        return run_scene(scene, accuracy=args.accuracy, save_profiles=bool(args.plot),
+                         ranges=not args.no_range, **numerics), None
+    from .answer import answer
+    from .trajectory import run_trajectory
+
+    result, *whole = run_trajectory(scene, args, args.accuracy, save_profiles=bool(args.plot),
+                                    **numerics)
+    result.answer = answer(result, args.accuracy, numerics, ranges=not args.no_range)
+    return result, whole
+
+
+def cmd_scene(args) -> int:
     if args.list_materials:
         return _list_materials(args)
     flags = {dest: getattr(args, dest) for dest in _FLAG_FIELDS}
@@ -303,37 +336,15 @@ def cmd_scene(args) -> int:
         scene = load_scene(args.file, flags, args.materials or ())
     except ValueError as exc:
         raise _usage_error(str(exc)) from None
-    from ..cli_shared import check_output_paths, numerics_overrides
+    from ..cli_shared import check_output_paths
 
     check_output_paths(plot=args.plot)
     from .trajectory import trajectory_asked
 
-    whole = None
     if scene.stops_outside and not trajectory_asked(args):
-        # the outer flow stops the spheres: no film collision to solve
-        from .run import stopped_result
-
-        d = stopped_result(scene, ranges=not args.no_range)
-        print(json.dumps(d) if args.json else format_report(d))
-        if args.plot:
-            print(f"ehd scene: no figures in {args.plot}: the spheres stop before x0, so there is "
-                  "no film collision to draw", file=sys.stderr)
-        return 0
+        return _report_stopped(scene, args)
     try:
-        # profiles only for the figures: the pressure extremes come from the solver
-        if trajectory_asked(args):  # the scene at the speed its release arrives with
-            from .answer import answer
-            from .trajectory import run_trajectory
-
-            result, *whole = run_trajectory(scene, args, args.accuracy,
-                                            save_profiles=bool(args.plot),
-                                            **numerics_overrides(args))
-            # the range of the scene at its arriving speed (not of every near-field solve)
-            result.answer = answer(result, args.accuracy, numerics_overrides(args),
-                                   ranges=not args.no_range)
-        else:
-            result = run_scene(scene, accuracy=args.accuracy, save_profiles=bool(args.plot),
-                               ranges=not args.no_range, **numerics_overrides(args))
+        result, whole = _solve(scene, args)
     except ValueError as exc:
         raise _usage_error(str(exc)) from None
     except ArithmeticError as exc:  # a numerical failure inside the solver: report, no traceback
@@ -438,30 +449,10 @@ def cmd_paper_figures(args) -> int:
     return 0
 
 
-def _build_scene(sub) -> None:
-    from ..cli_shared import add_numerics_flags
-    from .scene import CAVITATION_CHOICES, DENSITY_CHOICES, ROUGHNESS_CHOICES, VISCOSITY_CHOICES
+def _add_fluid_flags(p) -> None:
+    """``ehd scene``'s fluid flags (the fields of the scene file's [fluid] table)."""
+    from .scene import CAVITATION_CHOICES, DENSITY_CHOICES, VISCOSITY_CHOICES
 
-    p = sub.add_parser(
-        "scene", description="Solve one collision given in physical units, check the model's premises, "
-                    "and report the results in SI and in the scalings. Values are SI numbers or "
-                    "strings with units ('50 um', '10 cm/s', '1 mPa s'). Flags override the file.")
-    p.add_argument("file", nargs="?", default=None, help="scene file (TOML; see docs/scenes.md)")
-    p.add_argument("--title", default=None, help="a line describing the scene")
-    for n in (1, 2):
-        g = p.add_argument_group(f"body{n}" + (" (a sphere, or a plane wall with --wall)" if n == 2 else " (a sphere)"))
-        g.add_argument(f"--material{n}", default=None, help="named material (--list-materials)")
-        g.add_argument(f"--radius{n}", default=None, help="sphere radius, e.g. '50 um' (inf: wall)")
-        g.add_argument(f"--density{n}", default=None, help="density, e.g. '2600 kg/m^3'")
-        g.add_argument(f"--youngs-modulus{n}", dest=f"youngs_modulus{n}", default=None,
-                       help="Young's modulus, e.g. '70 GPa'")
-        g.add_argument(f"--poisson-ratio{n}", dest=f"poisson_ratio{n}", default=None,
-                       help="Poisson ratio in (-1, 0.5]")
-        g.add_argument(f"--yield-strength{n}", dest=f"yield_strength{n}", default=None,
-                       help="yield strength (enables the plasticity check)")
-        g.add_argument(f"--roughness{n}", dest=f"roughness{n}", default=None,
-                       help="rms surface roughness, e.g. '0.3 um' (asperity contact)")
-    p.add_argument("--wall", action="store_true", help="body2 is a plane wall (infinite radius and mass)")
     g = p.add_argument_group("fluid")
     g.add_argument("--fluid", default=None, help="named fluid (--list-materials)")
     g.add_argument("--viscosity", default=None, help="dynamic viscosity, e.g. '1 mPa s'")
@@ -500,6 +491,33 @@ def _build_scene(sub) -> None:
                         "dowson-higginson where the fluid has its constants and the density "
                         "would rise by more than 1%% at the classic peak pressure), or forced "
                         "constant / dowson-higginson")
+
+
+def _build_scene(sub) -> None:
+    from ..cli_shared import add_numerics_flags
+    from .scene import ROUGHNESS_CHOICES
+
+    p = sub.add_parser(
+        "scene", description="Solve one collision given in physical units, check the model's premises, "
+                    "and report the results in SI and in the scalings. Values are SI numbers or "
+                    "strings with units ('50 um', '10 cm/s', '1 mPa s'). Flags override the file.")
+    p.add_argument("file", nargs="?", default=None, help="scene file (TOML; see docs/scenes.md)")
+    p.add_argument("--title", default=None, help="a line describing the scene")
+    for n in (1, 2):
+        g = p.add_argument_group(f"body{n}" + (" (a sphere, or a plane wall with --wall)" if n == 2 else " (a sphere)"))
+        g.add_argument(f"--material{n}", default=None, help="named material (--list-materials)")
+        g.add_argument(f"--radius{n}", default=None, help="sphere radius, e.g. '50 um' (inf: wall)")
+        g.add_argument(f"--density{n}", default=None, help="density, e.g. '2600 kg/m^3'")
+        g.add_argument(f"--youngs-modulus{n}", dest=f"youngs_modulus{n}", default=None,
+                       help="Young's modulus, e.g. '70 GPa'")
+        g.add_argument(f"--poisson-ratio{n}", dest=f"poisson_ratio{n}", default=None,
+                       help="Poisson ratio in (-1, 0.5]")
+        g.add_argument(f"--yield-strength{n}", dest=f"yield_strength{n}", default=None,
+                       help="yield strength (enables the plasticity check)")
+        g.add_argument(f"--roughness{n}", dest=f"roughness{n}", default=None,
+                       help="rms surface roughness, e.g. '0.3 um' (asperity contact)")
+    p.add_argument("--wall", action="store_true", help="body2 is a plane wall (infinite radius and mass)")
+    _add_fluid_flags(p)
     g = p.add_argument_group("contact of the solids")
     g.add_argument("--asperity-contact", dest="asperity_contact", default=None,
                    choices=ROUGHNESS_CHOICES,

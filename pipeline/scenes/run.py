@@ -137,7 +137,7 @@ class SceneResult:
             "roughness_reason": self.roughness_reason, "e_dry_source": s.e_dry_source,
             "cavitation_pressure_Pa": s.cavitation_pressure,
             "status": c.status, "message": c.message,
-            # where e_far reads the speeds (solver/far_field.py; null for two unequal spheres)
+            # where e_far reads the speeds (solver/far_field.py)
             "x_ref_m": s.x_ref_distance, "x_ref_over_a": s.x_ref_distance / s.reduced_radius,
             "outer_start_m": s.outer_start_distance,
             "outer_start_over_a": s.outer_start_distance / s.reduced_radius,
@@ -248,6 +248,7 @@ def run_scene(scene: Scene, accuracy: str = "standard", sensitivity_solves: bool
     from ..environment import compile_notice
 
     compile_notice()  # one line when the solver is about to compile (a silent minute otherwise)
+    outer = scene.outer_flow()
     auto_cav = scene.cavitation == "auto"
     auto_visc = scene.viscosity_law == "auto"
     auto_dens = scene.density_law == "auto"
@@ -256,16 +257,13 @@ def run_scene(scene: Scene, accuracy: str = "standard", sensitivity_solves: bool
     # "Pressure-dependent viscosity and density", "Surface roughness"), with what the scene forces
     base = scene.physics("off" if auto_cav else None, "constant" if auto_visc else None,
                          "constant" if auto_dens else None, "off" if auto_rough else None)
-    overrides = {k: v for k, v in overrides.items() if v is not None}
-    overrides.setdefault("save_profiles", False)
-    outer = scene.outer_flow()
-    overrides["outer"] = outer
+    overrides = {"save_profiles": False,
+                 **{k: v for k, v in overrides.items() if v is not None}, "outer": outer}
     c = collide(base, accuracy=accuracy, **overrides)
-    # the base film's pressure extremes [Pa, gauge], when it was solved
-    p_star = scene.pressure_scale
-    base_p_min = c.p_min * p_star if c.ok else None
-    base_p_max = c.p_max * p_star if c.ok else None
-    base_h_m = c.h_m_x1 * scene.x1 if c.ok else None  # the base film's closest approach [m]
+    # the base film's pressure extremes [Pa, gauge] and closest approach [m], when solved
+    base_p_min, base_p_max, base_h_m = ((c.p_min * scene.pressure_scale,
+                                         c.p_max * scene.pressure_scale, c.h_m_x1 * scene.x1)
+                                        if c.ok else (None, None, None))
     final = scene.physics(
         ("auto" if cavitation_crosses(scene, base_p_min) else "off") if auto_cav else None,
         ("auto" if viscosity_switch(scene, base_p_max) else "constant") if auto_visc else None,
@@ -283,29 +281,37 @@ def run_scene(scene: Scene, accuracy: str = "standard", sensitivity_solves: bool
         "roughness_reason": roughness_reason(scene, c.physics, base_h_m, forced=not auto_rough),
     }
     sensitivity = _sensitivity(c, base, accuracy, overrides) if sensitivity_solves else {}
+    result = SceneResult(scene=scene, collision=c, sensitivity=sensitivity, outer=outer,
+                         **reasons)
+    _check(result, base, base_p_max)
+    options = {k: v for k, v in overrides.items() if k not in ("outer", "save_profiles")}
+    result.answer = answer(result, accuracy, options, ranges=ranges)
+    return result
+
+
+def _check(result: SceneResult, base, base_p_max) -> None:
+    """The validity checks and notes of a solved scene, and its pressure extremes in Pa, into
+    ``result`` (``base``: the film solved first, whose peak pressure ``base_p_max`` [Pa]
+    decided the switches)."""
+    scene, c = result.scene, result.collision
     warnings = premise_checks(scene)
     notes = []
-    p_max = p_min = math.nan
     if c.ok:
         # the solver's extremes over the whole collision, rigid phases included
-        p_max, p_min = c.p_max * p_star, c.p_min * p_star
-        post, notes = outcome_checks(scene, c, p_max, p_min)
+        p_star = scene.pressure_scale
+        result.peak_pressure, result.min_pressure = c.p_max * p_star, c.p_min * p_star
+        post, notes = outcome_checks(scene, c, result.peak_pressure, result.min_pressure)
         warnings += post
     warnings += pressure_checks(scene, base_p_max, base)
     notes += pressure_notes(scene, base_p_max, base)
     if scene.sound_speed is None:
         notes.append("elastic-wave check skipped: no density known for either solid")
-    if outer.geometry == "pair":
+    if result.outer.geometry == "pair":
         notes.append("e_far: two unequal spheres, their relative motion at zero momentum (the "
                      "drag on the pair's centre of mass left out; docs/model.md)")
     if scene.fluid.density is None:
         notes.append("e_far without added mass: the fluid has no density")
-    result = SceneResult(scene=scene, collision=c, warnings=warnings, notes=notes,
-                         peak_pressure=p_max, min_pressure=p_min, sensitivity=sensitivity,
-                         outer=outer, **reasons)
-    options = {k: v for k, v in overrides.items() if k not in ("outer", "save_profiles")}
-    result.answer = answer(result, accuracy, options, ranges=ranges)
-    return result
+    result.warnings, result.notes = warnings, notes
 
 
 # what switching one piece of physics off means in the physics groups
