@@ -28,6 +28,7 @@ import dataclasses
 import math
 
 from .materials import ROUGHNESS_CLASSES
+from .pieces import STIFFNESS_LABELS
 from .units import format_quantity
 
 __all__ = ["ALPHA_UNKNOWN_HIGH", "READING_BAND_OVER_A", "CODE_KINDS", "answer", "stopped_answer"]
@@ -112,8 +113,6 @@ _VARIANTS = (("roughness", _roughness_variants), ("cavitation onset", _cavitatio
              ("pressure-viscosity", _alpha_variants))
 
 
-# the sensitivity's labels of the asperity layer's stiffness (run._sensitivity)
-STIFFNESS_LABELS = ("asperities 10x stiffer", "asperities 10x softer")
 
 
 def _stiffness_driver(result):

@@ -223,6 +223,7 @@ def result_rows(d: dict) -> list[tuple[str, str]]:
 def format_report(d: dict) -> str:
     """Human-readable report of ``SceneResult.to_dict()``."""
     from .checks import per_gpa
+    from .pieces import PIECES
 
     ins = d["inputs"]
     lines = []
@@ -266,10 +267,7 @@ def format_report(d: dict) -> str:
     lines.append("derived")
     lines += [f"  {k:<{width}}  {v}" for k, v in rows]
     lines.append(f"model: {d['model_reason']}")
-    lines.append(f"physics: {d['cavitation_reason']}")
-    lines.append(f"viscosity: {d['viscosity_reason']}")
-    lines.append(f"density: {d['density_reason']}")
-    lines.append(f"contact: {d['roughness_reason']}")
+    lines += [f"{piece.report}: {d[piece.reason_key]}" for piece in PIECES]
     if d["status"] != "ok":
         lines.append(f"solve FAILED ({d['status']}): {d['message']}")
     else:

@@ -12,10 +12,10 @@ from dataclasses import dataclass, field
 from solver import observables
 from solver.physics import Physics
 
-from .checks import (Check, cavitation_crosses, cavitation_reason, density_reason, density_switch,
-                     model_reason, outcome_checks, premise_checks, pressure_checks, pressure_notes,
-                     contact_switch, roughness_reason, viscosity_reason, viscosity_switch)
-from .answer import STIFFNESS_LABELS, answer, stopped_answer
+from .answer import answer, stopped_answer
+from .checks import (Check, model_reason, outcome_checks, premise_checks, pressure_checks,
+                     pressure_notes)
+from .pieces import PIECES, REASON_KEYS, BaseFilm
 from .scene import Scene
 
 __all__ = ["SceneResult", "run_scene", "RESULT_KEYS", "SCALES", "scene_keys", "result_keys",
@@ -29,8 +29,7 @@ _SCENE_KEYS = (
     "range_drivers", "approach_speed_m_per_s", "inputs", "reduced_radius_m", "reduced_mass_kg",
     "theta_per_Pa", "effective_modulus_Pa", "x0_m", "x0_over_a", "x1_m", *Physics.names(), "Re",
     "Re_x0_over_a", "sound_speed_m_per_s", "wave_parameter", "model", "model_reason",
-    "cavitation_reason", "viscosity_reason", "density_reason", "roughness_reason",
-    "e_dry_source", "cavitation_pressure_Pa", "status", "message", "x_ref_m", "x_ref_over_a",
+    *REASON_KEYS, "e_dry_source", "cavitation_pressure_Pa", "status", "message", "x_ref_m", "x_ref_over_a",
     "outer_start_m", "outer_start_over_a", "outer_geometry", "density_ratio", "dem_restitution",
 )
 _LAST_KEYS = ("sensitivity", "warnings", "notes", "dimensionless")
@@ -96,16 +95,22 @@ class SceneResult:
     notes: list[str] = field(default_factory=list)
     peak_pressure: float = math.nan  # Pa
     min_pressure: float = math.nan  # Pa (negative: tension)
-    cavitation_reason: str = ""  # the film model used and why, one sentence with numbers
-    viscosity_reason: str = ""  # the viscosity law used and why, likewise
-    density_reason: str = ""  # the density law used and why, likewise
-    roughness_reason: str = ""  # whether the asperity contact acts and why, likewise
+    # per piece of physics the scene switches (pieces.PIECES): which was used and why, one
+    # sentence with numbers ({reason_key: sentence}; also attributes: result.cavitation_reason)
+    reasons: dict = field(default_factory=dict)
     # the result without each piece of physics the scene switched on (and with the asperity
     # stiffness 10x either way): {label: {"e_wet", "e_far", "v_r", "status"}}
     sensitivity: dict = field(default_factory=dict)
     outer: object = None  # the solver.far_field.OuterFlow e_far was read with (None: none)
     # the verdict and the e per code kind with their ranges (answer.answer); {} until computed
     answer: dict = field(default_factory=dict)
+
+    def __getattr__(self, name):
+        # each piece's reason as an attribute too (result.viscosity_reason, examples/)
+        reasons = self.__dict__.get("reasons", {})
+        if name in reasons:
+            return reasons[name]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def to_dict(self) -> dict:
         """All results (keys ``RESULT_KEYS``), SI with the unit in the key, non-finite as None."""
@@ -132,9 +137,8 @@ class SceneResult:
             "Re_x0_over_a": s.reynolds * s.x0 / s.reduced_radius,
             "sound_speed_m_per_s": s.sound_speed, "wave_parameter": s.wave_parameter,
             "model": c.model, "model_reason": model_reason(s, c),
-            "cavitation_reason": self.cavitation_reason,
-            "viscosity_reason": self.viscosity_reason, "density_reason": self.density_reason,
-            "roughness_reason": self.roughness_reason, "e_dry_source": s.e_dry_source,
+            **{key: self.reasons.get(key, "") for key in REASON_KEYS},
+            "e_dry_source": s.e_dry_source,
             "cavitation_pressure_Pa": s.cavitation_pressure,
             "status": c.status, "message": c.message,
             # where e_far reads the speeds (solver/far_field.py)
@@ -249,41 +253,23 @@ def run_scene(scene: Scene, accuracy: str = "standard", sensitivity_solves: bool
 
     compile_notice()  # one line when the solver is about to compile (a silent minute otherwise)
     outer = scene.outer_flow()
-    auto_cav = scene.cavitation == "auto"
-    auto_visc = scene.viscosity_law == "auto"
-    auto_dens = scene.density_law == "auto"
-    auto_rough = scene.asperity_contact == "auto"
+    auto = [p for p in PIECES if getattr(scene, p.field) == "auto"]
     # the automatic switches start from the classic film (docs/scenes.md, "Cavitation",
     # "Pressure-dependent viscosity and density", "Surface roughness"), with what the scene forces
-    base = scene.physics("off" if auto_cav else None, "constant" if auto_visc else None,
-                         "constant" if auto_dens else None, "off" if auto_rough else None)
+    base = scene.physics(**{p.field: p.base for p in auto})
     overrides = {"save_profiles": False,
                  **{k: v for k, v in overrides.items() if v is not None}, "outer": outer}
     c = collide(base, accuracy=accuracy, **overrides)
-    # the base film's pressure extremes [Pa, gauge] and closest approach [m], when solved
-    base_p_min, base_p_max, base_h_m = ((c.p_min * scene.pressure_scale,
-                                         c.p_max * scene.pressure_scale, c.h_m_x1 * scene.x1)
-                                        if c.ok else (None, None, None))
-    final = scene.physics(
-        ("auto" if cavitation_crosses(scene, base_p_min) else "off") if auto_cav else None,
-        ("auto" if viscosity_switch(scene, base_p_max) else "constant") if auto_visc else None,
-        ("auto" if density_switch(scene, base_p_max) else "constant") if auto_dens else None,
-        ("on" if contact_switch(scene, c) else "off") if auto_rough else None)
+    first = BaseFilm.of(scene, c)
+    final = scene.physics(**{p.field: p.on if p.switch(scene, first) else p.base for p in auto})
     if final != base:
         c = collide(final, accuracy=accuracy, **overrides)
-    reasons = {
-        "cavitation_reason": cavitation_reason(scene, c.physics, base_p_min, forced=not auto_cav,
-                                               base=base),
-        "viscosity_reason": viscosity_reason(scene, c.physics, base_p_max, forced=not auto_visc,
-                                             base=base),
-        "density_reason": density_reason(scene, c.physics, base_p_max, forced=not auto_dens,
-                                         base=base),
-        "roughness_reason": roughness_reason(scene, c.physics, base_h_m, forced=not auto_rough),
-    }
+    reasons = {p.reason_key: p.reason(scene, c.physics, first, p not in auto, base)
+               for p in PIECES}
     sensitivity = _sensitivity(c, base, accuracy, overrides) if sensitivity_solves else {}
     result = SceneResult(scene=scene, collision=c, sensitivity=sensitivity, outer=outer,
-                         **reasons)
-    _check(result, base, base_p_max)
+                         reasons=reasons)
+    _check(result, base, first.p_max)
     options = {k: v for k, v in overrides.items() if k not in ("outer", "save_profiles")}
     result.answer = answer(result, accuracy, options, ranges=ranges)
     return result
@@ -314,17 +300,6 @@ def _check(result: SceneResult, base, base_p_max) -> None:
     result.warnings, result.notes = warnings, notes
 
 
-# what switching one piece of physics off means in the physics groups
-_PIECES = (
-    ("without cavitation", lambda p: p.cavitation != "off", dict(cavitation="off")),
-    ("without pressure-dependent viscosity", lambda p: p.viscosity_law != "constant",
-     dict(viscosity_law="constant", beta=0.0, viscosity_table="")),
-    ("without pressure-dependent density", lambda p: p.density_law != "constant",
-     dict(density_law="constant")),
-    ("without roughness", lambda p: not p.smooth, dict(roughness=0.0)),
-)
-
-
 def _sensitivity(c, base, accuracy, overrides) -> dict:
     """The scene's result without each piece of physics it switched on itself (one solve each),
     and with a 10x stiffer and softer asperity layer (its stiffness is the least known input):
@@ -333,12 +308,12 @@ def _sensitivity(c, base, accuracy, overrides) -> dict:
 
     final = c.physics
     variants = {}
-    for label, on, off in _PIECES:
+    for piece in PIECES:
+        label, on, off = piece.without
         if on(final) and not on(base):
             variants[label] = final.replace(**off)
-    if not final.smooth:
-        for factor, label in zip((10.0, 0.1), STIFFNESS_LABELS):
-            variants[label] = final.replace(asperity_stiffness=final.asperity_stiffness * factor)
+    for piece in PIECES:
+        variants.update(piece.variants(final))
     out = {}
     for label, physics in variants.items():
         r = collide(physics, accuracy=accuracy, **overrides)
