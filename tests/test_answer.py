@@ -307,3 +307,40 @@ def test_a_tiny_rebound_is_not_shown_as_zero():
     from pipeline.scenes.commands import _e3
 
     assert _e3(1.1e-4) == "0.00011" and _e3(0.0) == "0.000" and _e3(0.7584) == "0.758"
+
+
+def test_a_settling_approach_is_the_terminal_speed_and_arrives_slowed(table):
+    """approach_speed = "settling": Stokes' terminal speed in the Stokes regime (closed form,
+    2 (rho_p - rho_f) g a^2 / (9 mu), to the root finder's 1e-12), and v0 below it: the wall
+    slows the sphere on its way from 10 a to x0."""
+    from pipeline.scenes.trajectory import STANDARD_GRAVITY
+
+    top = {"approach_speed": "settling", "body1": {"material": "glass", "radius": "20 um"},
+           "body2": {"material": "glass", "wall": True},
+           "fluid": {"name": "glycerol_water_80"}}
+    scene = scene_from_dict(top, table)
+    rho_p, rho_f, mu = scene.body1.solid.density, scene.fluid.density, scene.fluid.viscosity
+    stokes = 2.0 * (rho_p - rho_f) * STANDARD_GRAVITY * 20e-6 ** 2 / (9.0 * mu)
+    assert scene.approach_speed_source.startswith("settling (stokes drag")
+    assert scene.approach_speed == pytest.approx(stokes, rel=1e-9)
+    assert 0.0 < scene.v0 < scene.approach_speed
+    # a sphere lighter than the fluid does not settle: one line
+    with pytest.raises(SceneError, match="denser than the fluid"):
+        scene_from_dict(top | {"body1": {"material": "polystyrene", "radius": "20 um"},
+                               "fluid": {"name": "glycerol_water_80"}}, table)
+
+
+def test_a_settling_sphere_with_inertia_arrives_as_the_integrated_motion_and_near_the_balance(
+        table):
+    """Above QUASI_STEADY_BELOW the motion is integrated; its arrival speed lies below the
+    terminal speed and above the overdamped balance speed at x0 (inertia carries it in)."""
+    from pipeline.scenes import trajectory as tr
+
+    scene = scene_from_dict({"approach_speed": "settling",
+                             "body1": {"material": "steel", "radius": "1.5 mm"},
+                             "body2": {"material": "glass", "wall": True},
+                             "fluid": {"name": "silicone_oil_104cst"}}, table)
+    assert scene.stokes_of(scene.approach_speed) > tr.QUASI_STEADY_BELOW
+    outer = tr._outer(scene, tr.auto_drag_law(scene))
+    balance = tr._balance_speed(outer, scene.x0, scene.approach_speed)
+    assert balance < scene.v0 < scene.approach_speed

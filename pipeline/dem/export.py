@@ -180,7 +180,7 @@ def scene_path(scene, vary: str, factors) -> list:
     and ``x_ref`` with them, keeping their ratios to ``a``) times each factor. eps moves along
     the path with the speed and size: that is the point. A scene given its approach speed keeps
     it along a path in size (``v0`` mapped again: ``scene_file.at_approach_speed``)."""
-    from pipeline.scenes.scene_file import at_approach_speed
+    from pipeline.scenes.scene_file import at_approach_speed, at_settling
 
     if vary == "v0" and scene.stops_outside:
         from pipeline.scenes.scene import SceneError
@@ -201,7 +201,9 @@ def scene_path(scene, vary: str, factors) -> list:
             outer = {k: None if getattr(scene, k) is None else getattr(scene, k) * f
                      for k in ("outer_start", "x_ref")}
             scaled = dataclasses.replace(scene, body1=b1, body2=b2, x0=scene.x0 * f, **outer)
-            if scene.approach_speed is not None:
+            if scene.approach_speed_source.startswith("settling"):  # settles at its own speed
+                scaled = at_settling(scaled)
+            elif scene.approach_speed is not None:
                 scaled = at_approach_speed(scaled, scene.approach_speed)
             scenes.append(scaled)
         else:

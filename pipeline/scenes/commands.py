@@ -182,12 +182,17 @@ def answer_lines(d: dict) -> list[str]:
                  f"{d['verdict'].replace('sticks', 'stick').replace('rebounds', 'rebound')}"]
         lines += _e_lines(d)
     approach = d["approach_speed_m_per_s"]
+    source = d["inputs"]["approach_speed_source"] or ""
     given = d["inputs"]["approach_speed_m_per_s"] is not None
+    if source.startswith("settling"):
+        where, how = f"far out, {source}", "through the settling motion"
+    else:
+        where = (f"at the outer start {d['outer_start_over_a']:.3g} a "
+                 f"({'given' if given else 'what arrives at x0 with v0'})")
+        how = "through the outer flow" if given else "given"
     lines.append(
-        f"speeds: approach {'-' if approach is None else _q(approach, 'm/s')} at the outer start "
-        f"{d['outer_start_over_a']:.3g} a ({'given' if given else 'what arrives at x0 with v0'}), "
-        f"v0 {_q(d['inputs']['v0_m_per_s'], 'm/s')} at x0 = {d['x0_over_a']:.3g} a "
-        f"({'through the outer flow' if given else 'given'})")
+        f"speeds: approach {'-' if approach is None else _q(approach, 'm/s')} {where}, "
+        f"v0 {_q(d['inputs']['v0_m_per_s'], 'm/s')} at x0 = {d['x0_over_a']:.3g} a ({how})")
     return lines
 
 

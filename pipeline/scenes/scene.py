@@ -123,6 +123,8 @@ class Scene:
     # from it through the outer flow, 0 when the outer flow stops the spheres before x0); None:
     # the scene gave v0 (docs/scenes.md, "The approach speed")
     approach_speed: float | None = None
+    # how the approach speed was set: "given", or "settling (<law> drag, from 10 a)"
+    approach_speed_source: str = ""
 
     def __post_init__(self):
         # a forced law the fluid has no constants for is refused here, before anything is solved
@@ -446,6 +448,7 @@ class Scene:
                           "dowson_higginson_c2_per_Pa": f.dowson_higginson_c2,
                           "source": f.source, "pressure_source": f.pressure_source},
                 "v0_m_per_s": self.v0, "approach_speed_m_per_s": self.approach_speed,
+                "approach_speed_source": self.approach_speed_source,
                 "x0_m": self.x0}
 
 

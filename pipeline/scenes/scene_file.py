@@ -15,7 +15,7 @@ from .scene import (CAVITATION_CHOICES, DENSITY_CHOICES, ROUGHNESS_CHOICES, STAN
                     VISCOSITY_CHOICES, Body, Scene, SceneError, _reduced)
 from .units import FieldSpec, format_quantity, to_si
 
-__all__ = ["scene_from_dict", "DEFAULT_X0_OVER_A", "at_approach_speed"]
+__all__ = ["scene_from_dict", "DEFAULT_X0_OVER_A", "at_approach_speed", "at_settling"]
 
 DEFAULT_X0_OVER_A = 0.01  # docs/model.md "Setting": the close stage starts at x0 ~ 0.01 a
 
@@ -320,6 +320,8 @@ def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
                   cavitation_pressure_source=how, cavitation=cavitation,
                   outer_start=outer_start, x_ref=x_ref, **laws,
                   asperity_contact=contact, e_dry=e_dry, e_dry_source=e_dry_source)
+    if approach == "settling":
+        return at_settling(scene)
     return scene if approach is None else at_approach_speed(scene, approach)
 
 
@@ -331,12 +333,29 @@ def _speeds(data):
                          "(the speed at the outer start, where the sphere has not yet slowed), "
                          "not both")
     if "approach_speed" in data:
-        return None, to_si(data["approach_speed"], _SPEED, "approach_speed")
+        given = data["approach_speed"]
+        if isinstance(given, str) and given.strip().lower() == "settling":
+            return None, "settling"
+        return None, to_si(given, _SPEED, "approach_speed")
     if "v0" not in data:
         raise SceneError("missing the speed: give approach_speed (the speed far from the wall, "
                          "e.g. approach_speed = '15 cm/s') or v0 (the speed at the film's start "
                          "x0, e.g. v0 = '10 cm/s')")
     return to_si(data["v0"], _SPEED, "v0"), None
+
+
+def at_settling(scene: Scene) -> Scene:
+    """The scene with body 1 settling onto body 2 (``approach_speed = "settling"``): the
+    approach speed is the drag law's terminal speed, ``v0`` what arrives at ``x0`` through the
+    whole outer motion with gravity (``trajectory.settling_arrival``)."""
+    import dataclasses
+
+    from .trajectory import DEFAULT_RELEASE_GAP_OVER_A, settling_arrival
+
+    terminal, v0, law = settling_arrival(dataclasses.replace(scene, v0=1.0))
+    return dataclasses.replace(scene, v0=v0, approach_speed=terminal,
+                               approach_speed_source=f"settling ({law} drag, from "
+                                                     f"{DEFAULT_RELEASE_GAP_OVER_A:g} a)")
 
 
 def at_approach_speed(scene: Scene, approach: float) -> Scene:
@@ -347,4 +366,5 @@ def at_approach_speed(scene: Scene, approach: float) -> Scene:
 
     outer = scene.outer_flow()
     v0 = approach * max(0.0, outer.arrival_speed(scene.stokes_of(approach)))
-    return dataclasses.replace(scene, v0=v0, approach_speed=approach)
+    return dataclasses.replace(scene, v0=v0, approach_speed=approach,
+                               approach_speed_source="given")

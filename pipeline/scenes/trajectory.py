@@ -82,16 +82,65 @@ def _release(scene, args):
     text = args.release_speed
     speed = None if text in (None, "settling") else to_si(text, _SPEED, "release_speed")
     law = args.drag_law or "auto"
-    if law == "auto":  # the first law whose range holds the release (checked again below)
-        for name in drag.DRAG_LAWS:
-            outer = _outer(scene, name)
-            fastest = max(speed or 0.0, _terminal(outer))
-            if all(re <= drag.DRAG_LAWS[name].re_max for re in outer.reynolds_numbers(fastest)):
-                law = name
-                break
-        else:
-            law = "clift-gauvin"
+    if law == "auto":
+        law = auto_drag_law(scene, speed)
     return gap, speed, law
+
+
+def auto_drag_law(scene, speed=None) -> str:
+    """The first drag law whose Reynolds range holds the faster of ``speed`` [m/s] and the
+    terminal speed (checked again where it is used)."""
+    from solver.model import drag
+
+    for name in drag.DRAG_LAWS:
+        outer = _outer(scene, name)
+        fastest = max(speed or 0.0, _terminal(outer))
+        if all(re <= drag.DRAG_LAWS[name].re_max for re in outer.reynolds_numbers(fastest)):
+            return name
+    return "clift-gauvin"
+
+
+def settling_arrival(scene) -> tuple:
+    """``(terminal speed, speed at x0 [m/s], drag law)`` of body 1 settling onto body 2: released
+    at ``DEFAULT_RELEASE_GAP_OVER_A a`` with the drag law's terminal speed, followed with
+    gravity, buoyancy, the added mass and the drag joined to the exact Stokes resistance
+    (solver/trajectory.py) down to ``x0``; 0 at x0 when it stops before (a sphere lighter than
+    the fluid rises: refused). An overdamped sphere (``QUASI_STEADY_BELOW``) arrives with the
+    speed at which the drag at ``x0`` balances its weight."""
+    from solver.trajectory import motion
+
+    law = auto_drag_law(scene)
+    outer = _outer(scene, law)
+    terminal = _terminal(outer)
+    if not terminal > 0.0:
+        raise SceneError("approach_speed = 'settling' needs body1 denser than the fluid (it "
+                         "would rise, not settle): give the approach speed itself")
+    if scene.stokes_of(terminal) < QUASI_STEADY_BELOW:
+        return terminal, _balance_speed(outer, scene.x0, terminal), law
+    _, x, u, _, ended = motion(outer, DEFAULT_RELEASE_GAP_OVER_A * scene.reduced_radius,
+                               -terminal, until_gap=scene.x0)
+    return terminal, (abs(float(u[-1])) if ended == "gap" else 0.0), law
+
+
+# Below this Stokes number of the terminal speed a settling sphere is overdamped: its inertia
+# relaxes in St_V of the time it takes to cross a radius, so it moves at the speed where the drag
+# balances its weight, and the explicit integration of the motion (solver/trajectory.py) would
+# take ~1/St_V times the steps of an inertial one (a 20 um glass bead in 80 % glycerol-water,
+# St_V 1e-5: minutes). The speed it leaves out is a fraction ~St_V of v0.
+QUASI_STEADY_BELOW = 1e-2
+
+
+def _balance_speed(outer, gap: float, terminal: float) -> float:
+    """The speed [m/s] at which the drag at ``gap`` balances the buoyant weight (the resistance
+    grows near the wall and with the speed: one root below the terminal speed)."""
+    from scipy import optimize
+
+    k = 6.0 * math.pi * outer.viscosity * outer.a
+
+    def balance(v):
+        return k * v * outer.resistance_and_mass(gap, -v)[0] - outer.weight
+
+    return optimize.brentq(balance, 0.0, terminal, xtol=1e-15 * terminal, rtol=1e-13)
 
 
 def _terminal(outer):
