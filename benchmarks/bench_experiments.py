@@ -303,8 +303,8 @@ def measured_section(traj: dict | None, runs: list) -> list[str]:
              "The measured data first: the two Gondret, Lance & Petit (2002) runs, digitized gap "
              "against time, drawn against the whole computed trajectory (the sphere settling from "
              f"{traj['release_over_a']:g} a at the drag law's terminal speed, the near field, the "
-             "rebound to the top of its first bounce) in `benchmarks/trajectory.png`, table and "
-             "inputs in `benchmarks/trajectory.md` (`benchmarks/bench_trajectory.py`, accuracy "
+             "rebound to the top of its first bounce) in the top row of `benchmarks/experiments.png` "
+             "and in `benchmarks/trajectory.png`, table and inputs in `benchmarks/trajectory.md` (`benchmarks/bench_trajectory.py`, accuracy "
              f"`{traj['accuracy']}`). `e` is read the same way from both (docs/model.md, \"Reading "
              "e as experiments do\"); the St 27 file has no approach, its measured `e` rests on "
              "the reported impact speed. St here is the one of the speed read on approach. "
@@ -540,6 +540,17 @@ def _measured_points(ax, r: dict, traj: dict | None, runs: list) -> None:
                 label=f"computed trajectory ({label}), read the same way")
 
 
+def _trajectory_panels(subfig, drawn: list) -> None:
+    """The Gondret trajectories, computed against measured (gap against time), as
+    benchmarks/bench_trajectory.py draws them from its .json."""
+    from bench_trajectory import draw_run
+
+    for ax, rec in zip(subfig.subplots(1, len(drawn)), drawn):
+        draw_run(ax, rec)
+        ax.set_title(f"measured: {rec['name']}", fontsize=8)
+        ax.legend(loc="upper right", fontsize=6)
+
+
 def figure(data: dict, out: Path, traj: dict | None = None) -> None:
     import matplotlib
 
@@ -555,8 +566,14 @@ def figure(data: dict, out: Path, traj: dict | None = None) -> None:
     with matplotlib.style.context("default"), matplotlib.rc_context(_RC):
         ncol = 2
         nrow = math.ceil(len(runs) / ncol)
-        fig, axes = plt.subplots(nrow, ncol, figsize=(8.0, 2.4 * nrow), sharex=True,
-                                 sharey=True, layout="constrained")
+        drawn = [rec for rec in (traj or {}).get("runs", []) if "curves" in rec]
+        top = 3.0 if drawn else 0.0  # the measured trajectories first, when there are any
+        fig = plt.figure(figsize=(8.0, 2.4 * nrow + top), layout="constrained")
+        above, below = fig.subfigures(2, 1, height_ratios=[top, 2.4 * nrow]) if drawn \
+            else (None, fig)
+        if drawn:
+            _trajectory_panels(above, drawn)
+        axes = below.subplots(nrow, ncol, sharex=True, sharey=True)
         st = np.geomspace(1.0, 2000.0, 300)
         for ax, r in zip(axes.flat, runs):
             ax.plot(st, correlation(st, r["inputs"]), color="0.4", lw=3, alpha=0.5,
