@@ -19,6 +19,10 @@ land (issue 17, items 1-3), their variants are a line each; ``MISSING`` lists th
     python benchmarks/bench_experiments.py --report   # rewrite .md/.png from the .json
     python benchmarks/bench_experiments.py --quick    # smoke run (3 speeds), output in /tmp
 
+The report and the figure lead with the measured data: the Gondret trajectories of
+``benchmarks/trajectory.json`` (written by ``bench_trajectory.py``, run it first; read, never
+recomputed here), computed against measured, with e read the same way from both.
+
 writes ``benchmarks/experiments.md``, ``experiments.json`` and ``experiments.png``. One process,
 one scene at a time, standard preset; deterministic (the .json's one timing is
 ``wall_time_s``).
