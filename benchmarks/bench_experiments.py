@@ -19,6 +19,10 @@ land (issue 17, items 1-3), their variants are a line each; ``MISSING`` lists th
     python benchmarks/bench_experiments.py --report   # rewrite .md/.png from the .json
     python benchmarks/bench_experiments.py --quick    # smoke run (3 speeds), output in /tmp
 
+The report and the figure lead with the measured data: the Gondret trajectories of
+``benchmarks/trajectory.json`` (written by ``bench_trajectory.py``, run it first; read, never
+recomputed here), computed against measured, with e read the same way from both.
+
 writes ``benchmarks/experiments.md``, ``experiments.json`` and ``experiments.png``. One process,
 one scene at a time, standard preset; deterministic (the .json's one timing is
 ``wall_time_s``).
@@ -283,10 +287,58 @@ def _threshold_cell(v: dict, st_min: float) -> str:
     return f"< {st_min:g}" if v.get("St_c_below_path") else "-"
 
 
-def report(data: dict, seconds: float | None) -> str:
+TRAJECTORY_JSON = HERE / "trajectory.json"  # benchmarks/bench_trajectory.py: computed vs measured
+
+
+def measured_st(rec: dict, runs: list) -> float:
+    """The St of a measured Gondret trajectory, from the approach speed read from it (or the
+    reported impact speed when the file has no approach): the run's St scales with the speed."""
+    r = next(x for x in runs if x["name"] == rec["name"])
+    return r["inputs"]["St_reported_speed"] * rec["measured"]["u_in"] / rec["impact_speed_reported"]
+
+
+def measured_section(traj: dict | None, runs: list) -> list[str]:
+    """The comparison with measured data, first: the Gondret trajectories of
+    benchmarks/trajectory.json (benchmarks/bench_trajectory.py), read the same way as the model's."""
+    if traj is None:
+        return ["## Against measured trajectories", "",
+                "`benchmarks/trajectory.json` is missing: run `benchmarks/bench_trajectory.py`.", ""]
+    lines = ["## Against measured trajectories", "",
+             "The measured data first: the two Gondret, Lance & Petit (2002) runs, digitized gap "
+             "against time, drawn against the whole computed trajectory (the sphere settling from "
+             f"{traj['release_over_a']:g} a at the drag law's terminal speed, the near field, the "
+             "rebound to the top of its first bounce) in the top row of `benchmarks/experiments.png` "
+             "and in `benchmarks/trajectory.png`, table and inputs in `benchmarks/trajectory.md` (`benchmarks/bench_trajectory.py`, accuracy "
+             f"`{traj['accuracy']}`). `e` is read the same way from both (docs/model.md, \"Reading "
+             "e as experiments do\"); the St 27 file has no approach, its measured `e` rests on "
+             "the reported impact speed. St here is the one of the speed read on approach. "
+             "Nothing is fitted.", "",
+             "![computed against measured trajectories](trajectory.png)", "",
+             "| run | St measured | e measured | top measured mm | variant | St computed | "
+             "e computed | e computed - measured | top computed mm | top computed / measured |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for rec in traj["runs"]:
+        m = rec["measured"]
+        head = (f"| {rec['name']} | {measured_st(rec, runs):.1f} | {_f(m['e'])} | "
+                f"{_f(m['top_m'] * 1e3, '.2f')} |")
+        for label, c in rec["computed"].items():
+            st_in = c["St"] * c["u_in"] / c["arrival_speed_m_per_s"]
+            lines.append(f"{head} {label} | {st_in:.1f} | {_f(c['e_observed'])} | "
+                         f"{c['e_observed'] - m['e']:+.3f} | "
+                         f"{_f(c['rebound_height_m'] * 1e3, '.2f')} | "
+                         f"{_f(c['rebound_height_m'] / m['top_m'], '.2f')} |")
+            head = "| | | | |"
+    lines += ["", "Everything below compares the model with a correlation of the experiments, not "
+              "with their data.", ""]
+    return lines
+
+
+def report(data: dict, seconds: float | None, traj: dict | None = None) -> str:
     path = np.array(data["St_path"])
     names = data["variants"]
-    lines = ["# Experiments: the model's wet restitution on published sphere-wall conditions", "",
+    lines = ["# Experiments: the model against measured collisions, then against a correlation",
+             ""] + measured_section(traj, data["runs"]) + [
+             "## Against the experiments' correlation", "",
              "`python benchmarks/bench_experiments.py` (`make bench-experiments`; "
              + (f"{seconds / 60:.1f} min" if seconds else "a few minutes")
              + f" on one core of the shared 2-core machine, `{data['accuracy']}` preset, "
@@ -478,7 +530,32 @@ def _signed(name, run, path, band):
     return float(d[np.nanargmax(np.abs(d))])
 
 
-def figure(data: dict, out: Path) -> None:
+def _measured_points(ax, r: dict, traj: dict | None, runs: list) -> None:
+    """The e read from the measured Gondret trajectory and from the computed one, the same way
+    (benchmarks/trajectory.json), at the St of the speed each was read with."""
+    rec = next((x for x in (traj or {}).get("runs", []) if x["name"] == r["name"]), None)
+    if rec is None:
+        return
+    ax.plot([measured_st(rec, runs)], [rec["measured"]["e"]], "k*", ms=11, zorder=7,
+            label="measured trajectory, e read as docs/model.md says")
+    for label, c in rec["computed"].items():
+        ax.plot([c["St"] * c["u_in"] / c["arrival_speed_m_per_s"]], [c["e_observed"]],
+                "D" if label == "scene's own choice" else "v", ms=6, mfc="w", mec="k", zorder=6,
+                label=f"computed trajectory ({label}), read the same way")
+
+
+def _trajectory_panels(subfig, drawn: list) -> None:
+    """The Gondret trajectories, computed against measured (gap against time), as
+    benchmarks/bench_trajectory.py draws them from its .json."""
+    from bench_trajectory import draw_run
+
+    for ax, rec in zip(subfig.subplots(1, len(drawn)), drawn):
+        draw_run(ax, rec)
+        ax.set_title(f"measured: {rec['name']}", fontsize=8)
+        ax.legend(loc="upper right", fontsize=6)
+
+
+def figure(data: dict, out: Path, traj: dict | None = None) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -493,12 +570,19 @@ def figure(data: dict, out: Path) -> None:
     with matplotlib.style.context("default"), matplotlib.rc_context(_RC):
         ncol = 2
         nrow = math.ceil(len(runs) / ncol)
-        fig, axes = plt.subplots(nrow, ncol, figsize=(8.0, 2.4 * nrow), sharex=True,
-                                 sharey=True, layout="constrained")
+        drawn = [rec for rec in (traj or {}).get("runs", []) if "curves" in rec]
+        top = 3.0 if drawn else 0.0  # the measured trajectories first, when there are any
+        fig = plt.figure(figsize=(8.0, 2.4 * nrow + top), layout="constrained")
+        above, below = fig.subfigures(2, 1, height_ratios=[top, 2.4 * nrow]) if drawn \
+            else (None, fig)
+        if drawn:
+            _trajectory_panels(above, drawn)
+        axes = below.subplots(nrow, ncol, sharex=True, sharey=True)
         st = np.geomspace(1.0, 2000.0, 300)
         for ax, r in zip(axes.flat, runs):
             ax.plot(st, correlation(st, r["inputs"]), color="0.4", lw=3, alpha=0.5,
-                    label=r"correlation $e/e_{dry} = e^{-35/St_L}$")
+                    label=r"a correlation, not data: $e/e_{dry} = e^{-35/St_L}$")
+            _measured_points(ax, r, traj, runs)
             ax.axvline(10.0, color="0.3", ls="--", lw=0.8, label="no rebound below St ~ 10")
             for k, n in enumerate(names):
                 e = [np.nan if p["e"] is None else p["e"] for p in r["variants"][n]["path"]]
@@ -554,8 +638,9 @@ def main(argv=None) -> int:
         seconds = time.perf_counter() - t0
         data["wall_time_s"] = round(seconds)  # the one timing, for the report's first line
         data = harness.write_json(out / "experiments.json", data, load_start)
-    (out / "experiments.md").write_text(report(data, seconds))
-    figure(data, out / "experiments.png")
+    traj = json.loads(TRAJECTORY_JSON.read_text()) if TRAJECTORY_JSON.exists() else None
+    (out / "experiments.md").write_text(report(data, seconds, traj))
+    figure(data, out / "experiments.png", traj)
     print(f"wrote {out}/experiments.md, .json, .png"
           + (f" in {seconds:.0f} s" if seconds else ""))
     return 0

@@ -11,7 +11,7 @@ trajectory's wall time over the near-field solve it contains. Nothing is fitted.
 
     .venv/bin/python benchmarks/bench_trajectory.py [--data DIR]
 
-writes benchmarks/trajectory.json, trajectory.md and trajectory.png.
+writes benchmarks/trajectory.json (with the figures' series), trajectory.md and trajectory.png.
 """
 
 from __future__ import annotations
@@ -147,7 +147,55 @@ def report(data: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def figure(data: dict, curves: dict, out: Path) -> None:
+CURVE_POINTS = 600  # a computed trajectory resampled for the figures (its dense near field too)
+
+
+def aligned_curves(rec: dict, curves: dict) -> dict:
+    """The figures' series of one run, time from the first contact [ms] and gap [mm]: every
+    computed trajectory from its closest approach, resampled on ``CURVE_POINTS`` uniform times;
+    the measured points shifted so that their first rebound point lies on the scene's own
+    choice's departure (the files' origin of time is arbitrary)."""
+    t, gap = curves[(rec["name"], "measured")]
+    first = int(np.nonzero(np.diff(gap) > 0.0)[0][0])  # the first contact
+    out, shift = {}, None
+    for label, _ in VARIANTS:
+        tr = curves[(rec["name"], label)]
+        k0 = int(np.argmin(tr.gap))
+        if shift is None:
+            dep_t, dep_x = tr.t[k0:] - tr.t[k0], tr.gap[k0:]
+            top = int(np.argmax(dep_x))
+            shift = np.interp(gap[first], dep_x[:top + 1], dep_t[:top + 1]) - t[first]
+        ts = np.linspace(tr.t[0], tr.t[-1], CURVE_POINTS)
+        gs = np.interp(ts, tr.t, tr.gap)
+        ts, gs = np.append(ts, tr.t[k0]), np.append(gs, tr.gap[k0])  # keep the closest approach
+        order = np.argsort(ts)
+        out[label] = {"t_ms": _rounded((ts[order] - tr.t[k0]) * 1e3),
+                      "gap_mm": _rounded(gs[order] * 1e3)}
+    out["measured"] = {"t_ms": _rounded((t + shift) * 1e3), "gap_mm": _rounded(gap * 1e3)}
+    return out
+
+
+def _rounded(x) -> list:
+    return [float(f"{v:.6g}") for v in x]
+
+
+def draw_run(ax, rec: dict) -> None:
+    """One run's trajectories, computed against measured (``rec["curves"]``), on ``ax``."""
+    c = rec["curves"]
+    for label, _ in VARIANTS:
+        ax.plot(c[label]["t_ms"], c[label]["gap_mm"],
+                label=f"{label}: e = {rec['computed'][label]['e_observed']:.2f}")
+    t, gap = np.array(c["measured"]["t_ms"]), np.array(c["measured"]["gap_mm"])
+    ax.plot(t, gap, "ko", ms=3, label=f"measured: e = {rec['measured']['e']:.2f}")
+    ax.set_xlim(t[0] - 15, t[-1] + 5)
+    ax.set_ylim(0, 1.3 * max(gap.max(), 1.0))
+    ax.set_xlabel("time from the first contact [ms]")
+    ax.set_ylabel("gap [mm]")
+    ax.set_title(rec["name"])
+    ax.legend(loc="upper right", fontsize=7)
+
+
+def figure(data: dict, out: Path) -> None:
     import matplotlib
     from matplotlib.figure import Figure
 
@@ -156,28 +204,7 @@ def figure(data: dict, curves: dict, out: Path) -> None:
     with matplotlib.rc_context(STYLE):
         fig = Figure(figsize=(10, 4.2))
         for k, rec in enumerate(data["runs"]):
-            ax = fig.add_subplot(1, 2, k + 1)
-            t, gap = curves[(rec["name"], "measured")]
-            for label, _ in VARIANTS:
-                tr = curves[(rec["name"], label)]
-                # time from the first contact; the measured points shifted so that their first
-                # rebound point lies on the computed departure (the files' origin is arbitrary)
-                k0 = int(np.argmin(tr.gap))
-                first = int(np.nonzero(np.diff(gap) > 0.0)[0][0])  # the first contact
-                dep_t, dep_x = tr.t[k0:] - tr.t[k0], tr.gap[k0:]
-                top = int(np.argmax(dep_x))
-                shift = np.interp(gap[first], dep_x[:top + 1], dep_t[:top + 1]) - t[first] \
-                    if label == VARIANTS[0][0] else shift
-                ax.plot((tr.t - tr.t[k0]) * 1e3, tr.gap * 1e3,
-                        label=f"{label}: e = {rec['computed'][label]['e_observed']:.2f}")
-            ax.plot((t + shift) * 1e3, gap * 1e3, "ko", ms=3,
-                    label=f"measured: e = {rec['measured']['e']:.2f}")
-            ax.set_xlim((t[0] + shift) * 1e3 - 15, (t[-1] + shift) * 1e3 + 5)
-            ax.set_ylim(0, 1.3 * max(gap.max(), 1e-3) * 1e3)
-            ax.set_xlabel("time from the first contact [ms]")
-            ax.set_ylabel("gap [mm]")
-            ax.set_title(rec["name"])
-            ax.legend(loc="upper right", fontsize=7)
+            draw_run(fig.add_subplot(1, 2, k + 1), rec)
         fig.savefig(out, metadata={"Software": None})
 
 
@@ -187,9 +214,11 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     load_start = harness.load_now()
     data, curves = measure(Path(args.data))
+    for rec in data["runs"]:  # the figures' series (bench_experiments.py draws them too)
+        rec["curves"] = aligned_curves(rec, curves)
     data = harness.write_json(HERE / "trajectory.json", data, load_start)
     (HERE / "trajectory.md").write_text(report(data))
-    figure(data, curves, HERE / "trajectory.png")
+    figure(data, HERE / "trajectory.png")
     print(report(data))
     return 0
 
