@@ -116,7 +116,10 @@ class Outer:
         iso = self.isolated_resistance(speed)
         if self.geometry is None:
             return iso, self.m * (1.0 + 0.5 * self.phi), 0.0
-        g = min(gap / self.a, far_field.MAX_OVER_A)
+        # a trial stage of the integrator can step past the floor event (MIN_GAP_OVER_A) to a
+        # gap at or below 0, where ln x is undefined: it sees the floor's values, and the step
+        # is rejected or ends on the event (short drops crashed with "math domain error")
+        g = min(max(gap / self.a, MIN_GAP_OVER_A), far_field.MAX_OVER_A)
         r, c, dc = self.tables(g)
         dm = self.m * self.phi * dc / self.a if gap / self.a < far_field.MAX_OVER_A else 0.0
         return r - self.far_resistance + iso, self.m * (1.0 + self.phi * c), dm

@@ -4,6 +4,7 @@ far-field restitution it must reproduce in the Stokes limit, its energy budget a
 
 import math
 
+import numpy as np
 import pytest
 
 from solver import far_field as ff
@@ -284,3 +285,15 @@ def test_two_spheres_arrive_with_v0_from_the_outer_start(radius2, density2):
     start = reading.approach_speed(st) * v0
     _, x, u, _, ended = tj.motion(outer, a, -start, until_gap=0.01 * a)
     assert ended == "gap" and -u[-1] == pytest.approx(v0, rel=1e-6)
+
+
+def test_a_short_drop_reaches_x0_without_leaving_the_tables():
+    """A sphere dropped from rest 0.3 a above the wall (a trial stage of the integrator stepped
+    to a gap below 0, where ln x is undefined: 'math domain error') reaches x0 = 0.01 a, slower
+    than the terminal speed, the gap falling all the way."""
+    a, rho_p, rho_f, mu = 1.5e-3, 7800.0, 935.0, 1e-2
+    m = rho_p * 4.0 / 3.0 * math.pi * a ** 3
+    outer = tj.Outer("wall", a, m, math.inf, math.inf, rho_f, mu, G, "schiller-naumann")
+    t, x, u, loss, ended = tj.motion(outer, 0.3 * a, -1e-6, until_gap=0.01 * a)
+    assert ended == "gap" and x[-1] == pytest.approx(0.01 * a, rel=1e-9)
+    assert np.all(np.diff(x) < 0.0) and 0.0 < -u[-1] < tj.terminal_speed(outer)
