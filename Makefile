@@ -94,12 +94,19 @@ bench-validation: $(STAMP)
 	$(PY) benchmarks/bench_accuracy.py
 	$(PY) benchmarks/bench_cavitation.py
 	$(PY) benchmarks/bench_piezoviscous.py
+	$(PY) benchmarks/bench_trajectory.py
 	$(PY) benchmarks/bench_experiments.py
+	$(PY) benchmarks/bench_threshold_budget.py
 
-# e(St) on the conditions of published sphere-wall experiments, per variant of the physics,
-# against their correlation (issue 17) -> benchmarks/experiments.md/.json/.png (~3-4 min)
+# The measured Gondret trajectories against the computed ones (bench_trajectory.py, whose json
+# the experiments' figure reads), then e(St) on the conditions of published sphere-wall
+# experiments, per variant of the physics, the correlation shown as a correlation ->
+# benchmarks/trajectory.* and experiments.md/.json/.png (~4 min); the energy budget at the
+# rebound threshold -> benchmarks/threshold_budget.md (~15 s)
 bench-experiments: $(STAMP)
+	$(PY) benchmarks/bench_trajectory.py
 	$(PY) benchmarks/bench_experiments.py
+	$(PY) benchmarks/bench_threshold_budget.py
 
 bench-sweep: $(STAMP)
 	$(PY) benchmarks/bench_sweep.py
