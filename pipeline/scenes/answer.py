@@ -2,7 +2,8 @@
 CFD-DEM code take, and how far each moves over what the scene does not know.
 
 docs/scenes.md, "The answer and its range". The solved scene gives the central values
-(``e_for_dem`` is ``e_far``, ``e_for_cfd_dem`` is ``e_wet``, ``DEM_COUPLING``). Each *unknown* the
+(``e_for_dem`` is ``e_far``, ``e_for_cfd_dem`` is ``e_wet``: ``CODE_KINDS``, from the one table
+of which e each kind of code realises, ``pipeline.dem.conventions.DEM_KINDS``). Each *unknown* the
 scene leaves open is a driver: the scene solved again (``run_scene`` with its automatic
 switches, no sensitivity) at the unknown's low and high end, one unknown at a time:
 
@@ -18,7 +19,8 @@ switches, no sensitivity) at the unknown's low and high end, one unknown at a ti
   at ``READING_BAND_OVER_A``, the distances experiments and DEM calibrations read speeds at.
 
 A range is the envelope of the central value and the drivers' values; a driver's ``share`` is
-its span over the sum of the drivers' spans (of ``e_for_dem``). The drivers are one at a time,
+its span over the sum of the drivers' spans (of ``e_for_dem``; of ``e_for_cfd_dem`` where there
+is no ``e_far``). The drivers are one at a time,
 not combined: two unknowns at their worst together can go beyond the range.
 """
 
@@ -27,6 +29,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+from ..dem.conventions import DEM_KINDS
 from .materials import ROUGHNESS_CLASSES
 from .pieces import STIFFNESS_LABELS
 from .units import format_quantity
@@ -42,8 +45,10 @@ ALPHA_UNKNOWN_HIGH = 20e-9
 # Where a speed is read [x/a]: from 3 x0 (0.03 a) to one radius out, where a settling sphere has
 # not yet slowed (the outer start's default); e_far's default reading is 0.1 a
 READING_BAND_OVER_A = (0.03, 1.0)
-# code kind -> (JSON key stem, the result it takes); docs/scenes.md, "The approach from far away"
-CODE_KINDS = {"dem": ("e_for_dem", "e_far"), "cfd_dem": ("e_for_cfd_dem", "e_wet")}
+# the JSON key of each kind of code's e -> the result it takes (docs/scenes.md, "The approach from
+# far away")
+CODE_KINDS = {"e_for_dem": DEM_KINDS["dry"].e_column,
+              "e_for_cfd_dem": DEM_KINDS["cfd-dem"].e_column}
 
 
 def _value(v):
@@ -54,9 +59,9 @@ def _solved(result) -> dict:
     """``{"e_for_dem", "e_for_cfd_dem", "status"}`` of a ``SceneResult``."""
     c = result.collision
     if not c.ok:
-        return {"e_for_dem": None, "e_for_cfd_dem": None, "status": c.status}
-    e_far = float(c.e_far) if result.outer else math.nan
-    return {"e_for_dem": _value(e_far), "e_for_cfd_dem": _value(float(c.e_wet)), "status": "ok"}
+        return {**dict.fromkeys(CODE_KINDS), "status": c.status}
+    return {**{key: _value(float(getattr(c, column))) for key, column in CODE_KINDS.items()},
+            "status": "ok"}
 
 
 def _body_solid(scene, label, **changes):
@@ -183,7 +188,7 @@ def answer(result, accuracy: str = "standard", solve_options: dict | None = None
             drivers.append({
                 "unknown": name, "detail": what,
                 **{key: _envelope(central[key], [r[key] for r in solved])
-                   for key, _ in CODE_KINDS.values()},
+                   for key in CODE_KINDS},
                 "status": "ok" if not failed else "failed (" + ", ".join(failed) + ")"})
         stiffness = _stiffness_driver(result)
         if stiffness is not None:
@@ -204,7 +209,7 @@ def _assemble(central, drivers, computed=True) -> dict:
     out = {}
     shown = central["e_for_dem"] if central["e_for_dem"] is not None else central["e_for_cfd_dem"]
     out["verdict"] = None if shown is None else ("rebounds" if shown > 0.0 else "sticks")
-    for key, _ in CODE_KINDS.values():
+    for key in CODE_KINDS:
         out[key] = central[key]
         ends = [v for d in drivers if d[key] for v in d[key]]
         out[f"{key}_range"] = None if central[key] is None else _envelope(central[key], ends)

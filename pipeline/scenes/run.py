@@ -157,26 +157,24 @@ class SceneResult:
         return out
 
 
-# Which restitution a DEM code should take (docs/scenes.md, "The approach from far away")
-DEM_COUPLING = {
-    "resolved_cfd_dem": ("resolved CFD-DEM", "e_wet",
-                         "the CFD computes the fluid force on the particle down to near "
-                         "contact, so the contact law carries only the loss inside x0 that its "
-                         "grid cannot resolve"),
-    "dry_dem": ("dry DEM", "e_far", "no fluid forces in the code: the contact law carries the "
-                "whole loss the fluid causes, seen from x_ref on the way in and out"),
-}
+# Which restitution a DEM code should take (docs/scenes.md, "The approach from far away"): the
+# JSON's coupling -> (its label in the report, its kind in the one table of which e each kind of
+# code realises, pipeline.dem.conventions.DEM_KINDS)
+DEM_COUPLING = {"resolved_cfd_dem": ("resolved CFD-DEM", "cfd-dem"), "dry_dem": ("dry DEM", "dry")}
 
 
 def dem_restitution(e_wet: float, e_far: float) -> dict:
     """``{coupling: {"code", "key", "value", "why"}}``: the restitution each kind of DEM code
     takes (``key`` names the result, ``value`` is it)."""
+    from ..dem.conventions import DEM_KINDS
+
     values = {"e_wet": e_wet, "e_far": e_far}
     out = {}
-    for coupling, (label, key, why) in DEM_COUPLING.items():
+    for coupling, (label, kind) in DEM_COUPLING.items():
+        key = DEM_KINDS[kind].e_column
         v = float(values[key])
         out[coupling] = {"code": label, "key": key, "value": v if math.isfinite(v) else None,
-                         "why": why}
+                         "why": DEM_KINDS[kind].why}
     return out
 
 
