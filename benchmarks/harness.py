@@ -21,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import datetime
 import json
+import math
 import os
 import platform
 import re
@@ -209,6 +210,11 @@ def alternate(sides: dict[str, Callable[[], dict]], rounds: int, warmup: int = 1
 
 
 # ---------------------------------------------------------------------------------- statistics
+
+def cell(x, spec: str = ".3f") -> str:
+    """A number for a markdown table: ``format(x, spec)``, or "-" for None or non-finite."""
+    return "-" if x is None or not math.isfinite(x) else format(x, spec)
+
 
 def spread(values: Sequence[float]) -> dict:
     """Median, smallest and largest value, and how many."""

@@ -142,7 +142,7 @@ def _reading_driver(result):
         return None
     lo = max(READING_BAND_OVER_A[0], outer.x0_over_a)
     hi = min(READING_BAND_OVER_A[1], outer.start_over_a)
-    values = [outer.__class__(**{**outer.as_dict(), "x_ref_over_a": x}).restitution(
+    values = [dataclasses.replace(outer, x_ref_over_a=x).restitution(
         float(c.e_x0), c.physics.St) for x in (lo, hi)]
     return {"unknown": "reading distance",
             "detail": f"where the speeds are read: {lo:g} a to {hi:g} a (as solved: "
