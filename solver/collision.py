@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -25,13 +24,14 @@ from . import far_field
 from ._jit import deferred_interrupt
 from .integration import stepper
 from .integration.grid import reference_grid, scaled_grid
-from .integration.events import RELAXED_FULL
-from .model import cavitation, contact, liquid, piezoviscous, rigid
-from .shortcuts import plan
+from .model import liquid, rigid
 from .observables import OBSERVABLES, SERIES, STATUS, failure_message
 from .physics import Physics
+from .pieces import PIECES
 from .result import JSON_KEYS, SOLVER_VERSION, Collision
+from .rigid_phases import KEPT, RigidHead, rigid_block, rigid_path
 from .settings import Numerics, resolve
+from .shortcuts import plan
 
 __all__ = ["collide", "Collision", "SOLVER_VERSION", "hertz_overlap", "JSON_KEYS", "read_far"]
 
@@ -44,7 +44,7 @@ START_STRAIN_LIMIT = 0.1
 
 # An ok result's energy closure (``energy_error``, of m v0^2/2) stays below this. Over 566 ok
 # scenes of the supported range (St 0.05-1000 x eps 1e-12-0.1, the classic film, both floors,
-# Barus, rough with and without JFO; fast and standard presets) the largest closure error was
+# each piece of physics alone and rough with JFO; fast and standard presets) the largest closure error was
 # 3.1e-3 (fast), so 0.02 leaves a factor 6 for scenes outside that scan; an error this large
 # already moves v_r by 0.01/v_r, more than any preset's stated error. The scene that made it
 # (St 0.001, roughness ~ x0, k 1e-6) closed to 0.50 and was reported ok.
@@ -66,7 +66,7 @@ def hertz_overlap(stokes):
 
 
 def _parabolic_peak(t, f, i):
-    """Vertex of the parabola through samples i-1, i, i+1 (the discrete extremum ``i``)."""
+    """Vertex of the parabola by samples i-1, i, i+1 (the discrete extremum ``i``)."""
     if i <= 0 or i >= len(f) - 1:
         return t[i], f[i]
     t0, t1, t2 = t[i - 1], t[i], t[i + 1]
@@ -84,31 +84,27 @@ def _parabolic_peak(t, f, i):
 
 
 FAR_FIELD_REACH = 8.0  # the grid reaches this many film widths sqrt(2 X) beyond the axis
-CAVITY_REACH = 4.0  # ... and this many times the widest cavity, sqrt(2) (V/Pi)^(1/4) at V = 1
-WIDEST_CAVITY = 400.0  # cap for Pi -> 0 (at Pi = 0 the whole opening film cavitates)
 
 
-def scene_grid(stokes, x_switch, numerics: Numerics, pi=math.inf, roughness=0.0):
+def scene_grid(stokes, x_switch, numerics: Numerics, width=0.0, reach=0.0):
     """The radial grid of a scene.
 
     The inner region covers the Hertz contact radius ``sqrt(delta_H)`` (at least 2, the film's
-    width at small St), and the film's width ``sqrt(2 sigma)`` where rough surfaces touch
-    (``roughness``: at a roughness of several x1 the asperities stop the spheres before the
-    solids deform, and the film that does the work lives there; on the rigid limit of
-    tests/test_contact.py at roughness 5400 x1 this took the outer cells' error in e_wet at St 20
-    from 3.9e-4 to 7e-5). The grid must also reach well beyond the widest film the coupled phase
-    sees, ``sqrt(2 X)`` at the hand-over and at the release (where ``W(0)/X = release`` on the
-    rigid path with ``V <= 1``), and beyond the widest cavity of a film with the floor ``-pi``
-    (rigid separation at speed ``V``: radius ``sqrt(2 s_c) ~ sqrt(2) (V/Pi)^(1/4)``,
-    docs/model.md, "Cavitation"); its extent doubles until it does (a few outer cells each time).
+    width at small St), and ``width``, the widest film a piece of physics does its work in
+    (``Piece.film_width``, solver/pieces.py). The grid must also reach well
+    beyond the widest film the coupled phase sees, ``sqrt(2 X)`` at the hand-over and at the
+    release (where ``W(0)/X = release`` on the rigid path with ``V <= 1``), and the radius
+    ``reach`` a piece needs (``Piece.film_reach``); its extent doubles until it does (a few outer
+    cells each time).
     """
-    inner = numerics.inner_factor * max(math.sqrt(hertz_overlap(stokes)), 2.0,
-                                        math.sqrt(2.0 * roughness))
+    # the asperity contact's width: at a roughness of several x1 the asperities stop the spheres
+    # before the solids deform, and the film that does the work is sqrt(2 sigma) wide; on the
+    # rigid limit of tests/test_contact.py at roughness 5400 x1 covering it took the outer cells'
+    # error in e_wet at St 20 from 3.9e-4 to 7e-5
+    inner = numerics.inner_factor * max(math.sqrt(hertz_overlap(stokes)), 2.0, width)
     x_release = (rigid.HANDOVER_COEFF / numerics.release) ** 0.4
-    reach = FAR_FIELD_REACH * math.sqrt(2.0 * max(x_switch, x_release)) / inner
-    if math.isfinite(pi):
-        cavity = min(math.sqrt(2.0) * max(pi, 1e-12) ** -0.25, WIDEST_CAVITY)
-        reach = max(reach, CAVITY_REACH * cavity / inner)
+    reach = max(FAR_FIELD_REACH * math.sqrt(2.0 * max(x_switch, x_release)) / inner,
+                reach / inner)
     extent = numerics.outer_extent
     while extent < reach:
         extent *= 2.0
@@ -119,7 +115,7 @@ def scene_grid(stokes, x_switch, numerics: Numerics, pi=math.inf, roughness=0.0)
 
 def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 1.0,
             outer: far_field.OuterFlow | None = None, **overrides) -> Collision:
-    """Solve one head-on collision of two elastic spheres through a viscous film.
+    """Solve one head-on collision of two elastic spheres across a viscous film.
 
     Parameters
     ----------
@@ -223,7 +219,7 @@ def withhold(result):
 
 def read_far(result, outer=None):
     """``e_far`` and ``v_outer_start`` of ``result`` (its ``e_x0``, the departure speed at x0)
-    read through ``outer`` (solver/far_field.py; default ``far_field.DEFAULT``)."""
+    read by ``outer`` (solver/far_field.py; default ``far_field.DEFAULT``)."""
     outer = far_field.DEFAULT if outer is None else outer
     if not isinstance(outer, far_field.OuterFlow):
         raise TypeError(f"outer must be a solver.far_field.OuterFlow, got {type(outer).__name__}")
@@ -235,76 +231,33 @@ def read_far(result, outer=None):
 
 def handover_separation(physics, numerics):
     """Where the coupled phase takes over on the classic rigid approach: the first separation
-    where the deformation ``W(0)/X`` reaches ``switch`` (rigid.handover_separation) or the
-    liquid's pressure dependence changes the rigid film by as much (rigid.law_onset_separation:
-    up to there the classic rigid approach is exact to ``switch``), or before the asperities
-    touch (rigid.contact_onset_separation); None when the spheres come to
-    rest before either (the scene is rigid throughout)."""
+    where the deformation ``W(0)/X`` reaches ``switch`` (rigid.handover_separation), or where a
+    piece of physics stops the classic rigid approach being exact (``Piece.approach_stop``: e.g.
+    the liquid's pressure dependence changes the rigid film by ``switch``); None when the spheres
+    come to rest before any (the scene is rigid all the way)."""
     found = [x for x in (
         rigid.handover_separation(physics.x_start, physics.St, numerics.switch),
-        rigid.law_onset_separation(physics.x_start, physics.St, rigid.law_slopes(physics)[0],
-                                   numerics.switch),
-        rigid.contact_onset_separation(physics.x_start, physics.St, physics.roughness))
-        if x is not None]
+        *(p.approach_stop(physics, numerics) for p in PIECES)) if x is not None]
     return max(found) if found else None
-
-
-@dataclass
-class RigidHead:
-    """The rigid approach from the start ``(x0, V = 1, T = 0)`` until the coupled phase takes
-    over, or until rest (``rests``: the scene is rigid throughout; ``v = 0``, ``t = inf``, ``x`` the
-    rest separation)."""
-
-    x: float
-    v: float
-    t: float
-    rests: bool
-    block: dict  # its time series (phase 0), without the end state when a coupled phase follows
-    peaks: dict  # rigid.approach_peaks keys, and x_p_max (the gap at the largest pressure)
-    pressure: object  # P(s) of the film at the end state, the coupled phase's start
 
 
 def rigid_head(physics, numerics) -> RigidHead:
     """The rigid approach of ``physics``: the classic closed form (rigid.py) up to
-    ``handover_separation``, or for the Barus liquid at constant density its own rigid film
-    (model/piezoviscous.py, a scalar ODE with a closed-form force), up to the hand-over on the
-    Barus ``W(0)/X``, near the glass gap, or before rough surfaces touch
-    (rigid.contact_onset_separation)."""
+    ``handover_separation``, or the rigid approach of the piece the plan gives one
+    (``Piece.rigid_approach``), which stops where the other pieces stop the classic one."""
     stokes, x_start, tau_per_t = physics.St, physics.x_start, physics.tau_per_t
-    if plan(physics).approach == "barus":
-        # rough surfaces: the coupled phase takes over before the asperities touch
-        contact_onset = rigid.contact_onset_separation(x_start, stokes, physics.roughness)
-        path = piezoviscous.approach(x_start, 1.0, 0.0, stokes, physics.beta, numerics.switch,
-                                     x_stop=contact_onset or 0.0)
-        rests = path.event == "rest"
-        # the path without its end when a coupled phase follows (the phase starts there), and
-        # without the rest (reached after infinite time)
-        keep = np.isfinite(path.t)
-        if not rests:
-            keep[-1] = False
-        block = _rigid_block(path.t[keep], path.x[keep], path.v[keep], tau_per_t, 0,
-                             1.0 - path.v[keep] ** 2)
-        block["F"] = path.force[keep]
-        block["W0"] = path.w0[keep]
-        block["P_max"] = path.p_axis[keep]
-        beta, x, v = physics.beta, path.x_end, path.v_end
-        peaks = path.peaks
-        if x > piezoviscous.glass_gap(v, beta):
-            pressure = lambda s: piezoviscous.rigid_pressure(s, x, v, beta)  # noqa: E731
-        else:
-            # the start x0 itself lies inside the glass gap (beta > x0^2/3, e.g. 13 at eps 1e-2):
-            # no rigid Barus film exists there; the coupled phase starts from the classic
-            # pressure, the Kirchhoff pressure of that state, as with the other laws
-            pressure = lambda s: 3.0 * v / (x + s) ** 2  # noqa: E731
-            peaks = rigid.approach_peaks(x_start, stokes, x_start)
-        return RigidHead(x, v, path.t_end, rests, block, peaks, pressure)
+    own = plan(physics).approach_piece
+    if own is not None:
+        stops = [x for p in PIECES if p is not own
+                 for x in (p.approach_stop(physics, numerics),) if x is not None]
+        return own.rigid_approach(physics, numerics, max(stops, default=0.0))
     x_switch = handover_separation(physics, numerics)
     if x_switch is None:
         ln_x_stop = rigid.rest_separation(x_start, 1.0, stokes)
         u = np.linspace(0.0, 0.999 * stokes, 200) if stokes < 30 else np.linspace(0.0, 30.0, 200)
         x = x_start * np.exp(-u)
-        t, v = _rigid_path(x_start, 1.0, 0.0, stokes, x)
-        block = _rigid_block(t, x, v, tau_per_t, 0, 1.0 - v * v)
+        t, v = rigid_path(x_start, 1.0, 0.0, stokes, x)
+        block = rigid_block(t, x, v, tau_per_t, 0, 1.0 - v * v)
         return RigidHead(math.exp(ln_x_stop), 0.0, math.inf, True, block,
                          rigid.approach_peaks(x_start, stokes, 0.0), None)
     v_switch = float(rigid.velocity(x_switch, x_start, 1.0, stokes))
@@ -312,52 +265,11 @@ def rigid_head(physics, numerics) -> RigidHead:
     block = None
     if x_switch < x_start:
         x_head = x_start * np.exp(-np.linspace(0.0, math.log(x_start / x_switch), 60))[:-1]
-        t_head, v_head = _rigid_path(x_start, 1.0, 0.0, stokes, x_head)
-        block = _rigid_block(t_head, x_head, v_head, tau_per_t, 0, 1.0 - v_head**2)
+        t_head, v_head = rigid_path(x_start, 1.0, 0.0, stokes, x_head)
+        block = rigid_block(t_head, x_head, v_head, tau_per_t, 0, 1.0 - v_head**2)
     return RigidHead(x_switch, v_switch, t_switch, False, block,
                      rigid.approach_peaks(x_start, stokes, x_switch),
                      lambda s: 3.0 * v_switch / (x_switch + s) ** 2)
-
-
-def _rigid_path(x_from, v_from, t_from, stokes, x):
-    v = rigid.velocity(x, x_from, v_from, stokes)
-    t = t_from + rigid.elapsed_time(x, x_from, v_from, stokes)
-    return t, v
-
-
-def _rigid_block(t, x, v, tau_per_t, phase, dissipated):
-    """Time series of a rigid phase (docs/model.md, "Rigid solution"): ``P = 3V/H^2``,
-    so the force is ``V/X`` in our unit, the axis pressure ``3V/X^2`` the extreme one (the far
-    field tends to 0), ``W(0)`` the small-deformation estimate ``3 I0 V X^-1.5``."""
-    n = len(t)
-    p_axis = 3.0 * v / (x * x)
-    rigid_film = {
-        "T": t, "X": x, "V": v, "F": v / x, "W0": 3.0 * v * x**-1.5 * rigid.I0, "H_min": x,
-        "E_k": v * v, "dissipated": dissipated, "P_max": np.maximum(p_axis, 0.0),
-        "P_min": np.minimum(p_axis, 0.0),
-    }
-    # every other column (strain, cavity, void, compression...) is 0 on a rigid path
-    block = {c.name: rigid_film.get(c.name, np.zeros(n)) for c in _KEPT}
-    block.update(tau=t * tau_per_t, phase=np.full(n, phase, dtype=np.int8))
-    return block
-
-
-def _floor_block(path, physics, tau_per_t, lost, v_release):
-    """Time series of the rigid departure with a floor (model/cavitation.py): the force
-    ``-U/(X + s_c)``, the axis at the floor while the cavity ``R_c = sqrt(2 s_c)`` is open; the
-    energy lost (viscous and to the void) from the kinetic energy."""
-    x, u, t = path
-    sigma = np.array([cavitation.cavity_fraction(physics.Pi * xi * xi / (6.0 * ui))
-                      for xi, ui in zip(x, u)])
-    v = -u
-    block = _rigid_block(t, x, v, tau_per_t, 2, lost + (v_release**2 - v * v))
-    block["F"] = v / (x * (1.0 + sigma))
-    block["P_min"] = np.where(sigma > 0.0, -physics.Pi, block["P_min"])
-    block["cavity_radius"] = np.sqrt(2.0 * sigma * x)
-    return block
-
-
-_KEPT = tuple(c for c in SERIES if c.kept)  # the series columns a result keeps
 
 
 def _concat(blocks):
@@ -400,11 +312,11 @@ def include_rigid_peaks(result, head):
 
 def _integrate(physics, numerics, head, shortcuts):
     """The coupled phase's grid and time loop (integration/stepper.py) from the hand-over state
-    ``head`` until the shortcuts' end event (a JFO cavity has a memory: rigid once the film is
-    full): the grid, then ``stepper.integrate``'s results."""
+    ``head`` until the shortcuts' end event (a film that refills: until it is full again): the
+    grid, then ``stepper.integrate``'s results."""
     stokes, x_switch, v_switch = physics.St, head.x, head.v
-    grid = scene_grid(stokes, x_switch, numerics, physics.Pi if shortcuts.floor else math.inf,
-                      physics.roughness)
+    grid = scene_grid(stokes, x_switch, numerics, max(p.film_width(physics) for p in PIECES),
+                      max(p.film_reach(physics) for p in PIECES))
     p_init = head.pressure(grid.s)  # the rigid film's pressure; K p = asymptotic W
     # the first step (implicit Euler, no error estimate: no history yet) is a small fraction of
     # the film's time scale X/V and of the spheres' deceleration time St X/V: at St 0.001 a
@@ -425,8 +337,9 @@ def _save_profiles(result, t_c, x_c, p_hist, w_hist, theta_hist):
     result.profile_tau = t_c * result.physics.tau_per_t
     result.pressure = p_hist
     result.deformation = w_hist
-    if result.physics.cavitation == "jfo":
-        result.fluid_fraction = theta_hist
+    for piece in PIECES:
+        if piece.keeps_profile(result.physics):
+            setattr(result, piece.profile, theta_hist)
     result.profile_x = x_c
 
 
@@ -441,9 +354,9 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
     cols["F"] = cols["F"] / 3.0  # force unit 6 pi mu a^2 v0 / x1
     t_c, x_c, v_c = cols["T"], cols["X"], cols["V"]
 
-    # rigid approach (analytic, or the Barus film's scalar ODE) up to the hand-over
+    # rigid approach (analytic, or a piece's own rigid approach) up to the hand-over
     blocks = [head.block] if head.block is not None and len(head.block["T"]) else []
-    coupled = {c.name: cols[c.name] for c in _KEPT}
+    coupled = {c.name: cols[c.name] for c in KEPT}
     coupled.update(tau=t_c * tau_per_t, phase=np.full(len(t_c), 1, dtype=np.int8))
     blocks.append(coupled)
 
@@ -458,50 +371,28 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
         _save_profiles(result, t_c, x_c, p_hist, w_hist, theta_hist)
     if name != "ok":
         result.v_r = result.dimple_depth_x1 = math.nan
-        result.dimple = result.cavitated = None
+        result.dimple = None
+        for flag in (o.name for o in OBSERVABLES if o.kind == "flag"
+                     and any(o.name in p.observables for p in PIECES)):
+            setattr(result, flag, None)
         result.series = _concat(blocks)
         result.message = (f"{message} (St={stokes:g}, eps={physics.eps:g}, after "
                           f"{counters[stepper.STEPS]} steps at tau={t_c[-1] * tau_per_t:.4g})")
         return result
 
-    # rigid departure from the release state: with the Reynolds floor a scalar ODE until the
-    # cavity closes (model/cavitation.py), then the classic closed form
-    t_rel, x_rel, v_rel = t_c[-1], x_c[-1], v_c[-1]
-    # energy lost by the release
-    lost = cols["dissipated"][-1] + cols["void_work"][-1] + cols["solid_loss"][-1]
-    if shortcuts.departure == "floor" and v_rel < 0.0:
-        x_rel, u_rel, t_rel, path = cavitation.departure(x_rel, -v_rel, t_rel, stokes, physics.Pi)
-        v_rel = -u_rel
-        blocks.append(_floor_block(path, physics, tau_per_t, lost, v_c[-1]))
-        lost = blocks[-1]["dissipated"][-1]
-    resting = not physics.smooth and abs(v_rel) < contact.REST_SPEED
-    if resting:  # at rest on the asperities: the gap they hold is the equilibrium
-        ln_x_e = math.log(float(cols["H_min"][-1]))
-    elif math.isinf(x_rel):  # no floor at all (Pi = 0): no suction, the spheres never stop
-        ln_x_e = math.inf
-    else:
-        ln_x_e = rigid.rest_separation(x_rel, v_rel, stokes)
-        u_end = max(-30.0, min(30.0, -0.99 * stokes * v_rel))
-        if u_end != 0.0:
-            x_tail = x_rel * np.exp(np.linspace(0.0, u_end, 41)[1:])
-            t_tail, v_tail = _rigid_path(x_rel, v_rel, t_rel, stokes, x_tail)
-            blocks.append(_rigid_block(t_tail, x_tail, v_tail, tau_per_t, 2,
-                                       lost + (v_rel**2 - v_tail**2)))
+    ln_x_e, resting = _depart(physics, shortcuts, cols, blocks)
     result.series = _concat(blocks)
     result.tau_release = t_c[-1] * tau_per_t
     result.ln_x_e_x1 = ln_x_e
     if resting:  # they stick
         result.e_wet = result.e_x0 = 0.0
     else:
-        result.e_wet = _wet_restitution(physics, x_c, v_c, x_ref_x0 * x_start,
-                                        cols["cavity_radius"] + cols["void_volume"])
+        result.e_wet = _wet_restitution(physics, shortcuts, cols, x_ref_x0 * x_start)
         result.e_x0 = result.e_wet if x_ref_x0 == 1.0 else _wet_restitution(
-            physics, x_c, v_c, x_start, cols["cavity_radius"] + cols["void_volume"])
+            physics, shortcuts, cols, x_start)
     _coupled_observables(result, cols, tau_per_t, ln_x_e, v_c[-1])
-    if blocks[-1]["phase"][0] == 2:  # the departure's cavity (with a floor) may be the widest
-        widest = max(float(np.max(b["cavity_radius"])) for b in blocks if b["phase"][0] == 2)
-        result.cavity_radius_max = max(result.cavity_radius_max, widest)
-        result.cavitated = result.cavitated or widest > 0.0
+    for piece in PIECES:
+        piece.observe(result, cols, t_c * tau_per_t, blocks)
     include_rigid_peaks(result, head.peaks)
     if result.start_strain_energy > START_STRAIN_LIMIT:
         result.status = "start_deformed"
@@ -510,35 +401,49 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
     return result
 
 
-def _wet_restitution(physics, x_c, v_c, x_ref, cavity=None):
+def _depart(physics, shortcuts, cols, blocks):
+    """The rigid departure from the coupled phase's release state, its series appended to
+    ``blocks``: a piece's own departure where the plan gives one (until it hands back to the
+    classic path), then the classic closed form; or rest, where a piece holds the spheres (e.g.
+    on their asperities: the gap they hold is the equilibrium). Returns ``(ln x_e, resting)``."""
+    stokes, tau_per_t = physics.St, physics.tau_per_t
+    t_rel, x_rel, v_rel = cols["T"][-1], cols["X"][-1], cols["V"][-1]
+    # energy lost by the release
+    lost = cols["dissipated"][-1] + cols["void_work"][-1] + cols["solid_loss"][-1]
+    own = shortcuts.departure_piece
+    departed = own.depart(physics, x_rel, v_rel, t_rel, lost) if own is not None else None
+    if departed is not None:
+        x_rel, v_rel, t_rel, block = departed
+        blocks.append(block)
+        lost = block["dissipated"][-1]
+    if any(p.rests(physics, v_rel) for p in PIECES):
+        return math.log(float(cols["H_min"][-1])), True
+    if math.isinf(x_rel):  # a departure without suction (Pi = 0): the spheres never stop
+        return math.inf, False
+    ln_x_e = rigid.rest_separation(x_rel, v_rel, stokes)
+    u_end = max(-30.0, min(30.0, -0.99 * stokes * v_rel))
+    if u_end != 0.0:
+        x_tail = x_rel * np.exp(np.linspace(0.0, u_end, 41)[1:])
+        t_tail, v_tail = rigid_path(x_rel, v_rel, t_rel, stokes, x_tail)
+        blocks.append(rigid_block(t_tail, x_tail, v_tail, tau_per_t, 2,
+                                  lost + (v_rel**2 - v_tail**2)))
+    return ln_x_e, False
+
+
+def _wet_restitution(physics, shortcuts, cols, x_ref):
     """``e_wet`` at ``x_ref`` from the coupled phase's end: the rigid departure (rigid.restitution)
     from the release state; when the release lies beyond ``x_ref`` (the deformation relaxed only
     after the spheres passed it), from the last row inside ``x_ref`` on the way out, so the
     departure crosses ``x_ref`` on the rigid path of a state whose deformation is ``O(release)``.
-    ``cavity`` (JFO): positive on the rows with a cavity open."""
+    A piece whose departure or refill the plan gives reads it its own way (``Piece.restitution``)."""
+    x_c, v_c = cols["X"], cols["V"]
     j = len(x_c) - 1
     if x_c[j] > x_ref and v_c[j] < 0.0:
         inside = np.nonzero((x_c <= x_ref) & (v_c < 0.0))[0]
         if inside.size:
             j = int(inside[-1])
-    shortcuts = plan(physics)
-    if shortcuts.departure == "floor":
-        return cavitation.restitution(x_c[j], v_c[j], physics, x_ref)
-    if shortcuts.end_event == RELAXED_FULL:
-        # the coupled phase ran until the film is full again (RELAXED_FULL), from where the
-        # classic rigid departure is exact; when it ends beyond x_ref the spheres passed x_ref
-        # inside the coupled phase (possibly with a cavity): its speed there, interpolated
-        st_ref = rigid.impact_stokes(physics.St, physics.x_start, x_ref) / physics.St
-        last = len(x_c) - 1
-        if not np.any(cavity[j:] > 0.0):  # full from row j on: the classic departure, as above
-            return rigid.departure_speed(x_c[j], v_c[j], physics.St, x_ref) / st_ref
-        if x_c[last] > x_ref and v_c[last] < 0.0:
-            out = np.nonzero((x_c[1:] > x_ref) & (x_c[:-1] <= x_ref) & (v_c[1:] < 0.0))[0]
-            if out.size:
-                k = int(out[-1])
-                frac = (x_ref - x_c[k]) / (x_c[k + 1] - x_c[k])
-                return float(-(v_c[k] + frac * (v_c[k + 1] - v_c[k]))) / st_ref
-        return rigid.departure_speed(x_c[last], v_c[last], physics.St, x_ref) / st_ref
+    if shortcuts.reader is not None:
+        return shortcuts.reader.restitution(physics, x_c, v_c, j, x_ref, cols)
     return rigid.restitution(x_c[j], v_c[j], physics, x_ref)
 
 
@@ -605,10 +510,4 @@ def _coupled_observables(result, cols, tau_per_t, ln_x_e, v_rel):
     total = cols["E_k"] + cols["E_s"] + cols["E_c"] + cols["E_a"] + cols["dissipated"] \
         + cols["void_work"] + cols["solid_loss"]
     result.energy_error = float(np.max(np.abs(total - total[0])))
-    cavity = np.nonzero(cols["cavity_radius"] > 0.0)[0]
-    result.cavitated = bool(cavity.size > 0)
-    result.cavity_radius_max = float(np.max(cols["cavity_radius"]))
-    if cavity.size:
-        result.tau_cavitation_onset = float(tau[cavity[0]])
-    result.void_volume_max = float(np.max(cols["void_volume"]))
     result.start_strain_energy = float(cols["E_s"][0] / cols["E_k"][0])

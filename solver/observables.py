@@ -284,7 +284,7 @@ def failure_message(name: str, **fields) -> str:
 @dataclass(frozen=True)
 class Column:
     """One column of a collision's time series. A rigid phase's rows hold the rigid film's values
-    of the classic columns and 0 in every other (solver/collision.py: ``_rigid_block``)."""
+    of the classic columns and 0 in every other (solver/rigid_phases.py: ``rigid_block``)."""
 
     name: str
     long_name: str

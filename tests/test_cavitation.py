@@ -16,6 +16,7 @@ import pytest
 
 from solver import Physics, collide
 from solver.collision import scene_grid
+from solver.pieces import cavity_reach
 from solver.model import cavitation
 from solver.model.film import (cavity_edge, constrain, film_force, jacobian, residual,
                                update_cavity, update_cavity_jfo)
@@ -34,8 +35,9 @@ def rigid_separation(x, u, pi, n_inner=64, stretch=1.2, max_rel=0.3, bh=1.0):
     (one implicit step ``bh`` from the gap ``x - u bh``)."""
     physics = Physics(St=10.0, eps=1e-4, Pi=pi, cavitation="reynolds")
     phys = physics.as_array()
-    grid = scene_grid(physics.St, x, resolve("standard", n_inner=n_inner, stretch=stretch,
-                                             max_rel=max_rel, axis_ratio=1.0), pi)
+    numerics = resolve("standard", n_inner=n_inner, stretch=stretch, max_rel=max_rel,
+                       axis_ratio=1.0)
+    grid = scene_grid(physics.St, x, numerics, reach=cavity_reach(pi))
     n = grid.s.size
     h = x + grid.s
     h_hist = h - u * bh  # H - H_hist = U bh: the rigid opening rate
@@ -185,8 +187,9 @@ def jfo_steps(xs, pi, dt=1.0, n_inner=64, stretch=1.2, max_rel=0.3):
     in a cavitated cell. Returns the grid and, per step, ``(p, theta, active, h, q)``."""
     physics = Physics(St=10.0, eps=1e-4, Pi=pi, cavitation="jfo")
     phys = physics.as_array()
-    grid = scene_grid(physics.St, xs[0], resolve("standard", n_inner=n_inner, stretch=stretch,
-                                                 max_rel=max_rel, axis_ratio=1.0), pi)
+    numerics = resolve("standard", n_inner=n_inner, stretch=stretch, max_rel=max_rel,
+                       axis_ratio=1.0)
+    grid = scene_grid(physics.St, xs[0], numerics, reach=cavity_reach(pi))
     n = grid.s.size
     zero_k = np.zeros((n, n))
     p, theta = np.zeros(n), np.ones(n - 1)

@@ -8,24 +8,30 @@ import numpy as np
 import pytest
 
 from solver import Physics, collide
+from solver.collision import rigid_head, scene_grid
 from solver.integration.events import RELAXED, RELAXED_FULL
 from solver.master import MasterCurve
+from solver.model import contact
+from solver.pieces import PIECES, cavity_reach
+from solver.settings import resolve
 from solver.shortcuts import plan
 
-CASES = {  # Physics fields: (approach, end event, departure, floor, classic)
-    "classic": ({}, ("classic", RELAXED, "classic", False, True)),
-    "barus": (dict(beta=2.0), ("barus", RELAXED, "classic", False, False)),
+CASES = {  # Physics fields: (approach, end event, departure, classic)
+    "classic": ({}, ("classic", RELAXED, "classic", True)),
+    "barus": (dict(beta=2.0), ("barus", RELAXED, "classic", False)),
     "barus+dh": (dict(beta=2.0, density_law="dowson-higginson"),
-                 ("classic", RELAXED, "classic", False, False)),
-    "roelands": (dict(beta=2.0, viscosity_law="roelands"),
-                 ("classic", RELAXED, "classic", False, False)),
-    "reynolds": (dict(Pi=1e-3, cavitation="reynolds"),
-                 ("classic", RELAXED, "floor", True, False)),
-    "jfo": (dict(Pi=1e-3, cavitation="jfo"), ("classic", RELAXED_FULL, "classic", True, False)),
-    "jfo at Pi 0": (dict(Pi=0.0, cavitation="jfo"), ("classic", RELAXED, "floor", True, False)),
-    "barus+jfo": (dict(beta=1.0, Pi=1e-3), ("barus", RELAXED_FULL, "classic", True, False)),
+                 ("classic", RELAXED, "classic", False)),
+    "roelands": (dict(beta=2.0, viscosity_law="roelands"), ("classic", RELAXED, "classic", False)),
+    "reynolds": (dict(Pi=1e-3, cavitation="reynolds"), ("classic", RELAXED, "floor", False)),
+    "jfo": (dict(Pi=1e-3, cavitation="jfo"), ("classic", RELAXED_FULL, "classic", False)),
+    "jfo at Pi 0": (dict(Pi=0.0, cavitation="jfo"), ("classic", RELAXED, "floor", False)),
+    "barus+jfo": (dict(beta=1.0, Pi=1e-3), ("barus", RELAXED_FULL, "classic", False)),
     "no floor at Pi inf": (dict(Pi=math.inf, cavitation="jfo"),
-                           ("classic", RELAXED, "classic", False, True)),
+                           ("classic", RELAXED, "classic", True)),
+    "rough": (dict(roughness=2.0), ("classic", RELAXED, "classic", False)),
+    "rough+barus": (dict(roughness=2.0, beta=1.0), ("barus", RELAXED, "classic", False)),
+    "rough+jfo": (dict(roughness=2.0, Pi=1e-3, cavitation="jfo"),
+                  ("classic", RELAXED_FULL, "classic", False)),
 }
 
 
@@ -33,7 +39,61 @@ CASES = {  # Physics fields: (approach, end event, departure, floor, classic)
 def test_each_physics_gets_the_shortcuts_docs_model_gives_it(case):
     fields, expected = CASES[case]
     p = plan(Physics(St=10.0, eps=1e-3, **fields))
-    assert (p.approach, p.end_event, p.departure, p.floor, p.classic) == expected
+    assert (p.approach, p.end_event, p.departure, p.classic) == expected
+
+
+# each piece switched on alone, and what it must do to the collision's phases beyond the plan
+ALONE = {"pressure-dependent liquid": dict(beta=2.0, viscosity_law="roelands"),
+         "cavitation": dict(Pi=1e-3, cavitation="jfo"),
+         "asperity contact": dict(roughness=2.0)}
+
+
+def test_every_piece_is_covered_here():
+    assert {p.name for p in PIECES} == set(ALONE)
+
+
+@pytest.mark.parametrize("name", list(ALONE))
+def test_a_piece_that_is_off_answers_as_the_classic_film(name):
+    """Every hook of a piece that is off for the classic film leaves the classic shortcuts: no
+    stop, no own approach or departure, no refill, no grid width or reach, no rest."""
+    piece = next(p for p in PIECES if p.name == name)
+    classic, numerics = Physics(St=10.0, eps=1e-3), resolve("fast")
+    assert piece.approach_stop(classic, numerics) is None
+    assert not (piece.approach_exact(classic) or piece.departure_exact(classic)
+                or piece.refills(classic) or piece.rests(classic, 0.0)
+                or piece.keeps_profile(classic))
+    assert piece.film_width(classic) == 0.0 and piece.film_reach(classic) == 0.0
+
+
+def test_the_rough_pieces_stop_the_rigid_approach_before_the_asperities_touch():
+    """The asperity contact stops the classic rigid approach, and a piece's own (Barus) rigid
+    approach, at contact.CONTACT_MARGIN roughnesses, where the rigid gap is still clear of the
+    asperities (the bug this guards: a rough Barus film handed over inside the asperity layer)."""
+    numerics = resolve("fast")
+    # roughness 7 x1: the contact onset 14 x1 lies between the smooth hand-overs (12.1 x1 for
+    # both at St 10, eps 1e-3) and the start x0 = 15.8 x1
+    for fields in (dict(roughness=7.0), dict(roughness=7.0, beta=1.0)):
+        physics = Physics(St=10.0, eps=1e-3, **fields)
+        head = rigid_head(physics, numerics)
+        assert head.x >= contact.CONTACT_MARGIN * physics.roughness * (1.0 - 1e-12)
+        smooth = rigid_head(physics.replace(roughness=0.0), numerics)
+        assert head.x > smooth.x  # the contact, not the deformation, stopped it
+
+
+def test_the_grid_covers_what_each_piece_needs():
+    """The inner region covers the asperity film sqrt(2 sigma); the grid reaches the widest cavity
+    (pieces.cavity_reach) with a floor, and not without one."""
+    numerics = resolve("fast")
+    rough = Physics(St=10.0, eps=1e-8, roughness=200.0)  # x0 = 1585 x1
+    floor = Physics(St=10.0, eps=1e-3, Pi=1e-6, cavitation="jfo")
+    for physics in (rough, floor):
+        classic = scene_grid(10.0, 5.0, numerics)
+        grid = scene_grid(10.0, 5.0, numerics, max(p.film_width(physics) for p in PIECES),
+                          max(p.film_reach(physics) for p in PIECES))
+        assert grid.radius[-1] > classic.radius[-1]
+    assert np.array_equal(scene_grid(10.0, 5.0, numerics, 0.0, cavity_reach(math.inf)).radius,
+                          scene_grid(10.0, 5.0, numerics).radius)
+    assert scene_grid(10.0, 5.0, numerics, 0.0, cavity_reach(1e-6)).radius[-1] >= cavity_reach(1e-6)
 
 
 def test_the_master_curve_refuses_what_the_plan_does_not_give_it():

@@ -1,0 +1,236 @@
+"""The pieces of physics that change a collision's phases, each declared once.
+
+A collision is a rigid approach, a coupled phase and a rigid departure (solver/collision.py), and
+each analytic shortcut is exact only for some physics (solver/shortcuts.py). A ``Piece`` says what
+it does to them: where the classic rigid approach stops being exact, whether it has a rigid
+approach or a departure of its own and for which physics that is exact, whether the coupled phase
+must run on until its film is full again, how wide the grid's inner region and how far the grid
+must reach, when the spheres end the coupled phase at rest, and the observables it reads from the
+series. ``shortcuts.plan`` and collision.py iterate over ``PIECES`` and name none of them.
+
+The rest of a piece lives where its kind of code lives: its groups and off values in
+solver/physics.py (``GROUPS``), its laws and film terms in model/, its scene switch in
+pipeline/scenes/pieces.py. docs/model.md, "How to add a term", lists the steps.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from .model import cavitation, contact, piezoviscous, rigid
+from .rigid_phases import RigidHead, rigid_block
+
+__all__ = ["Piece", "PIECES", "CAVITY_REACH", "WIDEST_CAVITY", "cavity_reach"]
+
+
+def _none(*_):
+    return None
+
+
+def _false(*_):
+    return False
+
+
+def _zero(*_):
+    return 0.0
+
+
+@dataclass(frozen=True)
+class Piece:
+    """One piece of physics as the collision's phases see it (module docstring). Every hook takes
+    the scene's ``solver.Physics`` first; a piece that is off for it answers as the classic film
+    (``None``, ``False``, 0)."""
+
+    name: str
+    # (physics, numerics) -> separation or None: the classic rigid approach is exact only down to
+    # here (the coupled phase takes over at the largest of these and the classic hand-over)
+    approach_stop: Callable = _none
+    # its own rigid approach: the plan's label for it, physics -> it is exact, and
+    # (physics, numerics, x_stop) -> RigidHead (x_stop: the other pieces' largest stop, or 0)
+    approach: str = ""
+    approach_exact: Callable = _false
+    rigid_approach: Callable = _none
+    # its own rigid departure: the plan's label, physics -> it is exact, and
+    # (physics, x, v, t, lost) -> (x, v, t, series block) from the release state, or None when
+    # it does not apply there (e.g. still approaching)
+    departure: str = ""
+    departure_exact: Callable = _false
+    depart: Callable = _none
+    # physics -> the coupled phase runs until the film is full again (events.RELAXED_FULL), after
+    # which the classic departure is exact
+    refills: Callable = _false
+    # (physics, x_c, v_c, j, x_ref, cols) -> the restitution at x_ref read from row j of the
+    # coupled phase, for the physics whose departure or refill is this piece's
+    restitution: Callable = _none
+    film_width: Callable = _zero  # physics -> a radius the grid's inner region covers
+    film_reach: Callable = _zero  # physics -> a radius the grid reaches
+    rests: Callable = _false  # (physics, v at the release) -> the spheres are at rest there
+    # (result, cols, tau, blocks) -> None: sets its observables (``observables``) from the
+    # coupled phase's series ``cols`` and the departure's blocks, on every coupled result
+    observe: Callable = _none
+    observables: tuple = ()
+    # the coupled phase's history of the film's fluid fraction is kept in this result field
+    # where physics -> True
+    profile: str = ""
+    keeps_profile: Callable = _false
+
+
+# --- the pressure-dependent liquid (model/liquid.py, model/piezoviscous.py) -------------------
+
+def _law_onset(physics, numerics):
+    return rigid.law_onset_separation(physics.x_start, physics.St, rigid.law_slopes(physics)[0],
+                                      numerics.switch)
+
+
+def _barus_exact(physics):
+    return physics.viscosity_law == "barus" and piezoviscous.exact_for(physics)
+
+
+def _barus_approach(physics, numerics, x_stop) -> RigidHead:
+    """The Barus liquid's rigid film at constant density (model/piezoviscous.py, a scalar ODE
+    with a closed-form force), up to the hand-over on the Barus ``W(0)/X``, near the glass gap,
+    or at ``x_stop``."""
+    stokes, x_start, tau_per_t = physics.St, physics.x_start, physics.tau_per_t
+    path = piezoviscous.approach(x_start, 1.0, 0.0, stokes, physics.beta, numerics.switch,
+                                 x_stop=x_stop)
+    rests = path.event == "rest"
+    # the path without its end when a coupled phase follows (the phase starts there), and
+    # without the rest (reached after infinite time)
+    keep = np.isfinite(path.t)
+    if not rests:
+        keep[-1] = False
+    block = rigid_block(path.t[keep], path.x[keep], path.v[keep], tau_per_t, 0,
+                        1.0 - path.v[keep] ** 2)
+    block["F"] = path.force[keep]
+    block["W0"] = path.w0[keep]
+    block["P_max"] = path.p_axis[keep]
+    beta, x, v = physics.beta, path.x_end, path.v_end
+    peaks = path.peaks
+    if x > piezoviscous.glass_gap(v, beta):
+        pressure = lambda s: piezoviscous.rigid_pressure(s, x, v, beta)  # noqa: E731
+    else:
+        # the start x0 itself lies inside the glass gap (beta > x0^2/3, e.g. 13 at eps 1e-2):
+        # no rigid Barus film exists there; the coupled phase starts from the classic
+        # pressure, the Kirchhoff pressure of that state, as with the other laws
+        pressure = lambda s: 3.0 * v / (x + s) ** 2  # noqa: E731
+        peaks = rigid.approach_peaks(x_start, stokes, x_start)
+    return RigidHead(x, v, path.t_end, rests, block, peaks, pressure)
+
+
+LIQUID_LAW = Piece("pressure-dependent liquid", approach_stop=_law_onset, approach="barus",
+                   approach_exact=_barus_exact, rigid_approach=_barus_approach)
+
+
+# --- the cavitation floor (model/cavitation.py, model/film.py) -----------------------------
+
+CAVITY_REACH = 4.0  # the grid reaches this many times the widest cavity, sqrt(2) (V/Pi)^(1/4) at V = 1
+WIDEST_CAVITY = 400.0  # cap for Pi -> 0 (at Pi = 0 the whole opening film cavitates)
+
+
+def cavity_reach(pi) -> float:
+    """How far the grid must reach for a film with the floor ``-pi``: ``CAVITY_REACH`` times the
+    widest cavity of the rigid separation at speed ``V = 1``, ``sqrt(2 s_c) ~ sqrt(2) (V/Pi)^(1/4)``
+    (docs/model.md, "Cavitation"); 0 without a floor (``pi`` infinite)."""
+    if not math.isfinite(pi):
+        return 0.0
+    return CAVITY_REACH * min(math.sqrt(2.0) * max(pi, 1e-12) ** -0.25, WIDEST_CAVITY)
+
+
+def _floor_reach(physics):
+    return cavity_reach(physics.Pi) if physics.cavitation != "off" else 0.0
+
+
+def _refills(physics):
+    # a JFO cavity has a memory: the coupled phase goes on until the film is full again
+    return physics.cavitation == "jfo" and not cavitation.exact_for(physics)
+
+
+def _floor_departure(physics, x, v, t, lost):
+    """The rigid departure with the floor (model/cavitation.py) from the release state, until the
+    cavity closes; its series: the force ``-U/(X + s_c)``, the axis at the floor while the cavity
+    ``R_c = sqrt(2 s_c)`` is open, the energy lost (viscous and to the void) from the kinetic
+    energy."""
+    if v >= 0.0:
+        return None
+    x_end, u_end, t_end, (xs, us, ts) = cavitation.departure(x, -v, t, physics.St, physics.Pi)
+    sigma = np.array([cavitation.cavity_fraction(physics.Pi * xi * xi / (6.0 * ui))
+                      for xi, ui in zip(xs, us)])
+    vs = -us
+    block = rigid_block(ts, xs, vs, physics.tau_per_t, 2, lost + (v**2 - vs * vs))
+    block["F"] = vs / (xs * (1.0 + sigma))
+    block["P_min"] = np.where(sigma > 0.0, -physics.Pi, block["P_min"])
+    block["cavity_radius"] = np.sqrt(2.0 * sigma * xs)
+    return x_end, -u_end, t_end, block
+
+
+def _cavity_restitution(physics, x_c, v_c, j, x_ref, cols):
+    """``e`` at ``x_ref`` with a floor: by the floor's departure from row ``j``; or, for a film
+    that refills (the coupled phase ran until the film is full again, from where the classic
+    rigid departure is exact), by the classic departure where the film is full from row ``j``
+    on, else from the coupled phase's own speed where it crosses ``x_ref`` (possibly with a
+    cavity open), interpolated."""
+    if cavitation.exact_for(physics):
+        return cavitation.restitution(x_c[j], v_c[j], physics, x_ref)
+    open_cavity = cols["cavity_radius"] + cols["void_volume"]
+    st_ref = rigid.impact_stokes(physics.St, physics.x_start, x_ref) / physics.St
+    last = len(x_c) - 1
+    if not np.any(open_cavity[j:] > 0.0):  # full from row j on: the classic departure
+        return rigid.departure_speed(x_c[j], v_c[j], physics.St, x_ref) / st_ref
+    if x_c[last] > x_ref and v_c[last] < 0.0:
+        out = np.nonzero((x_c[1:] > x_ref) & (x_c[:-1] <= x_ref) & (v_c[1:] < 0.0))[0]
+        if out.size:
+            k = int(out[-1])
+            frac = (x_ref - x_c[k]) / (x_c[k + 1] - x_c[k])
+            return float(-(v_c[k] + frac * (v_c[k + 1] - v_c[k]))) / st_ref
+    return rigid.departure_speed(x_c[last], v_c[last], physics.St, x_ref) / st_ref
+
+
+def _observe_cavity(result, cols, tau, blocks):
+    cavity = np.nonzero(cols["cavity_radius"] > 0.0)[0]
+    result.cavitated = bool(cavity.size > 0)
+    result.cavity_radius_max = float(np.max(cols["cavity_radius"]))
+    if cavity.size:
+        result.tau_cavitation_onset = float(tau[cavity[0]])
+    result.void_volume_max = float(np.max(cols["void_volume"]))
+    if blocks[-1]["phase"][0] == 2:  # the departure's cavity (with a floor) may be the widest
+        widest = max(float(np.max(b["cavity_radius"])) for b in blocks if b["phase"][0] == 2)
+        result.cavity_radius_max = max(result.cavity_radius_max, widest)
+        result.cavitated = result.cavitated or widest > 0.0
+
+
+def _jfo(physics):
+    return physics.cavitation == "jfo"
+
+
+CAVITATION = Piece("cavitation", departure="floor", departure_exact=cavitation.exact_for,
+                   depart=_floor_departure, refills=_refills, restitution=_cavity_restitution,
+                   film_reach=_floor_reach, observe=_observe_cavity,
+                   observables=("cavitated", "cavity_radius_max", "tau_cavitation_onset",
+                                "void_volume_max"),
+                   profile="fluid_fraction", keeps_profile=_jfo)
+
+
+# --- asperity contact with e_dry (model/contact.py) -------------------------------------------
+
+def _contact_onset(physics, numerics):
+    return rigid.contact_onset_separation(physics.x_start, physics.St, physics.roughness)
+
+
+def _asperity_width(physics):
+    # the film that does the work where rough surfaces touch is sqrt(2 sigma) wide
+    return math.sqrt(2.0 * physics.roughness)
+
+
+def _at_rest_on_asperities(physics, v):
+    return not physics.smooth and abs(v) < contact.REST_SPEED
+
+
+ASPERITY_CONTACT = Piece("asperity contact", approach_stop=_contact_onset,
+                         film_width=_asperity_width, rests=_at_rest_on_asperities)
+
+
+PIECES = (LIQUID_LAW, CAVITATION, ASPERITY_CONTACT)
