@@ -27,7 +27,7 @@ from .integration.grid import reference_grid, scaled_grid
 from .model import liquid, rigid
 from .observables import OBSERVABLES, SERIES, STATUS, failure_message
 from .physics import Physics
-from .pieces import PIECES
+from . import pieces
 from .result import JSON_KEYS, SOLVER_VERSION, Collision
 from .rigid_phases import KEPT, RigidHead, rigid_block, rigid_path
 from .settings import Numerics, resolve
@@ -44,7 +44,7 @@ START_STRAIN_LIMIT = 0.1
 
 # An ok result's energy closure (``energy_error``, of m v0^2/2) stays below this. Over 566 ok
 # scenes of the supported range (St 0.05-1000 x eps 1e-12-0.1, the classic film, both floors,
-# each piece of physics alone and rough with JFO; fast and standard presets) the largest closure error was
+# Barus, rough with and without JFO; fast and standard presets) the largest closure error was
 # 3.1e-3 (fast), so 0.02 leaves a factor 6 for scenes outside that scan; an error this large
 # already moves v_r by 0.01/v_r, more than any preset's stated error. The scene that made it
 # (St 0.001, roughness ~ x0, k 1e-6) closed to 0.50 and was reported ok.
@@ -237,7 +237,7 @@ def handover_separation(physics, numerics):
     come to rest before any (the scene is rigid all the way)."""
     found = [x for x in (
         rigid.handover_separation(physics.x_start, physics.St, numerics.switch),
-        *(p.approach_stop(physics, numerics) for p in PIECES)) if x is not None]
+        *(p.approach_stop(physics, numerics) for p in pieces.PIECES)) if x is not None]
     return max(found) if found else None
 
 
@@ -248,7 +248,7 @@ def rigid_head(physics, numerics) -> RigidHead:
     stokes, x_start, tau_per_t = physics.St, physics.x_start, physics.tau_per_t
     own = plan(physics).approach_piece
     if own is not None:
-        stops = [x for p in PIECES if p is not own
+        stops = [x for p in pieces.PIECES if p is not own
                  for x in (p.approach_stop(physics, numerics),) if x is not None]
         return own.rigid_approach(physics, numerics, max(stops, default=0.0))
     x_switch = handover_separation(physics, numerics)
@@ -315,8 +315,9 @@ def _integrate(physics, numerics, head, shortcuts):
     ``head`` until the shortcuts' end event (a film that refills: until it is full again): the
     grid, then ``stepper.integrate``'s results."""
     stokes, x_switch, v_switch = physics.St, head.x, head.v
-    grid = scene_grid(stokes, x_switch, numerics, max(p.film_width(physics) for p in PIECES),
-                      max(p.film_reach(physics) for p in PIECES))
+    grid = scene_grid(stokes, x_switch, numerics,
+                      max(p.film_width(physics) for p in pieces.PIECES),
+                      max(p.film_reach(physics) for p in pieces.PIECES))
     p_init = head.pressure(grid.s)  # the rigid film's pressure; K p = asymptotic W
     # the first step (implicit Euler, no error estimate: no history yet) is a small fraction of
     # the film's time scale X/V and of the spheres' deceleration time St X/V: at St 0.001 a
@@ -337,7 +338,7 @@ def _save_profiles(result, t_c, x_c, p_hist, w_hist, theta_hist):
     result.profile_tau = t_c * result.physics.tau_per_t
     result.pressure = p_hist
     result.deformation = w_hist
-    for piece in PIECES:
+    for piece in pieces.PIECES:
         if piece.keeps_profile(result.physics):
             setattr(result, piece.profile, theta_hist)
     result.profile_x = x_c
@@ -373,7 +374,7 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
         result.v_r = result.dimple_depth_x1 = math.nan
         result.dimple = None
         for flag in (o.name for o in OBSERVABLES if o.kind == "flag"
-                     and any(o.name in p.observables for p in PIECES)):
+                     and any(o.name in p.observables for p in pieces.PIECES)):
             setattr(result, flag, None)
         result.series = _concat(blocks)
         result.message = (f"{message} (St={stokes:g}, eps={physics.eps:g}, after "
@@ -391,7 +392,7 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
         result.e_x0 = result.e_wet if x_ref_x0 == 1.0 else _wet_restitution(
             physics, shortcuts, cols, x_start)
     _coupled_observables(result, cols, tau_per_t, ln_x_e, v_c[-1])
-    for piece in PIECES:
+    for piece in pieces.PIECES:
         piece.observe(result, cols, t_c * tau_per_t, blocks)
     include_rigid_peaks(result, head.peaks)
     if result.start_strain_energy > START_STRAIN_LIMIT:
@@ -416,7 +417,7 @@ def _depart(physics, shortcuts, cols, blocks):
         x_rel, v_rel, t_rel, block = departed
         blocks.append(block)
         lost = block["dissipated"][-1]
-    if any(p.rests(physics, v_rel) for p in PIECES):
+    if any(p.rests(physics, v_rel) for p in pieces.PIECES):
         return math.log(float(cols["H_min"][-1])), True
     if math.isinf(x_rel):  # a departure without suction (Pi = 0): the spheres never stop
         return math.inf, False
@@ -435,7 +436,8 @@ def _wet_restitution(physics, shortcuts, cols, x_ref):
     from the release state; when the release lies beyond ``x_ref`` (the deformation relaxed only
     after the spheres passed it), from the last row inside ``x_ref`` on the way out, so the
     departure crosses ``x_ref`` on the rigid path of a state whose deformation is ``O(release)``.
-    A piece whose departure or refill the plan gives reads it its own way (``Piece.restitution``)."""
+    A piece whose departure or refill the plan gives reads it its own way
+    (``Piece.restitution``)."""
     x_c, v_c = cols["X"], cols["V"]
     j = len(x_c) - 1
     if x_c[j] > x_ref and v_c[j] < 0.0:

@@ -127,7 +127,8 @@ LIQUID_LAW = Piece("pressure-dependent liquid", approach_stop=_law_onset, approa
 
 # --- the cavitation floor (model/cavitation.py, model/film.py) -----------------------------
 
-CAVITY_REACH = 4.0  # the grid reaches this many times the widest cavity, sqrt(2) (V/Pi)^(1/4) at V = 1
+# the grid reaches this many times the widest cavity, sqrt(2) (V/Pi)^(1/4) at V = 1
+CAVITY_REACH = 4.0
 WIDEST_CAVITY = 400.0  # cap for Pi -> 0 (at Pi = 0 the whole opening film cavitates)
 
 

@@ -8,10 +8,10 @@ hold the closed forms refuse a scene their plan does not give them.
 What each piece of physics does to the shortcuts it declares in solver/pieces.py (docs/model.md,
 "Rigid solution" and each piece's section): the classic film takes every shortcut (the closed-form
 approach up to the hand-over, the release, the closed-form departure, the master curve); a piece
-may stop the classic rigid approach earlier (``Piece.approach_stop``, collision.handover_separation),
-bring a rigid approach or a departure of its own where that is exact, or keep the coupled phase
-running until its film is full again (``events.RELAXED_FULL``); any piece that is on takes the
-master curve away.
+may stop the classic rigid approach earlier (``Piece.approach_stop``,
+collision.handover_separation), bring a rigid approach or a departure of its own where that is
+exact, or keep the coupled phase running until its film is full again (``events.RELAXED_FULL``);
+any piece that is on takes the master curve away.
 """
 
 from __future__ import annotations
@@ -20,7 +20,8 @@ from dataclasses import dataclass
 
 from .integration.events import RELAXED, RELAXED_FULL
 from .model import rigid
-from .pieces import PIECES, Piece
+from . import pieces
+from .pieces import Piece
 
 __all__ = ["Shortcuts", "plan"]
 
@@ -66,9 +67,9 @@ class Shortcuts:
 def plan(physics) -> Shortcuts:
     """The shortcuts that are exact for ``physics`` (a ``solver.Physics``), from what each piece
     says its own shortcuts are exact for (solver/pieces.py) and model/rigid.py's ``exact_for``."""
-    approach = next((p for p in PIECES if p.approach_exact(physics)), None)
-    departure = next((p for p in PIECES if p.departure_exact(physics)), None)
-    refill = next((p for p in PIECES if p.refills(physics)), None)
+    approach = next((p for p in pieces.PIECES if p.approach_exact(physics)), None)
+    departure = next((p for p in pieces.PIECES if p.departure_exact(physics)), None)
+    refill = next((p for p in pieces.PIECES if p.refills(physics)), None)
     return Shortcuts(
         approach_piece=approach,
         end_event=RELAXED_FULL if refill else RELAXED,
