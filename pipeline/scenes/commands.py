@@ -395,9 +395,10 @@ def _add_scene_flags(p) -> None:
         for n in ((1, 2) if group == "body" else (None,)):
             g = p.add_argument_group(group_title(group, n)) if group else p
             for flag in by_group.get(group, ()):
-                name, dest, _, _ = flag.options()[n - 1 if n else 0]
-                g.add_argument(name, dest=dest, default=None, choices=flag.choices,
-                               help=flag.help)
+                for name, dest, section, _ in flag.options():
+                    if n is None or section == f"body{n}":  # a body's group: its own flags
+                        g.add_argument(name, dest=dest, default=None, choices=flag.choices,
+                                       help=flag.help)
         if group == "body":
             p.add_argument("--wall", action="store_true",
                            help="body2 is a plane wall (infinite radius and mass)")
