@@ -304,7 +304,7 @@ def test_restitution_range_needs_a_plot_and_fit_range_is_finite(capsys):
 
 
 def test_a_tiny_rebound_is_not_shown_as_zero():
-    from pipeline.scenes.commands import _e3
+    from pipeline.scenes.answer import _e3
 
     assert _e3(1.1e-4) == "0.00011" and _e3(0.0) == "0.000" and _e3(0.7584) == "0.758"
 

@@ -22,6 +22,8 @@ A range is the envelope of the central value and the drivers' values; a driver's
 its span over the sum of the drivers' spans (of ``e_for_dem``; of ``e_for_cfd_dem`` where there
 is no ``e_far``). The drivers are one at a time,
 not combined: two unknowns at their worst together can go beyond the range.
+
+``answer_lines`` writes the answer as the first lines of ``ehd scene``'s report.
 """
 
 from __future__ import annotations
@@ -34,7 +36,8 @@ from .materials import ROUGHNESS_CLASSES
 from .pieces import STIFFNESS_LABELS
 from .units import format_quantity
 
-__all__ = ["ALPHA_UNKNOWN_HIGH", "READING_BAND_OVER_A", "CODE_KINDS", "answer", "stopped_answer"]
+__all__ = ["ALPHA_UNKNOWN_HIGH", "READING_BAND_OVER_A", "CODE_KINDS", "SOLVED_UNKNOWNS", "answer",
+           "stopped_answer", "answer_lines"]
 
 # The high end of a liquid's unknown pressure-viscosity coefficient [1/Pa]: 20 1/GPa, the lowest
 # of the mineral oils in Stachowiak & Batchelor, Engineering Tribology, Table 2.3 (20-42 1/GPa;
@@ -116,6 +119,8 @@ def _alpha_variants(scene):
 
 _VARIANTS = (("roughness", _roughness_variants), ("cavitation onset", _cavitation_variants),
              ("pressure-viscosity", _alpha_variants))
+# the unknowns the range solves again (the others are read from solves already made)
+SOLVED_UNKNOWNS = tuple(name for name, _ in _VARIANTS)
 
 
 
@@ -225,3 +230,60 @@ def stopped_answer(ranges: bool = True) -> dict:
     span = [0.0, 0.0] if ranges else None
     return {"verdict": "sticks", "e_for_dem": 0.0, "e_for_dem_range": span,
             "e_for_cfd_dem": 0.0, "e_for_cfd_dem_range": span, "range_drivers": []}
+
+
+# the report's first lines: the label of each kind of code's e (the result it takes: CODE_KINDS)
+_CODE_LABELS = {"e_for_dem": "e for a dry DEM code",
+                "e_for_cfd_dem": "e for a resolved CFD-DEM code"}
+
+
+def _e3(value) -> str:
+    """An e for the report: 3 decimals, or 2 significant digits where those would show a
+    rebound as 0.000."""
+    return f"{value:.2g}" if 0.0 < value < 0.0005 else f"{value:.3f}"
+
+
+def _e_lines(d: dict) -> list[str]:
+    """The e per code kind with its range, and which unknowns make the range."""
+    lines = []
+    for key, result in CODE_KINDS.items():
+        label = _CODE_LABELS[key]
+        value, span = d[key], d[f"{key}_range"]
+        if value is None:
+            lines.append(f"{label} ({result}): not computed")
+            continue
+        spread = "" if span is None else f", range {_e3(span[0])} to {_e3(span[1])}" + (
+            " (no unknown moves it)" if span[0] == span[1] else "")
+        lines.append(f"{label} ({result}): {_e3(value)}{spread}")
+    shares = [f"{r['unknown']} {100 * r['share']:.0f} %" for r in d["range_drivers"]
+              if r["share"] > 0.0]
+    if shares:
+        code = "dry DEM" if d["e_for_dem"] is not None else "resolved CFD-DEM"
+        lines.append(f"  range of the {code} e from: {', '.join(shares)} (one at a time; "
+                     "range_drivers in --json)")
+    return lines
+
+
+def answer_lines(d: dict) -> list[str]:
+    """The report's first lines: the verdict, the e per code kind with its range and drivers,
+    and the two speeds (docs/scenes.md, "The answer and its range")."""
+    if d["verdict"] is None:
+        lines = ["verdict: none (the solve failed; see below)"]
+    else:
+        lines = [f"verdict: the spheres "
+                 f"{d['verdict'].replace('sticks', 'stick').replace('rebounds', 'rebound')}"]
+        lines += _e_lines(d)
+    approach = d["approach_speed_m_per_s"]
+    source = d["inputs"]["approach_speed_source"] or ""
+    given = d["inputs"]["approach_speed_m_per_s"] is not None
+    if source.startswith("settling"):
+        where, how = f"far out, {source}", "through the settling motion"
+    else:
+        where = (f"at the outer start {d['outer_start_over_a']:.3g} a "
+                 f"({'given' if given else 'what arrives at x0 with v0'})")
+        how = "through the outer flow" if given else "given"
+    approach = "-" if approach is None else format_quantity(approach, "m/s")
+    lines.append(f"speeds: approach {approach} {where}, "
+                 f"v0 {format_quantity(d['inputs']['v0_m_per_s'], 'm/s')} at x0 = "
+                 f"{d['x0_over_a']:.3g} a ({how})")
+    return lines

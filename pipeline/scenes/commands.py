@@ -1,8 +1,9 @@
 """``ehd scene`` (a collision given in physical units) and ``ehd paper-figures`` (figures 2-11).
 
 ``ehd scene FILE.toml`` reads a scene file (format in docs/scenes.md); every field can also be
-given, or overridden, by a flag (``--radius1 '50 um'``). Exit codes: 0 success, 1 the solve failed
-(or, with ``--strict``, a validity check warned), 2 bad input.
+given, or overridden, by a flag (``--radius1 '50 um'``), declared with the key it fills in
+``flags.py`` (the scene's own) and ``pieces.py`` (each piece's). Exit codes: 0 success, 1 the
+solve failed (or, with ``--strict``, a validity check warned), 2 bad input.
 """
 
 from __future__ import annotations
@@ -11,37 +12,19 @@ import json
 import sys
 
 from ..errors import EXIT_SCENE_FAILED
+from .flags import GROUPS, SCENE_FLAGS, group_title
+from .pieces import PIECES
 
-__all__ = ["register", "cmd_scene", "cmd_paper_figures", "load_scene", "format_report",
-           "result_rows"]
+__all__ = ["register", "cmd_scene", "cmd_paper_figures", "load_scene", "flag_values",
+           "format_report", "result_rows"]
 
+# every flag that fills a key of the scene file: the scene's own and each piece's (flags.py)
+_SCENE_FLAGS = (*SCENE_FLAGS, *(flag for piece in PIECES for flag in piece.flags))
 # flag dest -> (section or None for top level, key)
-_FLAG_FIELDS = {
-    "title": (None, "title"), "v0": (None, "v0"), "approach_speed": (None, "approach_speed"),
-    "x0": (None, "x0"),
-    "x0_over_a": (None, "x0_over_a"),
-    "outer_start": (None, "outer_start"), "outer_start_over_a": (None, "outer_start_over_a"),
-    "x_ref": (None, "x_ref"), "x_ref_over_a": (None, "x_ref_over_a"),
-    "fluid": ("fluid", "name"), "viscosity": ("fluid", "viscosity"),
-    "fluid_density": ("fluid", "density"), "vapour_pressure": ("fluid", "vapour_pressure"),
-    "mean_free_path": ("fluid", "mean_free_path"), "ambient_pressure": ("fluid", "ambient_pressure"),
-    "cavitation_pressure": ("fluid", "cavitation_pressure"),
-    "tensile_strength": ("fluid", "tensile_strength"), "cavitation": (None, "cavitation"),
-    "viscosity_law": (None, "viscosity_law"), "density_law": (None, "density_law"),
-    "pressure_viscosity": ("fluid", "pressure_viscosity"),
-    "roelands_index": ("fluid", "roelands_index"), "roelands_pressure": ("fluid", "roelands_pressure"),
-    "dowson_higginson_c1": ("fluid", "dowson_higginson_c1"),
-    "dowson_higginson_c2": ("fluid", "dowson_higginson_c2"),
-    "asperity_contact": (None, "asperity_contact"), "e_dry": (None, "e_dry"),
-}
+_FLAG_FIELDS = {dest: (section, key) for flag in _SCENE_FLAGS
+                for _, dest, section, key in flag.options()}
 # the scene's speed is v0 or approach_speed: one given by a flag replaces the other of the file
 _ONE_SPEED = {"v0": "approach_speed", "approach_speed": "v0"}
-_BODY_FLAGS = {"material": "material", "radius": "radius", "density": "density",
-               "youngs_modulus": "youngs_modulus", "poisson_ratio": "poisson_ratio",
-               "yield_strength": "yield_strength", "roughness": "roughness"}
-for _n in (1, 2):
-    for _flag, _key in _BODY_FLAGS.items():
-        _FLAG_FIELDS[f"{_flag}{_n}"] = (f"body{_n}", _key)
 
 
 def _e(value):
@@ -125,12 +108,10 @@ def _g(value, spec=".4g"):
     return format_value(value, spec)
 
 
-# a law's constants are report rows only where that law is used (the JSON has them all)
-_LAW_ROWS = {"viscosity_in_tension": ("viscosity_law", ("barus", "roelands")),
-             "roelands_Z": ("viscosity_law", ("roelands",)),
-             "roelands_PR": ("viscosity_law", ("roelands",)),
-             "dh_c1": ("density_law", ("dowson-higginson",)),
-             "dh_c2": ("density_law", ("dowson-higginson",))}
+# a law's constants are report rows only where that law is used (the JSON has them all):
+# Physics field -> (the piece's switch, the laws that use it)
+_LAW_ROWS = {name: (piece.field, laws) for piece in PIECES
+             for name, laws in piece.law_rows.items()}
 
 
 def _physics_rows(d: dict) -> list[str]:
@@ -139,61 +120,6 @@ def _physics_rows(d: dict) -> list[str]:
 
     return [name for name in Physics.names()
             if name not in _LAW_ROWS or d[_LAW_ROWS[name][0]] in _LAW_ROWS[name][1]]
-
-
-# the report's first lines: code kind -> (label, the result it takes)
-_ANSWER_ROWS = (("e_for_dem", "e for a dry DEM code", "e_far"),
-                ("e_for_cfd_dem", "e for a resolved CFD-DEM code", "e_wet"))
-
-
-def _e3(value) -> str:
-    """An e for the report: 3 decimals, or 2 significant digits where those would show a
-    rebound as 0.000."""
-    return f"{value:.2g}" if 0.0 < value < 0.0005 else f"{value:.3f}"
-
-
-def _e_lines(d: dict) -> list[str]:
-    """The e per code kind with its range, and which unknowns make the range."""
-    lines = []
-    for key, label, result in _ANSWER_ROWS:
-        value, span = d[key], d[f"{key}_range"]
-        if value is None:
-            lines.append(f"{label} ({result}): not computed")
-            continue
-        spread = "" if span is None else f", range {_e3(span[0])} to {_e3(span[1])}" + (
-            " (no unknown moves it)" if span[0] == span[1] else "")
-        lines.append(f"{label} ({result}): {_e3(value)}{spread}")
-    shares = [f"{r['unknown']} {100 * r['share']:.0f} %" for r in d["range_drivers"]
-              if r["share"] > 0.0]
-    if shares:
-        code = "dry DEM" if d["e_for_dem"] is not None else "resolved CFD-DEM"
-        lines.append(f"  range of the {code} e from: {', '.join(shares)} (one at a time; "
-                     "range_drivers in --json)")
-    return lines
-
-
-def answer_lines(d: dict) -> list[str]:
-    """The report's first lines: the verdict, the e per code kind with its range and drivers,
-    and the two speeds (docs/scenes.md, "The answer and its range")."""
-    if d["verdict"] is None:
-        lines = ["verdict: none (the solve failed; see below)"]
-    else:
-        lines = [f"verdict: the spheres "
-                 f"{d['verdict'].replace('sticks', 'stick').replace('rebounds', 'rebound')}"]
-        lines += _e_lines(d)
-    approach = d["approach_speed_m_per_s"]
-    source = d["inputs"]["approach_speed_source"] or ""
-    given = d["inputs"]["approach_speed_m_per_s"] is not None
-    if source.startswith("settling"):
-        where, how = f"far out, {source}", "through the settling motion"
-    else:
-        where = (f"at the outer start {d['outer_start_over_a']:.3g} a "
-                 f"({'given' if given else 'what arrives at x0 with v0'})")
-        how = "through the outer flow" if given else "given"
-    lines.append(
-        f"speeds: approach {'-' if approach is None else _q(approach, 'm/s')} {where}, "
-        f"v0 {_q(d['inputs']['v0_m_per_s'], 'm/s')} at x0 = {d['x0_over_a']:.3g} a ({how})")
-    return lines
 
 
 def _shown(when: str, d: dict) -> bool:
@@ -227,8 +153,8 @@ def result_rows(d: dict) -> list[tuple[str, str]]:
 
 def format_report(d: dict) -> str:
     """Human-readable report of ``SceneResult.to_dict()``."""
+    from .answer import answer_lines
     from .checks import per_gpa
-    from .pieces import PIECES
 
     ins = d["inputs"]
     lines = []
@@ -327,11 +253,15 @@ def _solve(scene, args):
     return result, whole
 
 
+def flag_values(args) -> dict:
+    """``{flag dest: value}`` of the parsed ``ehd scene`` flags, as ``load_scene`` takes them."""
+    return {**{dest: getattr(args, dest) for dest in _FLAG_FIELDS}, "wall2": args.wall}
+
+
 def cmd_scene(args) -> int:
     if args.list_materials:
         return _list_materials(args)
-    flags = {dest: getattr(args, dest) for dest in _FLAG_FIELDS}
-    flags["wall2"] = args.wall
+    flags = flag_values(args)
     if args.file is None and not any(v for v in flags.values()):
         raise _usage_error("give a scene file (ehd scene FILE.toml) or the scene as flags "
                            "(see ehd scene --help)")
@@ -452,104 +382,38 @@ def cmd_paper_figures(args) -> int:
     return 0
 
 
-def _add_fluid_flags(p) -> None:
-    """``ehd scene``'s fluid flags (the fields of the scene file's [fluid] table)."""
-    from .scene import CAVITATION_CHOICES, DENSITY_CHOICES, VISCOSITY_CHOICES
-
-    g = p.add_argument_group("fluid")
-    g.add_argument("--fluid", default=None, help="named fluid (--list-materials)")
-    g.add_argument("--viscosity", default=None, help="dynamic viscosity, e.g. '1 mPa s'")
-    g.add_argument("--fluid-density", dest="fluid_density", default=None, help="e.g. '998 kg/m^3'")
-    g.add_argument("--vapour-pressure", dest="vapour_pressure", default=None, help="e.g. '2.3 kPa'")
-    g.add_argument("--mean-free-path", dest="mean_free_path", default=None, help="gases, e.g. '67 nm'")
-    g.add_argument("--ambient-pressure", dest="ambient_pressure", default=None,
-                   help="absolute ambient pressure (default 1 atm), e.g. '2 bar'")
-    g.add_argument("--cavitation-pressure", dest="cavitation_pressure", default=None,
-                   help="absolute pressure at which the liquid cavitates: a pressure, 'vapour' "
-                        "(the default for a liquid) or 'gas-saturated' (the ambient pressure)")
-    g.add_argument("--tensile-strength", dest="tensile_strength", default=None,
-                   help="cavitation at the ambient pressure minus this, e.g. '10 MPa'")
-    g.add_argument("--cavitation", default=None, choices=CAVITATION_CHOICES,
-                   help="film model: auto (default: the classic film, switched to the JFO "
-                        "cavitation floor where its tension would cross the cavitation "
-                        "pressure), or forced off / reynolds / jfo")
-    g.add_argument("--pressure-viscosity", dest="pressure_viscosity", default=None,
-                   help="pressure-viscosity coefficient alpha = d ln(mu)/dp, e.g. '20 1/GPa'")
-    g.add_argument("--roelands-index", dest="roelands_index", default=None,
-                   help="Roelands pressure-viscosity index Z, e.g. 0.6 (with --roelands-pressure)")
-    g.add_argument("--roelands-pressure", dest="roelands_pressure", default=None,
-                   help="Roelands reference pressure p_R, e.g. '196 MPa'")
-    g.add_argument("--dowson-higginson-c1", dest="dowson_higginson_c1", default=None,
-                   help="Dowson-Higginson c1 of rho/rho0 = 1 + c1 p/(1 + c2 p), e.g. '0.6 1/GPa'")
-    g.add_argument("--dowson-higginson-c2", dest="dowson_higginson_c2", default=None,
-                   help="Dowson-Higginson c2, e.g. '1.7 1/GPa'")
-    g.add_argument("--viscosity-law", dest="viscosity_law", default=None,
-                   choices=VISCOSITY_CHOICES,
-                   help="viscosity against pressure: auto (default: constant, switched to the "
-                        "fluid's law where alpha times the classic peak pressure is >= 0.1; "
-                        "roelands where the fluid has Z and p_R, else barus), or forced "
-                        "constant / barus / roelands")
-    g.add_argument("--density-law", dest="density_law", default=None, choices=DENSITY_CHOICES,
-                   help="density against pressure: auto (default: constant, switched to "
-                        "dowson-higginson where the fluid has its constants and the density "
-                        "would rise by more than 1%% at the classic peak pressure), or forced "
-                        "constant / dowson-higginson")
+def _add_scene_flags(p) -> None:
+    """The flags that fill the scene file's keys (``_SCENE_FLAGS``), in their groups of
+    ``--help`` (``flags.GROUPS``), and ``--wall`` after the bodies'."""
+    by_group = {}
+    for flag in _SCENE_FLAGS:
+        by_group.setdefault(flag.help_group, []).append(flag)
+    unknown = sorted(set(by_group) - set(GROUPS))
+    if unknown:  # a declaration's mistake, not the user's
+        raise RuntimeError(f"scene flags in groups not in flags.GROUPS: {unknown}")
+    for group in GROUPS:
+        for n in ((1, 2) if group == "body" else (None,)):
+            g = p.add_argument_group(group_title(group, n)) if group else p
+            for flag in by_group.get(group, ()):
+                for name, dest, section, _ in flag.options():
+                    if n is None or section == f"body{n}":  # a body's group: its own flags
+                        g.add_argument(name, dest=dest, default=None, choices=flag.choices,
+                                       help=flag.help)
+        if group == "body":
+            p.add_argument("--wall", action="store_true",
+                           help="body2 is a plane wall (infinite radius and mass)")
 
 
 def _build_scene(sub) -> None:
     from ..cli_shared import add_numerics_flags
-    from .scene import ROUGHNESS_CHOICES
+    from .answer import SOLVED_UNKNOWNS
 
     p = sub.add_parser(
         "scene", description="Solve one collision given in physical units, check the model's premises, "
                     "and report the results in SI and in the scalings. Values are SI numbers or "
                     "strings with units ('50 um', '10 cm/s', '1 mPa s'). Flags override the file.")
     p.add_argument("file", nargs="?", default=None, help="scene file (TOML; see docs/scenes.md)")
-    p.add_argument("--title", default=None, help="a line describing the scene")
-    for n in (1, 2):
-        g = p.add_argument_group(f"body{n}" + (" (a sphere, or a plane wall with --wall)" if n == 2 else " (a sphere)"))
-        g.add_argument(f"--material{n}", default=None, help="named material (--list-materials)")
-        g.add_argument(f"--radius{n}", default=None, help="sphere radius, e.g. '50 um' (inf: wall)")
-        g.add_argument(f"--density{n}", default=None, help="density, e.g. '2600 kg/m^3'")
-        g.add_argument(f"--youngs-modulus{n}", dest=f"youngs_modulus{n}", default=None,
-                       help="Young's modulus, e.g. '70 GPa'")
-        g.add_argument(f"--poisson-ratio{n}", dest=f"poisson_ratio{n}", default=None,
-                       help="Poisson ratio in (-1, 0.5]")
-        g.add_argument(f"--yield-strength{n}", dest=f"yield_strength{n}", default=None,
-                       help="yield strength (enables the plasticity check)")
-        g.add_argument(f"--roughness{n}", dest=f"roughness{n}", default=None,
-                       help="rms surface roughness, e.g. '0.3 um' (asperity contact)")
-    p.add_argument("--wall", action="store_true", help="body2 is a plane wall (infinite radius and mass)")
-    _add_fluid_flags(p)
-    g = p.add_argument_group("contact of the solids")
-    g.add_argument("--asperity-contact", dest="asperity_contact", default=None,
-                   choices=ROUGHNESS_CHOICES,
-                   help="surface roughness as physics: auto (default: smooth, switched on where "
-                        "the combined rms roughness exceeds a third of the smooth film's closest "
-                        "approach), or forced on / off")
-    g.add_argument("--e-dry", dest="e_dry", default=None,
-                   help="dry coefficient of restitution of the pair, in (0, 1] (default 1: "
-                        "elastic; acts only where the asperities touch)")
-    g = p.add_argument_group("approach")
-    g.add_argument("--approach-speed", dest="approach_speed", default=None,
-                   help="the speed far from the wall, at the outer start where the sphere has "
-                        "not yet slowed (the speed experiments report), e.g. '15 cm/s'; v0 is "
-                        "then what arrives at x0 through the outer flow")
-    g.add_argument("--v0", default=None,
-                   help="the speed at the film's start x0, e.g. '10 cm/s' (instead of "
-                        "--approach-speed)")
-    g.add_argument("--x0", default=None, help="starting gap, e.g. '250 nm' (default 0.01 a)")
-    g.add_argument("--x0-over-a", dest="x0_over_a", default=None, help="starting gap as x0/a")
-    g.add_argument("--outer-start", dest="outer_start", default=None,
-                   help="where the outer approach (exact Stokes resistance, added mass) starts, "
-                        "e.g. '3 mm' (default 1 a)")
-    g.add_argument("--outer-start-over-a", dest="outer_start_over_a", default=None,
-                   help="the outer start over a (default 1)")
-    g.add_argument("--x-ref", dest="x_ref", default=None,
-                   help="where e_far reads approach and departure speeds, in [x0, outer start] "
-                        "(default 0.1 a)")
-    g.add_argument("--x-ref-over-a", dest="x_ref_over_a", default=None,
-                   help="x_ref over a (default 0.1)")
+    _add_scene_flags(p)
     p.add_argument("--materials", action="append", metavar="FILE",
                    help="extra materials/fluids TOML file (repeatable; overrides shipped entries)")
     p.add_argument("--list-materials", action="store_true",
@@ -560,8 +424,9 @@ def _build_scene(sub) -> None:
     p.add_argument("--plot", metavar="DIR", default=None,
                    help="write the scene's figures (PNG and PDF) into DIR")
     p.add_argument("--no-range", dest="no_range", action="store_true",
-                   help="skip the range's solves (one or two per unknown: roughness, cavitation "
-                        "onset, pressure-viscosity); e_for_dem_range and the others are then null")
+                   help=f"skip the range's solves (one or two per unknown: "
+                        f"{', '.join(SOLVED_UNKNOWNS)}); e_for_dem_range and the others are then "
+                        "null")
     p.add_argument("--strict", action="store_true",
                    help="exit 1 when any validity check warns")
     from .trajectory import add_trajectory_flags

@@ -15,7 +15,7 @@ from solver.physics import Physics
 from .answer import answer, stopped_answer
 from .checks import (Check, model_reason, outcome_checks, premise_checks, pressure_checks,
                      pressure_notes)
-from .pieces import PIECES, REASON_KEYS, BaseFilm
+from .pieces import PIECES, QUANTITY_KEYS, REASON_KEYS, BaseFilm
 from .scene import Scene
 
 __all__ = ["SceneResult", "run_scene", "RESULT_KEYS", "SCALES", "scene_keys", "result_keys",
@@ -29,8 +29,8 @@ _SCENE_KEYS = (
     "range_drivers", "approach_speed_m_per_s", "inputs", "reduced_radius_m", "reduced_mass_kg",
     "theta_per_Pa", "effective_modulus_Pa", "x0_m", "x0_over_a", "x1_m", *Physics.names(), "Re",
     "Re_x0_over_a", "sound_speed_m_per_s", "wave_parameter", "model", "model_reason",
-    *REASON_KEYS, "e_dry_source", "cavitation_pressure_Pa", "status", "message", "x_ref_m", "x_ref_over_a",
-    "outer_start_m", "outer_start_over_a", "outer_geometry", "density_ratio", "dem_restitution",
+    *REASON_KEYS, "e_dry_source", *QUANTITY_KEYS, "status", "message", "x_ref_m",
+    "x_ref_over_a", "outer_start_m", "outer_start_over_a", "outer_geometry", "density_ratio", "dem_restitution",
 )
 _LAST_KEYS = ("sensitivity", "warnings", "notes", "dimensionless")
 
@@ -96,7 +96,7 @@ class SceneResult:
     peak_pressure: float = math.nan  # Pa
     min_pressure: float = math.nan  # Pa (negative: tension)
     # per piece of physics the scene switches (pieces.PIECES): which was used and why, one
-    # sentence with numbers ({reason_key: sentence}; also attributes: result.cavitation_reason)
+    # sentence with numbers ({reason_key: sentence}; also attributes: result.<reason_key>)
     reasons: dict = field(default_factory=dict)
     # the result without each piece of physics the scene switched on (and with the asperity
     # stiffness 10x either way): {label: {"e_wet", "e_far", "v_r", "status"}}
@@ -139,7 +139,7 @@ class SceneResult:
             "model": c.model, "model_reason": model_reason(s, c),
             **{key: self.reasons.get(key, "") for key in REASON_KEYS},
             "e_dry_source": s.e_dry_source,
-            "cavitation_pressure_Pa": s.cavitation_pressure,
+            **{key: value(s) for piece in PIECES for key, value in piece.quantities.items()},
             "status": c.status, "message": c.message,
             # where e_far reads the speeds (solver/far_field.py)
             "x_ref_m": s.x_ref_distance, "x_ref_over_a": s.x_ref_distance / s.reduced_radius,
@@ -213,16 +213,13 @@ def run_scene(scene: Scene, accuracy: str = "standard", sensitivity_solves: bool
               ranges: bool = False, **overrides) -> SceneResult:
     """Solve a scene and check it.
 
-    The scene's automatic switches (``cavitation``, ``viscosity_law``, ``density_law`` "auto",
-    the defaults) are decided on one first solve, the *base*: the classic film, with whatever
-    the scene forces. Where the base's tension brings the absolute pressure below the scene's
-    cavitation pressure (``checks.cavitation_crosses``) the floor is switched on (``Pi`` finite,
-    the solver's default model); where alpha times its peak pressure is not small
-    (``checks.viscosity_switch``) the fluid's viscosity law; where the Dowson-Higginson density
-    rises by more than 1 % there (``checks.density_switch``) the density law. If anything was
-    switched on the scene is solved again with it. The ``SceneResult`` reasons say which film
-    answered and why. A scene that forces everything (or whose fluid gives nothing to switch)
-    is solved once.
+    The scene's automatic switches (each piece of ``pieces.PIECES`` whose field is "auto", the
+    default) are decided on one first solve, the *base*: the classic film (each automatic piece
+    at its ``base``), with whatever the scene forces. Each automatic piece asks that first film
+    whether it needs the piece (``ScenePiece.switch``, the rules of ``checks.py``); if one fired,
+    the scene is solved again with it ``on``. The ``SceneResult`` reasons say which film answered
+    and why. A scene that forces everything (or whose fluid gives nothing to switch) is solved
+    once.
 
     Parameters
     ----------
@@ -252,8 +249,8 @@ def run_scene(scene: Scene, accuracy: str = "standard", sensitivity_solves: bool
     compile_notice()  # one line when the solver is about to compile (a silent minute otherwise)
     outer = scene.outer_flow()
     auto = [p for p in PIECES if getattr(scene, p.field) == "auto"]
-    # the automatic switches start from the classic film (docs/scenes.md, "Cavitation",
-    # "Pressure-dependent viscosity and density", "Surface roughness"), with what the scene forces
+    # the automatic switches start from the classic film (docs/scenes.md, "Which model, and
+    # why"), with what the scene forces
     base = scene.physics(**{p.field: p.base for p in auto})
     overrides = {"save_profiles": False,
                  **{k: v for k, v in overrides.items() if v is not None}, "outer": outer}
@@ -300,8 +297,8 @@ def _check(result: SceneResult, base, base_p_max) -> None:
 
 def _sensitivity(c, base, accuracy, overrides) -> dict:
     """The scene's result without each piece of physics it switched on itself (one solve each),
-    and with a 10x stiffer and softer asperity layer (its stiffness is the least known input):
-    the spread a user should see beside the one number (docs/scenes.md, "Sensitivity")."""
+    and each piece's further variants (``ScenePiece.variants``: its least known input either
+    way): the spread a user should see beside the one number (docs/scenes.md, "Sensitivity")."""
     from solver import collide
 
     final = c.physics
