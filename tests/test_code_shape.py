@@ -6,7 +6,6 @@ integration/stepper.py) instead of tens of positional arrays.
 Read from the source with ``ast``, so a new function is checked the day it is written."""
 
 import ast
-import re
 from pathlib import Path
 
 SOLVER = Path(__file__).resolve().parent.parent / "solver"
@@ -60,21 +59,3 @@ def test_no_compiled_function_takes_more_than_12_arguments():
             if _compiled(node) and _arguments(node) > MAX_COMPILED_ARGUMENTS]
     assert not many, "pass named records instead: " + "; ".join(many)
 
-
-# issue 28, "Done when": the collision's phases, the shortcuts and the scene layer iterate over
-# the declared pieces (solver/pieces.py, pipeline/scenes/pieces.py) and name none of them; the
-# issue's own grep, literal and case-sensitive, of which only `#` comment lines may match
-PIECE_NAMES = re.compile(r"rough|jfo|cavit|barus|piezo")
-NAME_NO_PIECE = ("solver/collision.py", "solver/shortcuts.py")
-
-
-def test_the_phases_the_shortcuts_and_the_scene_layer_name_no_piece():
-    found = [f"{name}:{i}: {line.strip()}" for name in NAME_NO_PIECE
-             for i, line in enumerate((SOLVER.parent / name).read_text().splitlines(), 1)
-             if PIECE_NAMES.search(line) and not line.lstrip().startswith("#")]
-    assert not found, "\n".join(found)
-
-
-def test_the_piece_check_sees_a_piece_named_in_code():
-    assert PIECE_NAMES.search('    if physics.cavitation == "jfo":')
-    assert not PIECE_NAMES.search('    for piece in PIECES:')

@@ -1,4 +1,5 @@
-"""Each piece of physics declared once (issue 28, item 1): the scene layer's code names none, and
+"""Each piece of physics declared once (issue 28, item 1): the collision's phases, the shortcuts and
+the scene layer's code name none (solver/pieces.py, pipeline/scenes/pieces.py declare them), and
 every scene input a piece declares (``pipeline.scenes.pieces.ScenePiece``) reaches the scene."""
 
 import io
@@ -17,7 +18,8 @@ REPO = Path(__file__).resolve().parent.parent
 # the words that name a piece (issue 28, "Done when"), as its grep spells them
 PIECE_WORDS = re.compile(r"rough|jfo|cavit|barus|piezo")
 # the files that must name no piece outside comments (docstrings are code here)
-NAMING_NONE = ("pipeline/scenes/run.py", "pipeline/scenes/commands.py")
+NAMING_NONE = ("solver/collision.py", "solver/shortcuts.py", "pipeline/scenes/run.py",
+               "pipeline/scenes/commands.py")
 
 
 def piece_words(source: str) -> list[str]:
@@ -41,9 +43,10 @@ def test_the_check_finds_a_piece_in_code_and_docstrings_but_not_in_comments():
 
 
 @pytest.mark.parametrize("path", NAMING_NONE)
-def test_the_scene_layer_names_no_piece(path):
+def test_the_phases_the_shortcuts_and_the_scene_layer_name_no_piece(path):
     found = piece_words((REPO / path).read_text())
-    assert not found, f"{path} names a piece (declare it in pipeline/scenes/pieces.py):\n" + \
+    assert not found, f"{path} names a piece (declare it in solver/pieces.py or " \
+        "pipeline/scenes/pieces.py):\n" + \
         "\n".join(found)
 
 
