@@ -219,7 +219,7 @@ def test_stiffer_asperities_converge_to_the_hard_cut_off():
         error.append(abs(result.e_wet - exact))
         if k <= 1e4:
             # the film pressure inside a stiff contact is the small difference of two large
-            # loads: its Newton change is measured (step.film_change), or its noise's dissipation
+            # loads: its Newton change is measured (contact_step.film_change), or its noise's dissipation
             # broke the closure (1.6e-2 at k 1e4); measured 2.8e-4 and 1.8e-4, the smooth
             # film's order
             assert result.energy_error < 1e-3, (k, result.energy_error)

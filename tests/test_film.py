@@ -15,7 +15,7 @@ import pytest
 from solver import Physics
 from solver.collision import scene_grid
 from solver.integration.linalg import lu_factor, lu_solve, matvec
-from solver.model import step
+from solver.model import cavity_step, step
 from solver.model.film import gap
 from solver.model.state import Film, Step
 from solver.physics import PI
@@ -43,7 +43,7 @@ def _residual(grid, phys, bh, hist, y, film):
     n = grid.s.size
     yy = y.copy()
     film = _copy(film)
-    if phys[step.CAVITATION] == step.JFO:
+    if cavity_step.held(phys):
         active = film.cavity.active
         film.cavity.theta[active] = y[:n - 1][active]
         yy[:n - 1][active] = -phys[PI]

@@ -64,9 +64,10 @@ def _getter(field: str):
 
 
 # The fields of ``Cavity``, a floor's state, one entry per cell unless said otherwise:
-# ``active``, ``active_lu``, ``active0``, ``active_base`` (bool): the cavitated cells of the
-#   current iterate, of the Jacobian the loop solves with, of the last accepted state, and of the
-#   Jacobian it factorised (which low-rank updates correct to ``active_lu``);
+# ``active``, ``active_lu``, ``active0``, ``active_base``, ``active_was`` (bool): the cavitated
+#   cells of the current iterate, of the Jacobian the loop solves with, of the last accepted
+#   state, of the Jacobian it factorised (which low-rank updates correct to ``active_lu``), and
+#   of the iterate before its set was last decided (model/cavity_step.py: ``decide``);
 # ``theta``, ``theta0``, ``theta1``: the liquid fraction of the iterate and of the last two
 #   accepted states (1 in full cells, and in every cell but a JFO cavity's); ``dtheta``: its
 #   Newton update; ``h_onset``: the gap where each cell cavitated (the void volume); ``q_prev``:
@@ -75,7 +76,7 @@ def _getter(field: str):
 #   absolute part of the pressure error scale (``new_film``), the largest pressure seen, the
 #   accepted state's cavity radius.
 Cavity = array_record("Cavity", (
-    "active", "active_lu", "active0", "active_base", "theta", "theta0", "theta1", "dtheta",
+    "active", "active_lu", "active0", "active_base", "active_was", "theta", "theta0", "theta1", "dtheta",
     "h_onset", "q_prev", "worked", "p_abs", "p_seen", "r_edge"),
     "A floor's state (model/state.py).")
 
@@ -146,7 +147,7 @@ def new_film(q):
     # a film that never cavitates) keeps its instantaneous scale.
     cavity = Cavity(np.zeros(cells_n, dtype=np.bool_), np.zeros(cells_n, dtype=np.bool_),
                     np.zeros(cells_n, dtype=np.bool_), np.zeros(cells_n, dtype=np.bool_),
-                    theta, theta.copy(), theta.copy(), np.zeros(cells_n), np.zeros(cells_n),
+                    np.zeros(cells_n, dtype=np.bool_), theta, theta.copy(), theta.copy(), np.zeros(cells_n), np.zeros(cells_n),
                     q.copy(), _one(0.0), _one(1e-12), _one(0.0), _one(0.0))
     contact = Contact(np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
                       np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), _one(1.0), _one(0.0),

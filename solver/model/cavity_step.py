@@ -1,0 +1,208 @@
+"""The cavitation floor's part of the film's contract (model/step.py): what a film with the floor
+``P >= -Pi`` (the Reynolds condition or the mass-conserving JFO cavity) asks of the time loop
+beyond the classic film (docs/model.md, "Cavitation"; docs/solver.md, "Cavitation").
+
+Each hook reads the physics array and does nothing for a film without a floor, so model/step.py
+calls it unconditionally. The floor's state is the ``Cavity`` record of model/state.py: its
+active set (the cavitated cells) of the iterate, of the Jacobian and of the accepted states, the
+JFO liquid fractions, the void's history. A JFO cavity's slot holds its liquid fraction, not its
+pressure (``split_update``); a Reynolds cavity's row is replaced by its constraint
+(``constrain_rows``).
+"""
+
+from .._jit import jit
+from ..observables import SERIES_INDEX
+from ..physics import CAVITATION, PI, ST
+from .film import (JFO, NO_FLOOR, cavity_edge, constrain, jfo_void, update_cavity,
+                   update_cavity_jfo, void_work)
+
+_R_CAV, _V_VOID = SERIES_INDEX["cavity_radius"], SERIES_INDEX["void_volume"]
+
+
+@jit
+def on(phys):
+    """Whether the film has a floor: a constraint decided cell by cell (an active set)."""
+    return phys[CAVITATION] != NO_FLOOR
+
+
+@jit
+def held(phys):
+    """Whether the floor holds cells' slots at the floor with another unknown (JFO)."""
+    return phys[CAVITATION] == JFO
+
+
+@jit
+def held_cells(cavity, phys, out):
+    """The nodes whose slot is not their load (a JFO cavity's cells, held at the floor), into the
+    boolean ``out`` (N,)."""
+    n = out.size
+    out[:] = False
+    if held(phys):
+        out[:n - 1] = cavity.active
+
+
+@jit
+def start_attempt(y, film, phys):
+    """A step attempt of a JFO film starts from the accepted cavity, its cells' slots at the
+    floor; the Reynolds film keeps the iterate's set."""
+    if not held(phys):
+        return
+    cavity = film.cavity
+    active, active0 = cavity.active, cavity.active0
+    theta, theta0 = cavity.theta, cavity.theta0
+    for i in range(active.size):
+        active[i] = active0[i]
+        theta[i] = theta0[i]
+        if active[i]:
+            y[i] = -phys[PI]
+
+
+@jit
+def decide(p, res, film, phys):
+    """Decide the iterate's active set from its film pressure ``p`` and residual ``res``: a JFO
+    cavity from ``p`` and the liquid fractions (``film.update_cavity_jfo``; the set before is kept
+    in ``active_was``), a Reynolds cavity from ``p`` and ``res`` (``film.update_cavity``). Returns
+    True when JFO slots switched, whose gap and rows must then be evaluated again."""
+    cavity = film.cavity
+    if held(phys):
+        cavity.active_was[:] = cavity.active
+        return update_cavity_jfo(p, cavity.theta, phys, cavity.active)
+    update_cavity(p, res, phys, cavity.active)
+    return False
+
+
+@jit
+def constrain_rows(p, res, film, phys):
+    """Replace the rows of a Reynolds cavity's cells by their constraint (``film.constrain``);
+    a JFO cavity's rows stay its conservation law."""
+    if on(phys) and not held(phys):
+        constrain(p, res, film.cavity.active, phys)
+
+
+@jit
+def split_update(res, film, phys):
+    """Take the Newton update of the slots that hold another unknown out of ``res``: a JFO
+    cavity's slot updates its liquid fraction theta (kept >= 0: a dry cell), not ``P``."""
+    if not held(phys):
+        return
+    cavity = film.cavity
+    active, theta, dtheta = cavity.active, cavity.theta, cavity.dtheta
+    for i in range(active.size):
+        dtheta[i] = 0.0
+        if active[i]:
+            dtheta[i] = res[i]
+            theta[i] = max(theta[i] + res[i], 0.0)
+            res[i] = 0.0
+
+
+@jit
+def update_norm(norm, film, phys, rtol):
+    """The Newton norm with the fractions' updates (absolute) of ``split_update``."""
+    if not held(phys):
+        return norm
+    dtheta = film.cavity.dtheta
+    for i in range(dtheta.size):
+        norm = max(norm, abs(dtheta[i]) / rtol)
+    return norm
+
+
+@jit
+def error_in_time(film, phys, perr, dh):
+    """The floor's part of ``step.step_error``: while a cavity is open (or a JFO cell refilled in
+    this step) the pressure is not smooth in time, and its errors leave the norm (``perr`` to 0);
+    where a JFO cavity refilled, the gap's too (``dh`` to 0). Returns whether the pressure is not
+    smooth in time."""
+    if not on(phys):
+        return False
+    n = perr.size
+    not_smooth = _cavity_in_time(film.cavity, phys)
+    if not_smooth:
+        for i in range(n):
+            perr[i] = 0.0
+    if _refilled(film.cavity, phys):
+        for i in range(n):
+            dh[i] = 0.0
+    return not_smooth
+
+
+@jit
+def _refilled(cavity, phys):
+    """Whether a JFO cavity's cell refilled in this step (its pressure jumps: ``step_error``)."""
+    refilled = False
+    if held(phys):
+        active, active0 = cavity.active, cavity.active0
+        for i in range(active.size):
+            refilled = refilled or (active0[i] and not active[i])
+    return refilled
+
+
+@jit
+def _cavity_in_time(cavity, phys):
+    """Whether the pressure is not smooth in time over this step (``step_error``): a cavity open
+    at its start or end, or a JFO cell that refilled in it."""
+    open_cavity = cavity.r_edge[0] > 0.0
+    for i in range(cavity.active.size):
+        open_cavity = open_cavity or cavity.active[i]
+    return open_cavity or _refilled(cavity, phys)
+
+
+@jit
+def record(row, grid, p, h, pmax, pmin, cavity, phys, floor_fraction):
+    """The cavity's columns of the series row (radius and void volume; 0 for a film without a
+    floor) and the error scale's update (``step.record``); returns the radius the terminal events
+    see: the cavity's, tiny but positive for a JFO cavity of axis cells alone (whose edge radius
+    is zero)."""
+    if not on(phys):  # no cavity ever
+        row[_R_CAV] = 0.0
+        row[_V_VOID] = 0.0
+        return 0.0
+    area = grid.area
+    active0, h_onset = cavity.active0, cavity.h_onset
+    r_cav = cavity_edge(grid.s, p, active0, phys)
+    jfo = held(phys)
+    v_void = 0.0
+    if jfo:
+        v_void = jfo_void(area, cavity.theta0, h, active0)
+    else:
+        for i in range(active0.size):
+            if active0[i]:
+                v_void += area[i] * (h[i] - h_onset[i])
+    row[_R_CAV] = r_cav
+    row[_V_VOID] = v_void
+    cavity.r_edge[0] = r_cav
+    cavity.p_seen[0] = max(cavity.p_seen[0], pmax, -pmin)
+    if r_cav > 0.0:
+        cavity.p_abs[0] = max(cavity.p_abs[0], floor_fraction * cavity.p_seen[0])
+    r_event = r_cav
+    if jfo:
+        for i in range(active0.size):
+            if active0[i]:
+                r_event = max(r_event, 1e-300)
+    return r_event
+
+
+@jit
+def accept(grid, h0, h1, q, dt, film, phys):
+    """The floor's state after an accepted step (``h0`` its gap, ``h1`` the previous one's, ``q``
+    its face fluxes): the work against the floor (JFO: ``Pi dV_void`` exactly, film.jfo_void;
+    Reynolds: film.void_work), the fractions' history, where new cavity cells opened, and the
+    accepted cavity."""
+    if not on(phys):
+        return
+    cavity = film.cavity
+    active, active0 = cavity.active, cavity.active0
+    theta, theta0, theta1 = cavity.theta, cavity.theta0, cavity.theta1
+    area = grid.area
+    if held(phys):
+        cavity.worked[0] += 2.0 * phys[PI] * (jfo_void(area, theta, h0, active)
+                                              - jfo_void(area, theta0, h1, active0)) \
+            / (3.0 * phys[ST])
+    else:
+        cavity.worked[0] += void_work(area, h0, h1, q, cavity.q_prev, dt, active, phys)
+    theta1[:] = theta0
+    theta0[:] = theta
+    for i in range(active.size):
+        if active[i] and not active0[i]:
+            cavity.h_onset[i] = h1[i]
+    active0[:] = active
+    cavity.q_prev[:] = q
