@@ -328,6 +328,15 @@ def measured_section(traj: dict | None, runs: list) -> list[str]:
                          f"{_f(c['rebound_height_m'] * 1e3, '.2f')} | "
                          f"{_f(c['rebound_height_m'] / m['top_m'], '.2f')} |")
             head = "| | | | |"
+    flights = [(rec["name"], rec["computed"][next(iter(rec["computed"]))], rec["measured"],
+                rec["flight"]) for rec in traj["runs"] if "flight" in rec]
+    if flights:
+        lines += ["", "The tops split into the collision's part and the flight's "
+                  "(`benchmarks/trajectory.md`, \"Where the top's miss comes from\"): "
+                  + "; ".join(f"{name}: the departure speeds' heights differ by "
+                              f"{(c['e_observed'] / m['e']) ** 2:.2f}, and the model's outer motion "
+                              f"from the measured departure reaches {f['top_m'] / m['top_m']:.2f} of "
+                              f"the measured top" for name, c, m, f in flights) + "."]
     lines += ["", "Everything below compares the model with a correlation of the experiments, not "
               "with their data.", ""]
     return lines
