@@ -157,7 +157,7 @@ def render(doc: dict) -> str:
     a = doc.get("attribution")
     if a:
         lines += [
-            "", f"## Where the classic collision's compile goes (one run)", "",
+            "", "## Where the classic collision's compile goes (one run)", "",
             f"numba compiled {a['functions']} functions in {a['specialisations']} "
             f"specialisations, {a['total_s']:.1f} s in all (wall, inside the process); the "
             f"solver's own {a['solver_functions']} functions {a['solver_s']:.1f} s, numba's "
