@@ -15,6 +15,11 @@
   the summation order depend on how a kernel was compiled, so freshly compiled and cache-loaded
   code differed in the last digits (the elastic product uses BLAS instead, linalg.matvec).
 - ``error_model="numpy"``: division by zero gives inf (checked by the caller), not an exception.
+- ``copy_into`` instead of ``a[...] = b`` between arrays in compiled code: numba's slice
+  assignment from an array carries a shape-mismatch error whose message is formatted in compiled
+  code (``numba.np.arrayobj.raise_with_shape_context``), and its string machinery, linked into
+  every function that assigns a slice and into each of their callers, cost a sixth of the
+  solver's cold compile (benchmarks/compile.md: 45.5 s of CPU before, 38.6 s after).
 """
 
 import hashlib
@@ -100,6 +105,18 @@ def jit(func):
     # no cache at all rather than numba's silent fallback to __pycache__ (no source-hash guard)
     return numba.njit(cache=CACHE_DIR is not None, nogil=True, fastmath=FASTMATH,
                       error_model="numpy")(func)
+
+
+@jit
+def copy_into(dst, src):
+    """``dst[...] = src`` for C-ordered arrays of one shape, element by element (the reason is in
+    the module docstring); a shape mismatch raises ValueError with a fixed message."""
+    if dst.shape != src.shape:
+        raise ValueError("copy_into: the arrays' shapes differ")
+    flat_dst = dst.reshape(dst.size)
+    flat_src = src.reshape(src.size)
+    for i in range(flat_src.size):
+        flat_dst[i] = flat_src[i]
 
 
 # the signals whose Python handlers must not run inside compiled code (Ctrl-C; SIGTERM, which

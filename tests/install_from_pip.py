@@ -1,6 +1,6 @@
 """A pip install works as the README says (issue 20), from a folder outside the clone.
 
-Not part of ``make test`` (a fresh install compiles the solver: a minute or more); ``make
+Not part of ``make test`` (a fresh install compiles the solver: 40 s of CPU or more); ``make
 test-install`` runs it and ``.ci/run`` calls that. Steps: a copy of the clone's tracked sources
 (as ``git clone`` would give) is installed with ``pip install --no-deps`` into a fresh venv whose
 dependencies come from this venv (a ``.pth`` line: the packages are not downloaded again; the

@@ -14,7 +14,7 @@ import numpy as np
 from numba import types
 from numba.extending import get_cython_function_address
 
-from .._jit import jit
+from .._jit import copy_into, jit
 
 for _name in ("dgetrf", "dgetrs"):
     llvm.add_symbol(f"ehd_{_name}", get_cython_function_address("scipy.linalg.cython_lapack", _name))
@@ -33,7 +33,7 @@ def matvec(a, x, out):
     loop, and with a fixed summation order (numba's ``reassoc`` made freshly compiled and
     cache-loaded code sum differently)."""
     trans = np.empty(1, np.uint8)
-    trans[0] = ord("T")  # BLAS reads the C-ordered matrix as its transpose
+    trans[0] = 84  # ord("T") (ord compiles numba's unicode code); BLAS reads the C-ordered matrix as its transpose
     n = np.empty(1, np.int32)
     n[0] = a.shape[0]
     one = np.ones(1, np.int32)
@@ -57,7 +57,7 @@ def lu_factor(a, piv):
 def lu_solve(lu, piv, b):
     """Solve ``A x = b`` in place in ``b`` given ``lu_factor``'s output for ``A``."""
     trans = np.empty(1, np.uint8)
-    trans[0] = ord("T")  # LAPACK holds the factors of A^T (C order read as Fortran order)
+    trans[0] = 84  # ord("T"), as in matvec; LAPACK holds the factors of A^T (C order read as Fortran order)
     n = np.empty(1, np.int32)
     n[0] = lu.shape[0]
     one = np.ones(1, np.int32)
@@ -97,7 +97,7 @@ def lowrank_prepare(lu, piv, base, fresh, slots, k, u, v, z, cap, cpiv):
         for b in range(k):
             u[k + a, slots[b]] = 0.0
     for a in range(r):
-        z[a, :] = u[a, :]
+        copy_into(z[a], u[a])
         lu_solve(lu, piv, z[a])
     c = cap[: r * r].reshape((r, r))
     for a in range(r):

@@ -36,7 +36,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._jit import jit
+from .._jit import copy_into, jit
 from ..model import step as model
 from ..model.film import face_fluxes, gap
 from ..model.state import Step, array_record
@@ -146,7 +146,7 @@ def _rows(rows, cols):
 @jit
 def _grow(a, rows):
     out = _rows(rows, a.shape[1])
-    out[: a.shape[0]] = a
+    copy_into(out[: a.shape[0]], a)
     return out
 
 
@@ -195,7 +195,7 @@ def _predict(dt, t0, t1, t2, n_hist, y0, y1, y2, y_pred):
         for k in range(m):
             y_pred[k] = l0 * y0[k] + (1.0 - l0) * y1[k]
         return dt / (t_new - t1)
-    y_pred[:] = y0
+    copy_into(y_pred, y0)
     return 0.0
 
 
@@ -226,7 +226,7 @@ def _factorise(grid, phys, bh, y, h, film, fac, work):
     model.step_jacobian(grid, phys, bh, y, h, film, fac.jac, work.dres_dh)
     model.mark_factorised(film)
     if model.has_active_set(phys):  # kept for low-rank updates at a change of the set
-        fac.base[:, :] = fac.jac
+        copy_into(fac.base, fac.jac)
     fac.rank[0] = 0
     work.counters[JACOBIANS] += 1
     work.counters[LU] += 1
@@ -488,7 +488,7 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
         x_hist = a1 * y0[n] + a2 * y1[n]
         v_hist = a1 * y0[n + 1] + a2 * y1[n + 1]
         err_fac = _predict(dt, t0, t1, t2, n_hist, y0, y1, hist.y2, work.y_pred)
-        work.y[:] = work.y_pred
+        copy_into(work.y, work.y_pred)
         model.start_attempt(work.y, film, phys)
         step = Step(b * dt, work.c_hist, x_hist, v_hist)
         outcome, fresh = _newton(grid, phys, step, control.rtol, film, fac, work)
@@ -525,7 +525,7 @@ def _history(grid, start):
     n = s.size
     m = n + 2
     y0 = np.empty(m)
-    y0[:n] = start.p
+    copy_into(y0[:n], start.p)
     y0[n] = start.x
     y0[n + 1] = start.v
     w = np.empty(n)
@@ -539,11 +539,11 @@ def _history(grid, start):
 @jit
 def _shift(hist, dt, work):
     """The accepted step of size ``dt`` (``work.y``, ``work.h``) becomes the newest state."""
-    hist.y2[:] = hist.y1
-    hist.y1[:] = hist.y0
-    hist.y0[:] = work.y
-    hist.h1[:] = hist.h0
-    hist.h0[:] = work.h
+    copy_into(hist.y2, hist.y1)
+    copy_into(hist.y1, hist.y0)
+    copy_into(hist.y0, work.y)
+    copy_into(hist.h1, hist.h0)
+    copy_into(hist.h0, work.h)
     hist.t[2] = hist.t[1]
     hist.t[1] = hist.t[0]
     hist.t[0] = hist.t[0] + dt
@@ -584,7 +584,7 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
     work = _work(n)
     fac = _factorisation(n + 2)
     w, h, q = work.w, work.h, work.q
-    h[:] = hist.h0
+    copy_into(h, hist.h0)
     rows = 256
     series, p_hist, w_hist, theta_hist = _series(rows, n, save_profiles)
     # initial row
@@ -592,8 +592,8 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
     film = model.new_film(q)
     model.surface_gap(grid, phys, hist.y0, film, w, h)  # with a contact load, if any
     model.begin(film, phys)
-    hist.h0[:] = h
-    hist.h1[:] = h
+    copy_into(hist.h0, h)
+    copy_into(hist.h1, h)
     strain, diss_rate = model.energies(grid, phys, hist.y0, w, h, q, film)
     dissipated = start.dissipated
     n_rows = 0
@@ -609,9 +609,9 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
         wmax, r_event = _record(series[n_rows], hist.t[0], grid, phys, hist.y0, w, h, strain,
                                 dissipated, film)
         if save_profiles:
-            p_hist[n_rows] = model.film_pressure(hist.y0, film, phys)
-            w_hist[n_rows] = w
-            theta_hist[n_rows] = model.fluid_fraction(film)
+            copy_into(p_hist[n_rows], model.film_pressure(hist.y0, film, phys))
+            copy_into(w_hist[n_rows], w)
+            copy_into(theta_hist[n_rows], model.fluid_fraction(film))
         n_rows += 1
         if status != RUNNING:
             break

@@ -10,7 +10,7 @@ pressure (``split_update``); a Reynolds cavity's row is replaced by its constrai
 (``constrain_rows``).
 """
 
-from .._jit import jit
+from .._jit import copy_into, jit
 from ..observables import SERIES_INDEX
 from ..physics import CAVITATION, PI, ST
 from .film import (JFO, NO_FLOOR, cavity_edge, constrain, jfo_void, update_cavity,
@@ -38,7 +38,7 @@ def held_cells(cavity, phys, out):
     n = out.size
     out[:] = False
     if held(phys):
-        out[:n - 1] = cavity.active
+        copy_into(out[:n - 1], cavity.active)
 
 
 @jit
@@ -65,7 +65,7 @@ def decide(p, res, film, phys):
     True when JFO slots switched, whose gap and rows must then be evaluated again."""
     cavity = film.cavity
     if held(phys):
-        cavity.active_was[:] = cavity.active
+        copy_into(cavity.active_was, cavity.active)
         return update_cavity_jfo(p, cavity.theta, phys, cavity.active)
     update_cavity(p, res, phys, cavity.active)
     return False
@@ -199,10 +199,10 @@ def accept(grid, h0, h1, q, dt, film, phys):
             / (3.0 * phys[ST])
     else:
         cavity.worked[0] += void_work(area, h0, h1, q, cavity.q_prev, dt, active, phys)
-    theta1[:] = theta0
-    theta0[:] = theta
+    copy_into(theta1, theta0)
+    copy_into(theta0, theta)
     for i in range(active.size):
         if active[i] and not active0[i]:
             cavity.h_onset[i] = h1[i]
-    active0[:] = active
-    cavity.q_prev[:] = q
+    copy_into(active0, active)
+    copy_into(cavity.q_prev, q)

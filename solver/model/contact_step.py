@@ -11,7 +11,7 @@ pressures of the last gap computed, the unloading's set state, the film pressure
 
 import numpy as np
 
-from .._jit import jit
+from .._jit import copy_into, jit
 from ..observables import SERIES_INDEX
 from ..physics import E_DRY, PI, ROUGHNESS, ST
 from .cavity_step import held_cells
@@ -85,8 +85,8 @@ def begin(film, phys):
     states (``accepted_pressures``)."""
     if on(phys):
         contact = film.contact
-        contact.p_acc0[:] = contact.p_film
-        contact.p_acc1[:] = contact.p_film
+        copy_into(contact.p_acc0, contact.p_film)
+        copy_into(contact.p_acc1, contact.p_film)
 
 
 @jit
@@ -214,8 +214,8 @@ def accept(grid, y0, w, h0, film, phys):
     if on(phys):
         contact = film.contact
         unload(grid, y0, w, h0, contact, phys)
-        contact.p_acc1[:] = contact.p_acc0
-        contact.p_acc0[:] = contact.p_film
+        copy_into(contact.p_acc1, contact.p_acc0)
+        copy_into(contact.p_acc0, contact.p_film)
 
 
 @jit

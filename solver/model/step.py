@@ -39,7 +39,7 @@ model/film.py (terms), model/contact.py and docs/model.md (Cavitation; Pressure-
 viscosity and density; Surface roughness).
 """
 
-from .._jit import jit
+from .._jit import copy_into, jit
 from ..integration.events import ENDED, HELD
 from ..observables import SERIES_INDEX
 from ..physics import DENSITY
@@ -146,13 +146,13 @@ def step_jacobian(grid, phys, bh, y, h, film, jac, dres_dh):
     link = contact_step.coupling(grid, phys, film)
     jacobian(grid, phys, bh, film_pressure(y, film, phys), cav.theta, h, cav.active, link, jac,
              dres_dh)
-    cav.active_lu[:] = cav.active
+    copy_into(cav.active_lu, cav.active)
 
 
 @jit
 def mark_factorised(film):
     """The Jacobian just built (``step_jacobian``) is the one the loop factorises."""
-    film.cavity.active_base[:] = film.cavity.active_lu
+    copy_into(film.cavity.active_base, film.cavity.active_lu)
 
 
 @jit
