@@ -58,8 +58,6 @@ from .state import new_film  # noqa: F401 (new_film: the contract's start)
 _W_VOID, _E_C = SERIES_INDEX["void_work"], SERIES_INDEX["E_c"]
 
 
-
-
 @jit
 def energies(grid, phys, y, w, h, q, film):
     """Strain energy and dissipation rate of the state (film.energy_rates; the strain energy of
@@ -99,8 +97,6 @@ def content_history(a1, a2, y0, y1, h0, h1, film, phys, out):
             out[i] = a1 * cell_content(theta0[i], h0[i], p0[i], phys)[0] \
                 + a2 * cell_content(theta1[i], h1[i], p1[i], phys)[0]
     out[n - 1] = a1 * h0[n - 1] + a2 * h1[n - 1]
-
-
 
 
 @jit
@@ -168,9 +164,6 @@ def changed_slots(film, slots):
                 slots[k] = i
             k += 1
     return k
-
-
-
 
 
 @jit
