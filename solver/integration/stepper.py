@@ -38,7 +38,6 @@ import numpy as np
 
 from .._jit import copy_into, jit
 from ..model import step as model
-from ..model.film import face_fluxes, gap
 from ..model.state import Step, array_record
 from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
 from .events import reached
@@ -530,7 +529,7 @@ def _history(grid, start):
     y0[n + 1] = start.v
     w = np.empty(n)
     h = np.empty(n)
-    gap(s, grid.influence, start.x, start.p, w, h)
+    model.start_gap(s, grid.influence, start.x, start.p, w, h)
     t = np.empty(3)
     t[:] = start.t
     return History(y0, y0.copy(), y0.copy(), h, h.copy(), t, np.ones(1, dtype=np.int64))
@@ -588,7 +587,7 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
     rows = 256
     series, p_hist, w_hist, theta_hist = _series(rows, n, save_profiles)
     # initial row
-    face_fluxes(grid.s, grid.s_face, hist.y0[:n], h, phys, q)
+    model.face_fluxes(grid.s, grid.s_face, hist.y0[:n], h, phys, q)
     film = model.new_film(q)
     model.surface_gap(grid, phys, hist.y0, film, w, h)  # with a contact load, if any
     model.begin(film, phys)
@@ -629,7 +628,7 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
             continue
         _shift(hist, dt, work)
         y0 = hist.y0
-        face_fluxes(grid.s, grid.s_face, model.film_pressure(y0, film, phys), h, phys, q)
+        model.face_fluxes(grid.s, grid.s_face, model.film_pressure(y0, film, phys), h, phys, q)
         model.accept(grid, y0, w, hist.h0, hist.h1, q, dt, film, phys)
         strain_new, diss_new = model.energies(grid, phys, y0, w, h, q, film)
         dissipated += 0.5 * (diss_rate + diss_new) * dt

@@ -52,6 +52,11 @@ from .contact_step import (begin, film_change, film_pressure, relaxing_deflectio
                            surface_gap, total_force)
 from .contact import HOLD, REST
 from .film import cell_content, compression_work, energy_rates, jacobian, residual
+# the film's face fluxes of a state (what the loop records and the void's work reads), and the
+# gap of the rigid start, before the film's own state exists (its slots are the rigid film's
+# pressures whatever the pieces)
+from .film import face_fluxes  # noqa: F401
+from .film import gap as start_gap  # noqa: F401
 from .liquid import CONSTANT, isoviscous, kirchhoff_difference
 from .state import new_film  # noqa: F401 (new_film: the contract's start)
 
