@@ -10,9 +10,10 @@ transpose, and the solve uses ``trans = 'T'``.
 """
 
 import llvmlite.binding as llvm
-import numpy as np
+from llvmlite import ir
 from numba import types
-from numba.extending import get_cython_function_address
+from numba.core import cgutils
+from numba.extending import get_cython_function_address, intrinsic
 
 from .._jit import copy_into, jit
 
@@ -27,43 +28,88 @@ _dgemv = types.ExternalFunction("ehd_dgemv",
                                 types.void(_p, _p, _p, _p, _p, _p, _p, _p, _p, _p, _p))
 
 
+# The arguments BLAS and LAPACK take by address. An array's ``.ctypes`` holds a reference to
+# it (counted up and down at each use) and a one-entry array per scalar is an allocation: with
+# five of each per call, 4364 dgemv and 2489 dgetrs per collision, they were most of numba's
+# reference counting in the loop (benchmarks/refcount.md). The data pointer and a scalar in the
+# caller's stack frame carry neither.
+@intrinsic
+def _data(typingctx, array):
+    """The address of ``array``'s data (no reference counted)."""
+    if not isinstance(array, types.Array):
+        return None
+
+    def codegen(context, builder, signature, args):
+        ary = context.make_array(signature.args[0])(context, builder, args[0])
+        return builder.bitcast(ary.data, cgutils.voidptr_t)
+
+    return types.voidptr(array), codegen
+
+
+def _cell(numba_type, llvm_type):
+    """An intrinsic that stores its argument, cast to ``numba_type``, in a slot of the calling
+    function's stack frame and returns the slot's address (valid until that function returns)."""
+
+    @intrinsic
+    def cell(typingctx, value):
+        def codegen(context, builder, signature, args):
+            slot = cgutils.alloca_once(builder, llvm_type)
+            builder.store(context.cast(builder, args[0], signature.args[0], numba_type), slot)
+            return builder.bitcast(slot, cgutils.voidptr_t)
+
+        return types.voidptr(value), codegen
+
+    return cell
+
+
+_int32_cell = _cell(types.int32, ir.IntType(32))
+_char_cell = _cell(types.uint8, ir.IntType(8))
+_double_cell = _cell(types.float64, ir.DoubleType())
+
+
+@intrinsic
+def _int32_at(typingctx, address):
+    """The int32 stored at ``address`` (a ``_int32_cell``'s, after LAPACK wrote it)."""
+
+    def codegen(context, builder, signature, args):
+        return builder.load(builder.bitcast(args[0], ir.IntType(32).as_pointer()))
+
+    return types.int32(types.voidptr), codegen
+
+
+# BLAS and LAPACK read a C-ordered matrix as its transpose: trans = "T" (84; ord() compiles
+# numba's unicode code)
+_TRANSPOSE = 84
+
+
 @jit
 def matvec(a, x, out):
     """``out = a @ x`` (a C-ordered, square) by BLAS ``dgemv``: 2-3x faster than a compiled
     loop, and with a fixed summation order (numba's ``reassoc`` made freshly compiled and
     cache-loaded code sum differently)."""
-    trans = np.empty(1, np.uint8)
-    trans[0] = 84  # ord("T") (ord compiles numba's unicode code); BLAS reads the C-ordered matrix as its transpose
-    n = np.empty(1, np.int32)
-    n[0] = a.shape[0]
-    one = np.ones(1, np.int32)
-    alpha = np.ones(1)
-    beta = np.zeros(1)
-    _dgemv(trans.ctypes, n.ctypes, n.ctypes, alpha.ctypes, a.ctypes, n.ctypes, x.ctypes,
-           one.ctypes, beta.ctypes, out.ctypes, one.ctypes)
+    n = _int32_cell(a.shape[0])
+    one = _int32_cell(1)
+    _dgemv(_char_cell(_TRANSPOSE), n, n, _double_cell(1.0), _data(a), n, _data(x), one,
+           _double_cell(0.0), _data(out), one)
 
 
 @jit
 def lu_factor(a, piv):
     """Factor ``a`` (n, n, C order) in place; ``piv`` (n,) int32. False if singular."""
-    n = np.empty(1, np.int32)
-    n[0] = a.shape[0]
-    info = np.zeros(1, np.int32)
-    _dgetrf(n.ctypes, n.ctypes, a.ctypes, n.ctypes, piv.ctypes, info.ctypes)
-    return info[0] == 0
+    n = _int32_cell(a.shape[0])
+    info = _int32_cell(0)
+    _dgetrf(n, n, _data(a), n, _data(piv), info)
+    return _int32_at(info) == 0
 
 
 @jit
 def lu_solve(lu, piv, b):
-    """Solve ``A x = b`` in place in ``b`` given ``lu_factor``'s output for ``A``."""
-    trans = np.empty(1, np.uint8)
-    trans[0] = 84  # ord("T"), as in matvec; LAPACK holds the factors of A^T (C order read as Fortran order)
-    n = np.empty(1, np.int32)
-    n[0] = lu.shape[0]
-    one = np.ones(1, np.int32)
-    info = np.zeros(1, np.int32)
-    _dgetrs(trans.ctypes, n.ctypes, one.ctypes, lu.ctypes, n.ctypes, piv.ctypes, b.ctypes,
-            n.ctypes, info.ctypes)
+    """Solve ``A x = b`` in place in ``b`` given ``lu_factor``'s output for ``A`` (LAPACK holds
+    the factors of ``A^T``: C order read as Fortran order)."""
+    n = _int32_cell(lu.shape[0])
+    info = _int32_cell(0)
+    _dgetrs(_char_cell(_TRANSPOSE), n, _int32_cell(1), _data(lu), n, _data(piv), _data(b), n,
+            info)
     return b
 
 
