@@ -66,7 +66,7 @@ def hertz_overlap(stokes):
 
 
 def _parabolic_peak(t, f, i):
-    """Vertex of the parabola by samples i-1, i, i+1 (the discrete extremum ``i``)."""
+    """Vertex of the parabola interpolating samples i-1, i, i+1 (the discrete extremum ``i``)."""
     if i <= 0 or i >= len(f) - 1:
         return t[i], f[i]
     t0, t1, t2 = t[i - 1], t[i], t[i + 1]
@@ -91,16 +91,12 @@ def scene_grid(stokes, x_switch, numerics: Numerics, width=0.0, reach=0.0):
 
     The inner region covers the Hertz contact radius ``sqrt(delta_H)`` (at least 2, the film's
     width at small St), and ``width``, the widest film a piece of physics does its work in
-    (``Piece.film_width``, solver/pieces.py). The grid must also reach well
-    beyond the widest film the coupled phase sees, ``sqrt(2 X)`` at the hand-over and at the
-    release (where ``W(0)/X = release`` on the rigid path with ``V <= 1``), and the radius
-    ``reach`` a piece needs (``Piece.film_reach``); its extent doubles until it does (a few outer
-    cells each time).
+    (``Piece.film_width``, solver/pieces.py). The grid must also reach well beyond the widest
+    film the coupled phase sees, ``sqrt(2 X)`` at the hand-over and at the release (where
+    ``W(0)/X = release`` on the rigid path with ``V <= 1``), and the radius ``reach`` a piece
+    needs (``Piece.film_reach``); its extent doubles until it does (a few outer cells each
+    time).
     """
-    # the asperity contact's width: at a roughness of several x1 the asperities stop the spheres
-    # before the solids deform, and the film that does the work is sqrt(2 sigma) wide; on the
-    # rigid limit of tests/test_contact.py at roughness 5400 x1 covering it took the outer cells'
-    # error in e_wet at St 20 from 3.9e-4 to 7e-5
     inner = numerics.inner_factor * max(math.sqrt(hertz_overlap(stokes)), 2.0, width)
     x_release = (rigid.HANDOVER_COEFF / numerics.release) ** 0.4
     reach = max(FAR_FIELD_REACH * math.sqrt(2.0 * max(x_switch, x_release)) / inner,

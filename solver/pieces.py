@@ -222,7 +222,10 @@ def _contact_onset(physics, numerics):
 
 
 def _asperity_width(physics):
-    # the film that does the work where rough surfaces touch is sqrt(2 sigma) wide
+    # at a roughness of several x1 the asperities stop the spheres before the solids deform, and
+    # the film that does the work is sqrt(2 sigma) wide; on the rigid limit of
+    # tests/test_contact.py at roughness 5400 x1 covering it took the outer cells' error in e_wet
+    # at St 20 from 3.9e-4 to 7e-5
     return math.sqrt(2.0 * physics.roughness)
 
 
