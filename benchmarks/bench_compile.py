@@ -199,14 +199,8 @@ def main(argv=None) -> int:
         doc["ratio"] = {case: harness.compare([x["cpu_s"] for x in r["this"]],
                                               [x["cpu_s"] for x in r["before"]])
                         for case, r in runs.items()}
-    if args.out != "-":
-        doc = harness.write_json(Path(args.out).with_suffix(".json"), doc, load_start)
-    else:
-        doc = {**doc, **harness.provenance(load_start)}
-    text = render(doc)
-    print(text)
-    if args.out != "-":
-        Path(args.out).write_text(text)
+    doc = harness.save_results(args.out, doc, load_start)
+    harness.save_report(args.out, render(doc))
     return 0
 
 

@@ -246,12 +246,8 @@ def main(argv=None) -> int:
         before = doc["results"]
         meta["before_source"] = doc["meta"].get("source")
     payload = {"meta": meta, "results": results, "before": before}
-    if args.out != "-":
-        payload = harness.write_json(Path(args.out).with_suffix(".json"), payload, load_start)
-    text = render(results, meta, before, payload)
-    print(text)
-    if args.out != "-":
-        Path(args.out).write_text(text)
+    payload = harness.save_results(args.out, payload, load_start)
+    harness.save_report(args.out, render(results, meta, before, payload))
     return 0
 
 

@@ -146,8 +146,7 @@ def main(argv=None) -> int:
         ex = executors(sweep_file, tmp, env, args.rounds) if args.rounds > 0 else None
     payload = {"sweep_file": sweep_file, "repeat": args.repeat,
                "cases": [{"case": name, **r} for name, r in rows], "executors": ex}
-    doc = (harness.write_json(Path(args.out).with_suffix(".json"), payload, load_start)
-           if args.out != "-" else {**payload, **harness.provenance(load_start)})
+    doc = harness.save_results(args.out, payload, load_start)
     lines = [
         f"# Sweep benchmark: `make sweep` on `{sweep_file}`",
         "",
@@ -167,10 +166,7 @@ def main(argv=None) -> int:
               "nothing to do <= 5 s."]
     if ex is not None:
         lines += _executor_lines(ex, args.rounds)
-    text = "\n".join(lines) + "\n"
-    print(text)
-    if args.out != "-":
-        Path(args.out).write_text(text)
+    harness.save_report(args.out, "\n".join(lines) + "\n")
     return 0
 
 

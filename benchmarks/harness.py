@@ -136,6 +136,21 @@ def write_json(path: Path, payload: dict, load_start: list[float], default=None)
     return doc
 
 
+def save_results(out: str, payload: dict, load_start: list[float]) -> dict:
+    """A benchmark's results with their provenance: written to ``out`` with the suffix ``.json``
+    (``write_json``), or only returned when ``out`` is ``-`` (standard output)."""
+    if out == "-":
+        return {**payload, **{k: v for k, v in provenance(load_start).items() if k not in payload}}
+    return write_json(Path(out).with_suffix(".json"), payload, load_start)
+
+
+def save_report(out: str, text: str) -> None:
+    """A benchmark's Markdown report: printed, and written to ``out`` unless it is ``-``."""
+    print(text)
+    if out != "-":
+        Path(out).write_text(text)
+
+
 def describe(doc: dict) -> str:
     """One line naming where a result came from, for the Markdown reports."""
     commit = doc.get("commit", NOT_RECORDED)
