@@ -23,7 +23,7 @@ import numpy as np
 
 __all__ = ["Physics", "Group", "GROUPS", "ST", "EPS", "PI", "CAVITATION", "CAVITATION_MODELS",
            "DEFAULT_CAVITATION", "BETA", "VISCOSITY", "ROELANDS_Z", "ROELANDS_PR", "DENSITY",
-           "DH_C1", "DH_C2", "TABLE", "ROUGHNESS", "ASPERITY_K", "E_DRY", "TENSION",
+           "DH_C1", "DH_C2", "TABLE", "ROUGHNESS", "ASPERITY_K", "E_DRY", "SLIP", "TENSION",
            "TENSION_CHOICES", "VISCOSITY_LAWS", "DENSITY_LAWS",
            "INDEX", "codes"]
 
@@ -195,6 +195,12 @@ GROUPS = (
           "dry restitution", 0.0, 1.0, default=1.0, off=1.0,
           doc="Acts only where the asperities touch: a smooth collision never loses energy in "
               "the solids (docs/model.md, \"Losses in the solids\")."),
+    # slip at the surfaces (docs/model.md, "Slip"): a gas's mean free path, or a liquid's slip
+    # length on a slippery surface; 1e8 x1 is the start gap at eps 1e-20, as for the roughness
+    Group("slip_length", "slip length l / x1 of each surface (Maxwell-Navier slip, u_wall = l "
+          "du/dz)", "slip length", 0.0, 1.0e8, closed_lo=True, default=0.0, off=0.0,
+          doc="The film's mobility becomes ``H^3 + 6 l H^2`` (model/slip.py). A gas film's slip "
+              "length is its mean free path; no cavitation floor acts with it."),
     # measured mu(p): ln(mu/mu0) linear between the points, extended with the last slope
     Group("viscosity_table", "measured viscosity against pressure, \"P:mu/mu0, ...\" from 0:1 "
           "with P increasing (P in mu a v0 / x1^2)", "viscosity table", math.nan, math.nan,
@@ -214,6 +220,7 @@ ROELANDS_Z, ROELANDS_PR = INDEX["roelands_Z"], INDEX["roelands_PR"]
 DENSITY, DH_C1, DH_C2 = INDEX["density_law"], INDEX["dh_c1"], INDEX["dh_c2"]
 TABLE = INDEX["viscosity_table"]
 ROUGHNESS, ASPERITY_K, E_DRY = INDEX["roughness"], INDEX["asperity_stiffness"], INDEX["e_dry"]
+SLIP = INDEX["slip_length"]
 
 
 def codes(name: str) -> tuple:
@@ -294,6 +301,10 @@ class _PhysicsMethods:
             raise ValueError(f"roughness (roughness) = {self.roughness!r} must be smaller than the "
                              f"start gap x0/x1 = eps^-0.4 = {self.x_start:.6g}: the asperities "
                              "would touch before the collision starts (start farther out)")
+        if self.slip_length > 0.0 and model != "off":
+            raise ValueError(f"slip_length = {self.slip_length!r} with cavitation {model!r}: a "
+                             "slipping film with a cavitation floor is not modelled (a gas film "
+                             "has no floor: give Pi = inf, or slip_length = 0)")
 
     # ---- the declaration, for code that iterates over the groups ----------------------------
     @staticmethod
@@ -349,7 +360,8 @@ class _PhysicsMethods:
         """True when no physics beyond Davis, Serayssol & Hinch (1986) is switched on, so every
         analytic shortcut of the classic model (rigid phases, hand-over, release, master curve)
         is exact."""
-        return self.cavitation == "off" and self.isoviscous and self.smooth
+        return (self.cavitation == "off" and self.isoviscous and self.smooth
+                and self.slip_length == 0.0)
 
     @property
     def smooth(self) -> bool:

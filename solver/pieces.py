@@ -21,10 +21,10 @@ from typing import Callable
 
 import numpy as np
 
-from .model import cavitation, contact, piezoviscous, rigid
+from .model import cavitation, contact, piezoviscous, rigid, slip
 from .rigid_phases import RigidHead, rigid_block
 
-__all__ = ["Piece", "PIECES", "CAVITY_REACH", "WIDEST_CAVITY", "cavity_reach"]
+__all__ = ["Piece", "PIECES", "CAVITY_REACH", "WIDEST_CAVITY", "SLIP_REACH", "cavity_reach"]
 
 
 def _none(*_):
@@ -237,4 +237,91 @@ ASPERITY_CONTACT = Piece("asperity contact", approach_stop=_contact_onset,
                          film_width=_asperity_width, rests=_at_rest_on_asperities)
 
 
-PIECES = (LIQUID_LAW, CAVITATION, ASPERITY_CONTACT)
+# --- slip at the surfaces (model/slip.py) -----------------------------------------------------
+
+# the grid reaches where the gap is this many slip gaps c = 6 l: the far-field row keeps the
+# classic P H^2, which slip changes by 2c/(3H) there, on a load 3V/H^2 that is negligible
+SLIP_REACH = 100.0
+
+
+def _slip_stop(physics, numerics):
+    # slip changes the rigid film from the start on, by 2c/(3 x0) in its force
+    return physics.x_start if physics.slip_length > 0.0 else None
+
+
+def _slip_approach(physics, numerics, x_stop) -> RigidHead:
+    """The rigid slip film (model/slip.py, closed forms) from the start to the hand-over on its
+    own ``W(0)/X``, to ``x_stop``, or to rest."""
+    c = slip.mobility_gap(physics)
+    path = slip.approach(physics.x_start, physics.St, c, numerics.switch, x_stop)
+    rests = path.event == "rest"
+    keep = np.isfinite(path.t)
+    if not rests:
+        keep[-1] = False
+    block = _slip_block(path, keep, physics.tau_per_t, 0, 1.0 - path.v[keep] ** 2)
+    x, v = float(path.x[-1]), float(path.v[-1])
+    best = {"peak_force": int(np.argmax(path.force)), "w0_max": int(np.argmax(path.w0)),
+            "p_max": int(np.argmax(path.p_axis))}
+    peaks = {"peak_force": float(path.force[best["peak_force"]]),
+             "t_peak_force": float(path.t[best["peak_force"]]),
+             "w0_max": float(path.w0[best["w0_max"]]),
+             "t_max_deformation": float(path.t[best["w0_max"]]),
+             "p_max": float(path.p_axis[best["p_max"]]), "t_p_max": float(path.t[best["p_max"]]),
+             "x_p_max": float(path.x[best["p_max"]])}
+    pressure = None if rests else (lambda s: slip.rigid_pressure(s, x, v, c))  # noqa: E731
+    return RigidHead(x, 0.0 if rests else v, math.inf if rests else float(path.t[-1]), rests,
+                     block, peaks, pressure)
+
+
+def _slip_block(path, keep, tau_per_t, phase, dissipated):
+    block = rigid_block(path.t[keep], path.x[keep], path.v[keep], tau_per_t, phase, dissipated)
+    block["F"] = path.force[keep]
+    block["W0"] = path.w0[keep]
+    block["P_max"] = np.maximum(path.p_axis[keep], 0.0)
+    block["P_min"] = np.minimum(path.p_axis[keep], 0.0)
+    return block
+
+
+def _slip_departure(physics, x, v, t, lost):
+    """The rigid slip departure from the release state (model/slip.py): to rest, returned as the
+    state ``(x_e, 0)``, or out to where slip no longer counts (``slip.departure``), from where
+    the classic departure goes on."""
+    if v >= 0.0:
+        return None
+    path = slip.departure(x, v, t, physics.St, slip.mobility_gap(physics))
+    keep = np.ones(len(path.t), dtype=bool)
+    block = _slip_block(path, keep, physics.tau_per_t, 2, lost + (v * v - path.v ** 2))
+    if path.event == "rest":
+        ln_rest = slip.rest_separation(x, v, physics.St, slip.mobility_gap(physics))
+        return math.exp(ln_rest), 0.0, math.inf, block
+    return float(path.x[-1]), float(path.v[-1]), float(path.t[-1]), block
+
+
+def _slip_restitution(physics, x_c, v_c, j, x_ref, cols):
+    """``e`` at ``x_ref``: the rigid slip departure's speed there from row ``j`` over the rigid
+    slip approach's speed there (which arrives at ``x0`` with speed 1)."""
+    c = slip.mobility_gap(physics)
+    approach_speed = float(slip.velocity(x_ref, physics.x_start, 1.0, physics.St, c))
+    departure_speed = -float(slip.velocity(x_ref, x_c[j], v_c[j], physics.St, c))
+    if v_c[j] >= 0.0 or slip.rest_separation(x_c[j], v_c[j], physics.St, c) <= math.log(x_ref):
+        return 0.0
+    return departure_speed / approach_speed
+
+
+def _slip_reach(physics):
+    return math.sqrt(2.0 * SLIP_REACH * slip.mobility_gap(physics))
+
+
+def _slip_width(physics):
+    # the rigid slip film's pressure falls as 1/H, not 1/H^2, out to H ~ c: its work is done
+    # out to s ~ c
+    return math.sqrt(2.0 * slip.mobility_gap(physics))
+
+
+SLIP = Piece("slip", approach_stop=_slip_stop, approach="slip", approach_exact=slip.exact_for,
+             rigid_approach=_slip_approach, departure="slip",
+             departure_exact=slip.departs_exact, depart=_slip_departure,
+             restitution=_slip_restitution, film_width=_slip_width, film_reach=_slip_reach)
+
+
+PIECES = (LIQUID_LAW, CAVITATION, ASPERITY_CONTACT, SLIP)

@@ -95,6 +95,9 @@ FILMS = {  # every film the physics can build: the classic one, each floor, each
     "rough+jfo": dict(roughness=1.0, asperity_stiffness=5.0, Pi=0.05, cavitation="jfo"),
     "rough+barus+reynolds": dict(roughness=1.0, asperity_stiffness=20.0, beta=2.0, Pi=0.05,
                                  cavitation="reynolds"),
+    "slip": dict(slip_length=0.7),
+    "slip+barus+dh": dict(slip_length=0.7, beta=2.0, density_law="dowson-higginson"),
+    "slip+rough": dict(slip_length=0.7, roughness=1.0, asperity_stiffness=5.0),
 }
 
 

@@ -33,6 +33,10 @@ CASES = {  # Physics fields: (approach, end event, departure, classic)
     "rough+barus": (dict(roughness=2.0, beta=1.0), ("barus", RELAXED, "classic", False)),
     "rough+jfo": (dict(roughness=2.0, Pi=1e-3, cavitation="jfo"),
                   ("classic", RELAXED_FULL, "classic", False)),
+    "slip": (dict(slip_length=1.0), ("slip", RELAXED, "slip", False)),
+    "slip+rough": (dict(slip_length=1.0, roughness=2.0), ("slip", RELAXED, "slip", False)),
+    # the Barus approach is not exact with slip: slip's stop hands it over at the start
+    "slip+barus": (dict(slip_length=1.0, beta=1.0), ("barus", RELAXED, "slip", False)),
 }
 
 
@@ -46,7 +50,8 @@ def test_each_physics_gets_the_shortcuts_docs_model_gives_it(case):
 # each piece switched on alone, and what it must do to the collision's phases beyond the plan
 ALONE = {"pressure-dependent liquid": dict(beta=2.0, viscosity_law="roelands"),
          "cavitation": dict(Pi=1e-3, cavitation="jfo"),
-         "asperity contact": dict(roughness=2.0)}
+         "asperity contact": dict(roughness=2.0),
+         "slip": dict(slip_length=1.0)}
 
 
 def test_every_piece_is_covered_here():

@@ -35,6 +35,7 @@ MODEL_PAGES = (
       "Reading e as experiments do", "Outer flow: the history force")),
     ("roughness", "Rough surfaces and losses in the solids",
      ("Surface roughness", "Losses in the solids")),
+    ("slip", None, ("Slip",)),
     ("observables", "Observables and figures", ("Observables", "Figures")),
     ("adding-a-term", None, ("How to add a term",)),
     ("glossary", None, ("Glossary",)),

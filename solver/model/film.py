@@ -32,9 +32,10 @@ import numpy as np
 
 from .._jit import jit
 from ..integration.linalg import matvec
-from ..physics import CAVITATION, CAVITATION_MODELS, DENSITY, PI, ST
+from ..physics import CAVITATION, CAVITATION_MODELS, DENSITY, PI, SLIP, ST
 from .liquid import (CONSTANT, compression_energy, density, isoviscous, kirchhoff_difference,
                      volume_difference)
+from .slip import flux_factor
 
 # the cavitation models' codes in the physics array (solver/physics.py: codes("cavitation"))
 NO_FLOOR, REYNOLDS, JFO = (float(CAVITATION_MODELS.index(m)) for m in ("off", "reynolds", "jfo"))
@@ -68,7 +69,8 @@ def face_flux(s_lo, s_hi, s_f, p_lo, p_hi, h_lo, h_hi, phys):
     and its partial derivatives. The pressure difference that drives it is ``Int rho_bar/mu_bar
     dP`` (model/liquid.py: ``kirchhoff_difference``), ``P_hi - P_lo`` for the classic film: with
     it the film is isoviscous in the Kirchhoff variable, and the face stays exact for the rigid
-    Barus film as it is for the classic one.
+    Barus film as it is for the classic one. Slip at the surfaces multiplies the flux by
+    model/slip.py's ``flux_factor``.
 
     Returns
     -------
@@ -76,7 +78,9 @@ def face_flux(s_lo, s_hi, s_f, p_lo, p_hi, h_lo, h_hi, phys):
     """
     dp, ddp_lo, ddp_hi = kirchhoff_difference(p_lo, p_hi, phys)
     q, c, dq_dh_lo, dq_dh_hi = flux_law(s_lo, s_hi, s_f, h_lo, h_hi, dp)
-    return q, c * ddp_lo, c * ddp_hi, dq_dh_lo, dq_dh_hi
+    g, dg_dh_lo, dg_dh_hi = flux_factor(h_lo, h_hi, phys)  # slip at the surfaces (model/slip.py)
+    return (q * g, c * g * ddp_lo, c * g * ddp_hi, dq_dh_lo * g + q * dg_dh_lo,
+            dq_dh_hi * g + q * dg_dh_hi)
 
 
 @jit
@@ -271,13 +275,21 @@ def strain_energy(weight, s_last, p, w, phys):
 
 # ---- assembled from the terms ---------------------------------------------------------------------
 @jit
+def plain_flux(phys):
+    """The face flux is ``flux_law`` with the drive ``P_hi - P_lo``: an isoviscous liquid that
+    does not slip, decided once per call by the loops over the faces."""
+    return isoviscous(phys) and phys[SLIP] == 0.0
+
+
+@jit
 def face_fluxes(s, s_face, p, h, phys, q_out):
     """Face fluxes ``q_f`` of every face into ``q_out`` (N-1 entries). The liquid's law is
     decided once, outside the loop: for an isoviscous liquid the drive is ``P_hi - P_lo``
     (``kirchhoff_difference``'s value there) and the loop, ``flux_law`` inlined, is one the
     compiler vectorises (the liquid's law called per face made the classic residual slower,
-    measured in docs/solver.md: 19 us against 0.6 us)."""
-    if isoviscous(phys):
+    measured in docs/solver.md: 19 us against 0.6 us); slip (model/slip.py) takes the general
+    loop."""
+    if plain_flux(phys):
         for f in range(s.size - 1):
             q_out[f] = flux_law(s[f], s[f + 1], s_face[f], h[f], h[f + 1], p[f + 1] - p[f])[0]
         return
@@ -371,7 +383,7 @@ def jacobian(grid, phys, bh, p, theta, h, active, link, jac, dres_dh):
     n = s.size
     jac[:, :] = 0.0
     dres_dh[:, :] = 0.0
-    classic_flux = isoviscous(phys)
+    classic_flux = plain_flux(phys)
     for f in range(n - 1):
         if classic_flux:  # face_flux with the isoviscous drive P_hi - P_lo, decided once
             _, c, dq_dhi, dq_dhj = flux_law(s[f], s[f + 1], s_face[f], h[f], h[f + 1],
