@@ -690,6 +690,29 @@ def test_a_huge_grid_is_refused_before_any_array_is_built(monkeypatch):
                                        "eps = {start = 1e-8, stop = 1e-2, num = 10000}"))
 
 
+def test_a_store_made_before_a_new_piece_of_physics_is_the_same_physics(tmp_path):
+    """A group added to solver.Physics after a store was made (here ``slip_length``, as the
+    store of solver 1.8.0 before it) is at its off value in the sweep: the store's fixed
+    physics, which lacks it, is the same physics; nothing is refused or recomputed. At another
+    value it is other physics, refused as before."""
+    store = tmp_path / "older.zarr"
+    sweep = parse_sweep(physics_sweep_text("St = [1.0, 3.0]", "eps = 1e-2")).with_store(store)
+    run(sweep)
+    before = data_vars(open_results(store))
+    older = {k: v for k, v in sweep.fixed.items() if k != "slip_length"}
+    with SweepStore.open(sweep) as opened:
+        fixed = {k: v for k, v in opened.ds.attrs["fixed_physics"].items() if k != "slip_length"}
+        opened._set_attrs(fixed_physics=fixed, cache_key=cache_key(
+            sweep.solver_version(), sweep.numerics(), older, sweep.axis_names))
+    CALLS.clear()
+    run(sweep)
+    assert CALLS == []
+    xr.testing.assert_identical(before, data_vars(open_results(store)))
+    slipping = parse_sweep(physics_sweep_text("St = [1.0, 3.0]", "eps = 1e-2\nslip_length = 1.0"))
+    with pytest.raises(StoreMismatch, match="slip_length = 0.0 in the store, 1.0 in this sweep"):
+        run(slipping.with_store(store))
+
+
 def test_a_store_refuses_a_sweep_with_other_fixed_physics_or_axes(tmp_path):
     store = tmp_path / "fixed.zarr"
     first = parse_sweep(physics_sweep_text("St = [1.0, 3.0]", "eps = 1e-2")).with_store(store)

@@ -611,6 +611,11 @@ class SweepStore:
             diffs.append(f"solver_version {attrs.get('solver_version')} -> {sweep.solver_version()}")
         diffs += [f"{k} {old_num.get(k)!r} -> {new_num.get(k)!r}"
                   for k in sorted(set(old_num) | set(new_num)) if old_num.get(k) != new_num.get(k)]
+        if not diffs:
+            # same solver version and numerics: the key differs only in the fixed physics'
+            # spelling (a group added to solver.Physics since, at its off value), which
+            # _check_physics has accepted as the same physics
+            return
         version = attrs.get("solver_version", "old")
         raise StoreMismatch(
             f"store {str(self.path)!r} holds results of another solver version or numerics "
@@ -627,6 +632,9 @@ class SweepStore:
             raise StoreMismatch(f"the store's axes are {axes}, this sweep's are "
                                 f"{list(sweep.axis_names)}; results never mix: {fix}")
         old = physics_from_json(dict(attrs.get("fixed_physics", {})))
+        for k in Physics.names():  # a group added since the store was made: its physics was off
+            if k not in old and k in sweep.fixed and Physics.group(k).off is not None:
+                old[k] = Physics.group(k).off
         diffs = [f"{k} = {old.get(k, 'unset')!r} in the store, {sweep.fixed.get(k, 'unset')!r} "
                  "in this sweep" for k in Physics.names() if old.get(k) != sweep.fixed.get(k)]
         diffs += [f"{k} = {old[k]!r} in the store, unknown to this solver"
