@@ -283,17 +283,17 @@ def _slip_block(path, keep, tau_per_t, phase, dissipated):
 
 
 def _slip_departure(physics, x, v, t, lost):
-    """The rigid slip departure from the release state (model/slip.py): to rest, returned as the
-    state ``(x_e, 0)``, or out to where slip no longer counts (``slip.departure``), from where
-    the classic departure goes on."""
+    """The rigid slip departure from the release state (model/slip.py): out to 0.99 of the way
+    to its rest in ``ln X`` or to where slip no longer counts (``slip.departure``), from where
+    the classic departure goes on (its rest separation, ``ln_x_e``, is then the classic one's
+    from there: within ``0.01 (1 - f*)`` of the slip path's in ``ln X``; ``e`` is read on the
+    slip path, ``_slip_restitution``). The state handed on still moves, so no piece takes the
+    spheres for resting (the asperity contact's ``rests`` reads its speed)."""
     if v >= 0.0:
         return None
     path = slip.departure(x, v, t, physics.St, slip.mobility_gap(physics))
     keep = np.ones(len(path.t), dtype=bool)
     block = _slip_block(path, keep, physics.tau_per_t, 2, lost + (v * v - path.v ** 2))
-    if path.event == "rest":
-        ln_rest = slip.rest_separation(x, v, physics.St, slip.mobility_gap(physics))
-        return math.exp(ln_rest), 0.0, math.inf, block
     return float(path.x[-1]), float(path.v[-1]), float(path.t[-1]), block
 
 
