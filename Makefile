@@ -28,13 +28,16 @@ install: $(STAMP)
 
 # The install tests (marker "install": a fresh venv and an empty compile cache each, about
 # 80 s apiece) run in make test-install, which .ci/run calls, so make test stays under 10 minutes
+# Both tiers run on TEST_WORKERS processes (pytest-xdist; each loads the compiled cache, or on
+# a cold cache compiles it, about 600 MiB at its peak): make test TEST_WORKERS=0 runs in this process
+TEST_WORKERS ?= 2
 test: $(STAMP)
-	$(PY) -m pytest -q -m "not install and not memory"
+	$(PY) -m pytest -q -n $(TEST_WORKERS) -m "not install and not memory"
 
 # The inner loop: the suite without the tests marked slow (tests/conftest.py SLOW), under 2 minutes
 .PHONY: test-fast
 test-fast: $(STAMP)
-	$(PY) -m pytest -q -m "not install and not memory and not slow"
+	$(PY) -m pytest -q -n $(TEST_WORKERS) -m "not install and not memory and not slow"
 
 # pip install of the clone into a fresh venv, then the README's first commands from an empty
 # folder (tests/install_from_pip.py), and the install tests of the compile cache's folder (a few
