@@ -20,6 +20,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from .._jit import jit
 from ..model.elasticity import force_weights, influence_matrix
 from ..model.state import array_record
 
@@ -43,7 +44,7 @@ class RadialGrid:
 
     def nodes(self) -> "Nodes":
         """The arrays the compiled film and time loop read, as one record."""
-        return Nodes(self.s, self.s_face, self.area, self.force_weight, self.influence)
+        return _as_nodes(self.s, self.s_face, self.area, self.force_weight, self.influence)
 
 
 # A grid as the compiled code reads it (``RadialGrid`` less the radii, ``weight`` its
@@ -52,6 +53,14 @@ class RadialGrid:
 Nodes = array_record("Nodes", ("s", "s_face", "area", "weight", "influence"),
                        "A grid as the compiled film and time loop read it (integration/grid.py).",
                        __name__)
+
+
+@jit
+def _as_nodes(s, s_face, area, weight, influence):
+    """``Nodes`` built by compiled code, which loads from numba's cache: the record's Python
+    constructor compiles a constructor of its own in every process (about 0.2 s of every warm
+    ``ehd run``, benchmarks/startup.md)."""
+    return Nodes(s, s_face, area, weight, influence)
 
 
 def _reference_nodes(n_inner: int, axis_ratio: float, axis_extent: float, stretch: float,

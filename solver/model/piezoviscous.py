@@ -58,7 +58,7 @@ from dataclasses import dataclass, field
 from types import SimpleNamespace
 
 import numpy as np
-from scipy import integrate, optimize
+from scipy import optimize
 
 from ..physics import TENSION_CHOICES
 from .rigid import I0
@@ -410,7 +410,8 @@ def approach(x_from, v_from, t_from, stokes, beta, switch, glass_margin=GLASS_MA
     events = [f.handover, f.glass if beta > 0.0 else None, f.rest, f.d_handover, f.d_pressure,
               f.d_force, f.d_deflection]
     active = [ev for ev in events if ev is not None]
-    sol = integrate.solve_ivp(f.rhs, (0.0, u_max), y0, method="DOP853", rtol=1e-12, atol=1e-15,
+    from scipy.integrate import solve_ivp  # here: a run without this piece never imports it
+    sol = solve_ivp(f.rhs, (0.0, u_max), y0, method="DOP853", rtol=1e-12, atol=1e-15,
                               dense_output=True, events=active,
                               max_step=0.5 if beta > 0.0 else math.inf)
     reached_stop = sol.status == 0 and u_max == u_stop

@@ -29,7 +29,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import integrate, optimize
+from scipy import optimize
 
 from .._jit import jit
 from ..physics import SLIP
@@ -147,6 +147,10 @@ def rest_separation(x_from, v_from, stokes, c):
 def elapsed_time(x, x_from, v_from, stokes, c):
     """Time ``T - T1`` to move on the rigid slip path from ``X1`` to each ``X`` (quadrature of
     ``dX/|V|``; ``inf`` at the rest separation, which the path approaches logarithmically)."""
+    # scipy.integrate imported here, not with the module: a collision without slip never uses
+    # it, and importing it costs a tenth of a second of every ehd run (benchmarks/startup.md)
+    from scipy.integrate import quad
+
     x = np.atleast_1d(np.asarray(x, dtype=float))
     out = np.empty_like(x)
     sign = 1.0 if v_from > 0.0 else -1.0
@@ -160,7 +164,7 @@ def elapsed_time(x, x_from, v_from, stokes, c):
         if float(velocity(xk, x_from, v_from, stokes, c)) * sign <= 0.0:
             out[k:] = math.inf
             break
-        t += abs(integrate.quad(speed, ln_last, math.log(xk), epsabs=0.0, epsrel=1e-11,
+        t += abs(quad(speed, ln_last, math.log(xk), epsabs=0.0, epsrel=1e-11,
                                 limit=200)[0])
         out[k] = t
         ln_last = math.log(xk)
@@ -184,8 +188,8 @@ def axis_deflection(x, v, c):
     def integrand(t):  # R = sqrt(2 X) t/(1 - t), t in [0, 1)
         r = math.sqrt(2.0 * x) * t / (1.0 - t)
         return float(rigid_pressure(0.5 * r * r, x, v, c)) * math.sqrt(2.0 * x) / (1.0 - t) ** 2
-    return 0.5 * math.pi * integrate.quad(integrand, 0.0, 1.0, epsabs=0.0, epsrel=1e-10,
-                                          limit=200)[0]
+    from scipy.integrate import quad  # here: a run without slip never imports it
+    return 0.5 * math.pi * quad(integrand, 0.0, 1.0, epsabs=0.0, epsrel=1e-10, limit=200)[0]
 
 
 def deformation_ratio(x, v, c):
