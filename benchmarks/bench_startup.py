@@ -200,7 +200,9 @@ def render(results: dict, meta: dict, before: dict | None, doc: dict) -> str:
                   "store, both run as `python -S -P -m pipeline.cli` with this venv's packages: "
                   + ", ".join(f"{row} {meta['compared'][row]['wall_s']:.3f} s wall, "
                               f"{meta['compared'][row]['cpu_s']:.3f} s CPU"
-                              for row in NOOP_ROWS[2:]) + " the same way for this checkout."]
+                              for row in (*NOOP_ROWS[2:], RUN))
+                  + " the same way for this checkout (the table's columns for it are the `ehd` "
+                  "script's)."]
         for what, key in (("No-op `make sweep`", "compared_ratio"), (f"`{RUN}`", "run_ratio")):
             r = meta[key]["cpu_s"]["ratio"]
             w = meta[key]["wall_s"]["ratio"]
@@ -274,7 +276,7 @@ def main(argv=None) -> int:
         before = {**compared["before"], RUN: compared_run["before"]}
         meta["before_source"] = str(args.compare)
         meta["run_ratio"] = compared_run["ratio"]
-        meta["compared"] = compared["after"]
+        meta["compared"] = {**compared["after"], RUN: compared_run["after"]}
         meta["compared_ratio"] = compared["ratio"]
     elif args.before:
         doc = json.loads(Path(args.before).read_text())
