@@ -28,8 +28,8 @@ install: $(STAMP)
 
 # The install tests (marker "install": a fresh venv and an empty compile cache each, about
 # 80 s apiece) run in make test-install, which .ci/run calls, so make test stays under 10 minutes
-# Both tiers run on TEST_WORKERS processes (pytest-xdist; each loads the compiled cache, or on
-# a cold cache compiles it, about 600 MiB at its peak): make test TEST_WORKERS=0 runs in this process
+# Both tiers run on TEST_WORKERS processes (pytest-xdist; each loads the compiled cache, or on a
+# cold cache compiles it, about 600 MiB at its peak); make test TEST_WORKERS=0 runs in one process
 TEST_WORKERS ?= 2
 test: $(STAMP)
 	$(PY) -m pytest -q -n $(TEST_WORKERS) -m "not install and not memory"

@@ -99,8 +99,8 @@ def departure(x_from, u_from, t_from, stokes, pi, samples=40):
     ln0 = math.log(x_from)
     ln1 = 0.5 * math.log(3.0 * u_from / pi) + 1.0  # U only falls: the cavity closes before
     from scipy.integrate import solve_ivp  # here: a run without this piece never imports it
-    sol = solve_ivp(rhs, (ln0, ln1), [u_from, t_from], events=closes, rtol=1e-10,
-                              atol=1e-14, dense_output=True)
+    sol = solve_ivp(rhs, (ln0, ln1), [u_from, t_from], events=closes, rtol=1e-10, atol=1e-14,
+                    dense_output=True)
     if sol.status != 1 or not sol.t_events[0].size:
         raise RuntimeError(f"the cavity of the rigid departure did not close: {sol.message}")
     ln_c = float(sol.t_events[0][0])
@@ -129,8 +129,8 @@ def speed_at(x_from, u_from, stokes, pi, x_target):
         closes.terminal = True
         closes.direction = 1.0
         from scipy.integrate import solve_ivp  # here: a run without this piece never imports it
-        sol = solve_ivp(rhs, (math.log(x_from), math.log(x_target)), [u_from],
-                                  events=closes, rtol=1e-10, atol=1e-14)
+        sol = solve_ivp(rhs, (math.log(x_from), math.log(x_target)), [u_from], events=closes,
+                        rtol=1e-10, atol=1e-14)
         if not sol.t_events[0].size:  # still open at x_target
             return float(sol.y[0, -1])
         x_from, u_from = math.exp(float(sol.t_events[0][0])), float(sol.y_events[0][0][0])

@@ -412,8 +412,7 @@ def approach(x_from, v_from, t_from, stokes, beta, switch, glass_margin=GLASS_MA
     active = [ev for ev in events if ev is not None]
     from scipy.integrate import solve_ivp  # here: a run without this piece never imports it
     sol = solve_ivp(f.rhs, (0.0, u_max), y0, method="DOP853", rtol=1e-12, atol=1e-15,
-                              dense_output=True, events=active,
-                              max_step=0.5 if beta > 0.0 else math.inf)
+                    dense_output=True, events=active, max_step=0.5 if beta > 0.0 else math.inf)
     reached_stop = sol.status == 0 and u_max == u_stop
     if sol.status != 1 and not reached_stop:
         raise RuntimeError(f"the rigid Barus approach did not reach an end: {sol.message}")

@@ -147,9 +147,7 @@ def rest_separation(x_from, v_from, stokes, c):
 def elapsed_time(x, x_from, v_from, stokes, c):
     """Time ``T - T1`` to move on the rigid slip path from ``X1`` to each ``X`` (quadrature of
     ``dX/|V|``; ``inf`` at the rest separation, which the path approaches logarithmically)."""
-    # scipy.integrate imported here, not with the module: a collision without slip never uses
-    # it, and importing it costs a tenth of a second of every ehd run (benchmarks/startup.md)
-    from scipy.integrate import quad
+    from scipy.integrate import quad  # here: a run without slip never imports it (0.1 s)
 
     x = np.atleast_1d(np.asarray(x, dtype=float))
     out = np.empty_like(x)
@@ -164,8 +162,7 @@ def elapsed_time(x, x_from, v_from, stokes, c):
         if float(velocity(xk, x_from, v_from, stokes, c)) * sign <= 0.0:
             out[k:] = math.inf
             break
-        t += abs(quad(speed, ln_last, math.log(xk), epsabs=0.0, epsrel=1e-11,
-                                limit=200)[0])
+        t += abs(quad(speed, ln_last, math.log(xk), epsabs=0.0, epsrel=1e-11, limit=200)[0])
         out[k] = t
         ln_last = math.log(xk)
     return out
