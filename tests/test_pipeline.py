@@ -501,6 +501,40 @@ def test_a_crashing_worker_is_stored_as_an_error_and_the_sweep_goes_on(tmp_path,
     assert int(ds.status) == STATUS_CODES["error"] and "KilledWorker" in str(ds.message.values)
 
 
+class KilledWorker(Exception):
+    """Named as dask's: a scene whose worker processes died while it was assigned to them."""
+
+
+def test_a_scene_failed_only_by_its_neighbours_crash_is_run_again_alone():
+    """dask fails every scene assigned to a worker that died three times, a queued one too
+    (KilledWorker); the runner runs each such scene again, one at a time, after the others.
+    Here the first pass fails "b" (it waited behind the crash) and "c" (the crash itself)."""
+    from concurrent.futures import Future
+
+    from pipeline.sweeps.runners import Runner
+
+    runs = []
+
+    class Executor:
+        def submit(self, fn, *args):
+            tag = args[0]
+            first = tag not in runs
+            runs.append(tag)
+            fut = Future()
+            if tag == "c" or (tag == "b" and first):
+                fut.set_exception(KilledWorker(tag))
+            else:
+                fut.set_result(fn(*args))
+            return fut
+
+    got = list(Runner("fake", executor=Executor()).unordered(str.upper, [(t, (t,)) for t in "abc"]))
+    results = {tag: r for tag, r in got}
+    assert results["a"] == "A" and results["b"] == "B"  # b ran again and is kept
+    assert isinstance(results["c"], KilledWorker) and len(got) == 3
+    # the second pass after the first (in the order their failures came, which is any)
+    assert runs[:3] == ["a", "b", "c"] and sorted(runs[3:]) == ["b", "c"]
+
+
 # ---- command line -------------------------------------------------------------------------------
 def test_cli_sweep_status_and_exit_codes(tmp_path, capsys):
     from pipeline.cli import main

@@ -282,7 +282,8 @@ class Runner:
         """Yield ``(tag, result)`` for ``jobs = [(tag, args), ...]`` as they finish.
 
         An exception raised by ``fn`` (or a lost worker) is yielded as the exception object, so
-        the caller can store it as a failed scene and go on.
+        the caller can store it as a failed scene and go on. A scene whose workers died under it
+        (dask's KilledWorker) is run once more, alone, at the end.
         """
         if self._executor is None:
             for tag, args in jobs:  # lazily: each result reaches the store before the next runs
@@ -291,18 +292,28 @@ class Runner:
                 except Exception as exc:
                     yield tag, exc
             return
-        from concurrent.futures import CancelledError
-
-        futures = {self._executor.submit(fn, *args): tag for tag, args in jobs}
+        futures = {self._executor.submit(fn, *args): (tag, args) for tag, args in jobs}
+        # A worker process that dies takes every scene assigned to it, the queued ones too, and
+        # dask fails a scene that was on as many such workers as it allows (KilledWorker): the
+        # scene that crashed them, or one that only waited behind it. Run again alone, each
+        # shows which it is, and no scene is stored as failed for its neighbour's crash.
+        killed, done = [], 0
         try:
             for fut in as_completed(futures):
-                try:
-                    exc = fut.exception()
-                except CancelledError:  # we cancel nothing: the scheduler went away
-                    raise self._lost(len(jobs) - len(futures)) from None
-                if exc is not None and self._scheduler_gone():
-                    raise self._lost(len(jobs) - len(futures)) from None
-                yield futures.pop(fut), (exc if exc is not None else fut.result())
+                exc = self._exception(fut, done)
+                tag, args = futures.pop(fut)
+                if type(exc).__name__ == "KilledWorker":
+                    killed.append((tag, args))
+                    continue
+                done += 1
+                yield tag, (exc if exc is not None else fut.result())
+            for tag, args in killed:
+                fut = self._executor.submit(fn, *args)
+                futures[fut] = (tag, args)
+                exc = self._exception(fut, done)
+                del futures[fut]
+                done += 1
+                yield tag, (exc if exc is not None else fut.result())
         finally:
             if futures:  # interrupted: do not leave scenes running on a shared cluster
                 # quiet first: each cancel runs a callback on the client's event loop thread that
@@ -312,6 +323,19 @@ class Runner:
             for fut in futures:
                 fut.cancel()
 
+
+    def _exception(self, fut, finished: int):
+        """The exception ``fut`` raised (None: a result), once it is done; SchedulerLost when
+        the scheduler went away (``finished`` scenes were yielded before)."""
+        from concurrent.futures import CancelledError
+
+        try:
+            exc = fut.exception()
+        except CancelledError:  # we cancel nothing: the scheduler went away
+            raise self._lost(finished) from None
+        if exc is not None and self._scheduler_gone():
+            raise self._lost(finished) from None
+        return exc
 
     def _scheduler_gone(self) -> bool:
         return self.client is not None and self.client.status not in ("running", "newly-created")
