@@ -12,7 +12,8 @@ child processes):
   when ``--store`` is not given: about a minute) whose figures are up to date.
 
 Targets (issue 20): ``ehd --help`` within 1.5x of the bare Python; the no-op ``make sweep`` in at
-most 2 s on 2 cores; (issue 30) the warm ``ehd run`` under 0.5 s. The machine is shared, so CPU time is the steadier measure; both are shown.
+most 2 s on 2 cores; (issue 30) the warm ``ehd run`` under 0.5 s. The machine is shared, so CPU
+time is the steadier measure; both are shown.
 
 ``--source DIR`` measures another checkout (e.g. ``git archive main | tar -x -C DIR``) with this
 venv's packages: ``python -S -P -m pipeline.cli`` with ``PYTHONPATH=DIR:site-packages`` instead of
@@ -44,7 +45,8 @@ REPO = Path(__file__).resolve().parent.parent
 HELP_TARGET = 1.5  # ehd --help over the bare Python start (issue 20)
 NOOP_TARGET_S = 2.0  # the no-op make sweep, seconds on 2 cores (issue 20)
 RUN_TARGET_S = 0.5  # a warm ehd run, seconds (issue 30)
-RUN = "ehd run --St 10 --eps 1e-4"
+RUN_ARGS = ("run", "--St", "10", "--eps", "1e-4")  # one classic collision
+RUN = "ehd " + " ".join(RUN_ARGS)
 BASE = "python -c 'import argparse'"
 
 
@@ -78,7 +80,7 @@ def measure(repeat: int, store: Path, figures: Path, ehd: list[str], env: dict) 
         "ehd --version": [*ehd, "--version"],
         "ehd run --help": [*ehd, "run", "--help"],
         "ehd sweep --help": [*ehd, "sweep", "--help"],
-        RUN: [*ehd, *RUN.split()[1:]],
+        RUN: [*ehd, *RUN_ARGS],
     }
     out = {}
     for _ in range(2):  # warm the file system cache and the .pyc files; not counted
@@ -109,10 +111,8 @@ NOOP_ROWS = ("ehd sweep (nothing to do)", "ehd figures (up to date)", "no-op mak
 
 
 def compare_noop(repeat: int, store: Path, tmp: Path, launches: dict) -> dict:
-    """The no-op ``make sweep`` of each ``{label: (argv, env)}``, in rounds that run every label
-    once in a rotated order (benchmarks/harness.py): ``{label: {row: median}}``, and under
-    ``"ratio"`` the per-round ratios of the last label to the first (the store must be complete;
-    each label draws its own figures once)."""
+    """The no-op ``make sweep`` of each ``{label: (argv, env)}`` (``_alternated``; the store
+    must be complete; each label draws its own figures once)."""
     sides = {}
     for label, (ehd, env) in launches.items():
         sweep = [*ehd, "sweep", "sweeps/paper.toml", "--store", str(store)]
@@ -124,31 +124,33 @@ def compare_noop(repeat: int, store: Path, tmp: Path, launches: dict) -> dict:
             a, b = _timed(sweep, env, ok=(0, 3)), _timed(figs, env)
             return dict(zip(NOOP_ROWS, (a, b, (a[0] + b[0], a[1] + b[1]))))
         sides[label] = both
-    runs = harness.alternate(sides, repeat, warmup=0)
-    out = {label: {row: _median([r[row] for r in rounds]) for row in NOOP_ROWS}
-           for label, rounds in runs.items()}
-    first, last = list(launches)[0], list(launches)[-1]
-
-    def seconds(label):
-        return [{"wall_s": r[NOOP_ROWS[-1]][0], "cpu_s": r[NOOP_ROWS[-1]][1]} for r in runs[label]]
-    out["ratio"] = harness.compare_runs(seconds(last), seconds(first))
-    return out
+    return _alternated(sides, repeat, NOOP_ROWS)
 
 
 def compare_run(repeat: int, launches: dict) -> dict:
-    """The warm ``ehd run`` of each ``{label: (argv, env)}``, alternated as in ``compare_noop``:
-    ``{label: median}``, and under ``"ratio"`` the per-round ratios of the last to the first."""
+    """The warm ``ehd run`` of each ``{label: (argv, env)}`` (``_alternated``; two runs first
+    fill each label's compile cache)."""
     sides = {}
     for label, (ehd, env) in launches.items():
-        cmd = [*ehd, *RUN.split()[1:]]
-        for _ in range(2):  # fills this side's compile cache; not counted
+        cmd = [*ehd, *RUN_ARGS]
+        for _ in range(2):
             _timed(cmd, env)
-        sides[label] = lambda cmd=cmd, env=env: dict(zip(("wall_s", "cpu_s"), _timed(cmd, env)))
+        sides[label] = lambda cmd=cmd, env=env: {RUN: _timed(cmd, env)}
+    return _alternated(sides, repeat, (RUN,))
+
+
+def _alternated(sides: dict, repeat: int, rows: tuple) -> dict:
+    """``sides`` (``{label: a call returning {row: (wall, cpu)}}``) in rounds that run every
+    label once in a rotated order (benchmarks/harness.py): ``{label: {row: median}}``, and under
+    ``"ratio"`` the per-round ratios of the last label to the first on the last row."""
     runs = harness.alternate(sides, repeat, warmup=0)
-    out = {label: _median([(r["wall_s"], r["cpu_s"]) for r in rounds])
+    out = {label: {row: _median([r[row] for r in rounds]) for row in rows}
            for label, rounds in runs.items()}
-    first, last = list(launches)[0], list(launches)[-1]
-    out["ratio"] = harness.compare_runs(runs[last], runs[first])
+    first, last = list(sides)[0], list(sides)[-1]
+
+    def seconds(label):
+        return [{"wall_s": r[rows[-1]][0], "cpu_s": r[rows[-1]][1]} for r in runs[label]]
+    out["ratio"] = harness.compare_runs(seconds(last), seconds(first))
     return out
 
 
@@ -195,8 +197,8 @@ def render(results: dict, meta: dict, before: dict | None, doc: dict) -> str:
                   "this script shortly before; its own bare-Python start was "
                   f"{before[BASE]['wall_s']:.3f} s wall, {before[BASE]['cpu_s']:.3f} s CPU."]
     elif before:
-        lines += ["", f"Before (the no-op rows and the warm run): {meta.get('before_source')}, measured in "
-                  "this run (`--compare`), its runs alternated with this checkout's on the same "
+        lines += ["", "Before (the no-op rows and the warm run): "
+                  f"{meta.get('before_source')}, measured in this run (`--compare`), its runs alternated with this checkout's on the same "
                   "store, both run as `python -S -P -m pipeline.cli` with this venv's packages: "
                   + ", ".join(f"{row} {meta['compared'][row]['wall_s']:.3f} s wall, "
                               f"{meta['compared'][row]['cpu_s']:.3f} s CPU"
@@ -273,10 +275,10 @@ def main(argv=None) -> int:
         shutil.rmtree(tmp, ignore_errors=True)
     before = None
     if compared:
-        before = {**compared["before"], RUN: compared_run["before"]}
+        before = {**compared["before"], **compared_run["before"]}
         meta["before_source"] = str(args.compare)
         meta["run_ratio"] = compared_run["ratio"]
-        meta["compared"] = {**compared["after"], RUN: compared_run["after"]}
+        meta["compared"] = {**compared["after"], **compared_run["after"]}
         meta["compared_ratio"] = compared["ratio"]
     elif args.before:
         doc = json.loads(Path(args.before).read_text())

@@ -323,7 +323,6 @@ class Runner:
             for fut in futures:
                 fut.cancel()
 
-
     def _exception(self, fut, finished: int):
         """The exception ``fut`` raised (None: a result), once it is done; SchedulerLost when
         the scheduler went away (``finished`` scenes were yielded before)."""

@@ -147,7 +147,7 @@ def rest_separation(x_from, v_from, stokes, c):
 def elapsed_time(x, x_from, v_from, stokes, c):
     """Time ``T - T1`` to move on the rigid slip path from ``X1`` to each ``X`` (quadrature of
     ``dX/|V|``; ``inf`` at the rest separation, which the path approaches logarithmically)."""
-    from scipy.integrate import quad  # here: a run without slip never imports it (0.1 s)
+    from scipy.integrate import quad  # here: a run without this piece never imports it
 
     x = np.atleast_1d(np.asarray(x, dtype=float))
     out = np.empty_like(x)
@@ -185,7 +185,7 @@ def axis_deflection(x, v, c):
     def integrand(t):  # R = sqrt(2 X) t/(1 - t), t in [0, 1)
         r = math.sqrt(2.0 * x) * t / (1.0 - t)
         return float(rigid_pressure(0.5 * r * r, x, v, c)) * math.sqrt(2.0 * x) / (1.0 - t) ** 2
-    from scipy.integrate import quad  # here: a run without slip never imports it
+    from scipy.integrate import quad  # here: a run without this piece never imports it
     return 0.5 * math.pi * quad(integrand, 0.0, 1.0, epsabs=0.0, epsrel=1e-10, limit=200)[0]
 
 
