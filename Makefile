@@ -28,11 +28,9 @@ install: $(STAMP)
 
 # The install tests (marker "install": a fresh venv and an empty compile cache each, about
 # 80 s apiece) run in make test-install, which .ci/run calls, so make test stays under 10 minutes
-# TEST_WORKERS=2 runs both tiers on two processes (pytest-xdist; each loads the compiled cache,
-# or compiles it on a cold cache, about 600 MiB at its peak): a third of the time on 2 cores, but
-# the dask crash and Ctrl-C tests flaked under the second worker's load (docs/developer.md), so
-# the default stays one process (0) until they are made robust to it
-TEST_WORKERS ?= 0
+# Both tiers run on TEST_WORKERS processes (pytest-xdist; each loads the compiled cache, or on a
+# cold cache compiles it, about 600 MiB at its peak); make test TEST_WORKERS=0 runs in one process
+TEST_WORKERS ?= 2
 test: $(STAMP)
 	$(PY) -m pytest -q -n $(TEST_WORKERS) -m "not install and not memory"
 

@@ -71,6 +71,7 @@ SLOW = {
         "test_another_sweep_file_needs_add_sweep_and_is_recorded",
         "test_bad_input_gives_one_line_and_changes_nothing",
         "test_ctrl_c_is_exit_130_one_line_and_keeps_every_finished_scene",
+        "test_a_local_workers_own_log_lines_never_reach_the_terminal",
         "test_damaged_data_is_listed_refused_raised_and_recomputed",
         "test_metadata_of_the_wrong_shape_is_one_line_for_every_reader",
         "test_sigterm_is_exit_143_one_line_and_keeps_every_finished_scene",

@@ -505,6 +505,35 @@ def test_ctrl_c_is_exit_130_one_line_and_keeps_every_finished_scene(tmp_path, ca
     assert summary.computed == len(FAULT_ST) * len(EPS) - kept and summary.done == summary.scenes
 
 
+LOGGING_WORKER = """
+import logging, sys
+sys.path.insert(0, {repo!r})
+from pipeline.sweeps.runners import open_runner
+
+def log_on_the_worker():
+    logging.getLogger("distributed.worker").error("a worker's own ERROR line")
+    return 1
+
+if __name__ == "__main__":
+    with open_runner("processes", 1) as run:
+        print(run.client.run(log_on_the_worker), file=sys.stderr, flush=True)
+"""
+
+
+def test_a_local_workers_own_log_lines_never_reach_the_terminal(tmp_path):
+    """An interrupted sweep closes its local cluster; a worker whose heartbeat meets the closed
+    scheduler logs an ERROR with its traceback (seen on a loaded machine after Ctrl-C). Whatever
+    fails on a local worker reaches the sweep as a scene's error, so the workers' own logging is
+    silenced: here a worker logs an ERROR line itself, and the terminal must not show it."""
+    (tmp_path / "logs.py").write_text(LOGGING_WORKER.format(repo=str(REPO)))
+    env = {**os.environ, "PYTHONPATH": str(REPO), "OPENBLAS_NUM_THREADS": "1"}
+    done = subprocess.run([sys.executable, "logs.py"], cwd=tmp_path, env=env, text=True,
+                          capture_output=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert ": 1}" in done.stderr  # the function ran on the worker
+    assert "a worker's own ERROR line" not in done.stderr, done.stderr
+
+
 def test_a_scheduler_killed_mid_sweep_is_one_line_and_keeps_finished_scenes(tmp_path, capsys):
     env = _fault_setup(tmp_path)
     bin_dir = Path(sys.executable).parent

@@ -449,7 +449,7 @@ def _cluster_runner(n: int, warm):
         _close_quietly(cluster)
         raise
     try:
-        yield _dask_runner(client, f"local processes x{n}", warm)
+        yield _dask_runner(client, f"local processes x{n}", warm, quiet=True)
     except BaseException:
         # interrupted or failed: dask would log the tracebacks of every comm it closes
         _quiet_dask()
@@ -524,13 +524,13 @@ def _wait_for_workers(client, n: int, timeout: float, stream) -> None:
         time.sleep(min(0.5, max(timeout - waited, 0.01)))
 
 
-def _dask_runner(client, description: str, warm) -> Runner:
+def _dask_runner(client, description: str, warm, quiet: bool = False) -> Runner:
     from .worker import WorkerSetup
 
     try:
         # every worker (also one that joins later) sets the environment and loads the cached
         # kernels before its first scene
-        client.register_plugin(WorkerSetup(warm))
+        client.register_plugin(WorkerSetup(warm, quiet))
     except Exception as exc:
         raise RunnerError(f"setting up the workers failed ({type(exc).__name__}: {exc}); every "
                           "worker needs this project installed (pip install -e .)") from None
