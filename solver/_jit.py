@@ -113,6 +113,10 @@ def copy_into(dst, src):
     the module docstring); a shape mismatch raises ValueError with a fixed message."""
     if dst.shape != src.shape:
         raise ValueError("copy_into: the arrays' shapes differ")
+    if dst.ndim == 1:  # no reshaped views: small enough to inline, no references counted
+        for i in range(src.size):
+            dst[i] = src[i]
+        return
     flat_dst = dst.reshape(dst.size)
     flat_src = src.reshape(src.size)
     for i in range(flat_src.size):

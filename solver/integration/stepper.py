@@ -41,7 +41,7 @@ from ..model import step as model
 from ..model.state import Step, array_record
 from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
 from .events import reached
-from .linalg import MAX_SLOTS, lowrank_prepare, lowrank_solve, lu_factor, matvec
+from .linalg import MAX_SLOTS, lowrank_prepare, lowrank_solve, lu_factor, lu_solve, matvec
 
 # status codes of the loop (solver/observables.py: STATUS)
 RUNNING = 0
@@ -257,7 +257,19 @@ def _update_for_set(grid, phys, bh, y, h, film, fac, work):
 
 @jit
 def _solve(fac, b):
-    """Solve with the Newton matrix (the factorised one, or its low-rank update) in place."""
+    """Solve with the Newton matrix (the factorised one, or its low-rank update) in place. The
+    factorised matrix alone, every solve of a film without an active set, is LAPACK's solve
+    inlined here: the low-rank path is a call of its own, whose field reads would otherwise be
+    reference-counted at every solve."""
+    if fac.rank[0] == 0:
+        lu_solve(fac.jac, fac.piv, b)
+    else:
+        _solve_updated(fac, b)
+
+
+@jit
+def _solve_updated(fac, b):
+    """``_solve`` with the low-rank update of the factorised matrix (``fac.rank[0]`` > 0)."""
     lowrank_solve(fac.jac, fac.piv, fac.rank[0], fac.v, fac.z, fac.cap, fac.cpiv, b, fac.work)
 
 
