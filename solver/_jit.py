@@ -107,6 +107,15 @@ def jit(func):
                       error_model="numpy")(func)
 
 
+def hook(func):
+    """``jit``, and inlined into every compiled caller by numba itself: for the film contract's
+    small hooks that choose between the classic film and a piece (model/step.py). Called, a hook
+    made its caller keep the reference counts of everything it held, because the piece's branch
+    is a call (docs/solver.md, "Reference counting")."""
+    return numba.njit(cache=CACHE_DIR is not None, nogil=True, fastmath=FASTMATH,
+                      error_model="numpy", inline="always")(func)
+
+
 @jit
 def copy_into(dst, src):
     """``dst[...] = src`` for C-ordered arrays of one shape, element by element (the reason is in

@@ -18,8 +18,8 @@ from solver import Physics, collide
 from solver.collision import scene_grid
 from solver.pieces import cavity_reach
 from solver.model import cavitation
-from solver.model.film import (cavity_edge, constrain, film_force, jacobian, residual,
-                               update_cavity, update_cavity_jfo)
+from solver.model.film import (cavity_edge, constrain, face_fluxes, film_force, jacobian,
+                               residual, update_cavity, update_cavity_jfo)
 from solver.model.state import Coupling, Step
 from solver.settings import resolve
 
@@ -46,6 +46,7 @@ def rigid_separation(x, u, pi, n_inner=64, stretch=1.2, max_rel=0.3, bh=1.0):
     res, q = np.empty(n + 2), np.empty(n - 1)
     jac, work = np.empty((n + 2, n + 2)), np.empty((n, 3))
     for _ in range(100):
+        face_fluxes(grid.nodes(), p, h, phys, q)
         residual(grid.nodes(), phys, Step(bh, h_hist, x, -u), x, -u, p, np.ones(n - 1), h, q,
                  res)
         changed = update_cavity(p, res, phys, active)
@@ -203,9 +204,11 @@ def jfo_steps(xs, pi, dt=1.0, n_inner=64, stretch=1.2, max_rel=0.3):
         c_hist = theta * h_old[:n - 1]
         u = (x - h_old[0]) / dt
         for _ in range(200):
+            face_fluxes(grid.nodes(), p, h, phys, q)
             residual(grid.nodes(), phys, Step(dt, c_hist, x, -u), x, -u, p, theta, h, q, res)
             changed = update_cavity_jfo(p, theta, phys, active)
             if changed:
+                face_fluxes(grid.nodes(), p, h, phys, q)
                 residual(grid.nodes(), phys, Step(dt, c_hist, x, -u), x, -u, p, theta, h, q, res)
             jacobian(grid.nodes(), phys, dt, p, theta, h, active,
                      Coupling(zero_k, np.ones(n), grid.force_weight, 0.0, np.empty(0)), jac, work)
@@ -218,6 +221,7 @@ def jfo_steps(xs, pi, dt=1.0, n_inner=64, stretch=1.2, max_rel=0.3):
                 break
         else:
             raise AssertionError("the JFO active set did not settle")
+        face_fluxes(grid.nodes(), p, h, phys, q)
         residual(grid.nodes(), phys, Step(dt, c_hist, x, -u), x, -u, p, theta, h, q, res)
         states.append((p.copy(), theta.copy(), active.copy(), h.copy(), q.copy()))
         h_old = h

@@ -18,7 +18,7 @@ import pytest
 
 from solver import Physics, collide
 from solver.collision import scene_grid
-from solver.model.film import face_flux, film_force, jacobian, residual
+from solver.model.film import face_flux, face_fluxes, film_force, jacobian, residual
 from solver.model.liquid import density
 from solver.model.state import Coupling, Step
 from solver.settings import resolve
@@ -52,6 +52,7 @@ def rigid_squeeze(x, v, physics, n_inner, stretch, max_rel, bh=1.0):
     jac, work = np.empty((n + 2, n + 2)), np.empty((n, 3))
     theta = np.ones(n - 1)
     for _ in range(200):
+        face_fluxes(grid.nodes(), p, h, phys, q)
         residual(grid.nodes(), phys, Step(bh, h_hist, x, v), x, v, p, theta, h, q, res)
         jacobian(grid.nodes(), phys, bh, p, theta, h, np.zeros(n - 1, dtype=bool),
                  Coupling(np.zeros((n, n)), np.ones(n), grid.force_weight, 0.0, np.empty(0)), jac,

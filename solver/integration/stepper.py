@@ -76,7 +76,7 @@ _P_MAX, _P_MIN = SERIES_INDEX["P_max"], SERIES_INDEX["P_min"]
 
 
 # ---- the records: what the caller hands in, and what the loop allocates once -------------------
-# (Work and Factorisation, passed to the Newton iteration's functions, are StructRefs: one
+# (History, Work and Factorisation, passed to the loop's functions, are StructRefs: one
 # reference however many arrays, state.array_record)
 class Start(NamedTuple):
     """The state the coupled phase starts from (time, separation, speed, pressure profile) and
@@ -98,18 +98,12 @@ class Control(NamedTuple):
     max_steps: int
 
 
-class History(NamedTuple):
-    """The accepted states the BDF2 step and its predictor read: solutions ``y0`` (newest),
-    ``y1``, ``y2``, gaps ``h0``, ``h1``, their times ``t`` (3,) and how many are held, ``n``
-    (1,), at most 3."""
-
-    y0: np.ndarray
-    y1: np.ndarray
-    y2: np.ndarray
-    h0: np.ndarray
-    h1: np.ndarray
-    t: np.ndarray
-    n: np.ndarray
+# The accepted states the BDF2 step and its predictor read: solutions ``y0`` (newest), ``y1``,
+# ``y2``, gaps ``h0``, ``h1``, their times ``t`` (3,) and how many are held, ``n`` (1,), at most
+# 3. A record, not a NamedTuple: a NamedTuple's seven arrays were seven reference counts at each
+# call of a function that takes it (docs/solver.md, "Reference counting").
+History = array_record("History", ("y0", "y1", "y2", "h0", "h1", "t", "n"),
+                       "The accepted states the step reads (integration/stepper.py).", __name__)
 
 
 # The iterate and the loop's work arrays, allocated once per coupled phase (m = N + 2 unknowns):
@@ -599,7 +593,7 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
     rows = 256
     series, p_hist, w_hist, theta_hist = _series(rows, n, save_profiles)
     # initial row
-    model.face_fluxes(grid.s, grid.s_face, hist.y0[:n], h, phys, q)
+    model.face_fluxes(grid, hist.y0[:n], h, phys, q)
     film = model.new_film(q)
     model.surface_gap(grid, phys, hist.y0, film, w, h)  # with a contact load, if any
     model.begin(film, phys)
@@ -640,7 +634,7 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
             continue
         _shift(hist, dt, work)
         y0 = hist.y0
-        model.face_fluxes(grid.s, grid.s_face, model.film_pressure(y0, film, phys), h, phys, q)
+        model.face_fluxes(grid, model.film_pressure(y0, film, phys), h, phys, q)
         model.accept(grid, y0, w, hist.h0, hist.h1, q, dt, film, phys)
         strain_new, diss_new = model.energies(grid, phys, y0, w, h, q, film)
         dissipated += 0.5 * (diss_rate + diss_new) * dt

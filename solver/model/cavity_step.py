@@ -10,7 +10,7 @@ pressure (``split_update``); a Reynolds cavity's row is replaced by its constrai
 (``constrain_rows``).
 """
 
-from .._jit import copy_into, jit
+from .._jit import copy_into, hook, jit
 from ..observables import SERIES_INDEX
 from ..physics import CAVITATION, PI, ST
 from .film import (JFO, NO_FLOOR, cavity_edge, constrain, jfo_void, update_cavity,
@@ -41,7 +41,7 @@ def held_cells(cavity, phys, out):
         copy_into(out[:n - 1], cavity.active)
 
 
-@jit
+@hook
 def start_attempt(y, film, phys):
     """A step attempt of a JFO film starts from the accepted cavity, its cells' slots at the
     floor; the Reynolds film keeps the iterate's set."""
@@ -79,7 +79,7 @@ def constrain_rows(p, res, film, phys):
         constrain(p, res, film.cavity.active, phys)
 
 
-@jit
+@hook
 def split_update(res, film, phys):
     """Take the Newton update of the slots that hold another unknown out of ``res``: a JFO
     cavity's slot updates its liquid fraction theta (kept >= 0: a dry cell), not ``P``."""
@@ -95,7 +95,7 @@ def split_update(res, film, phys):
             res[i] = 0.0
 
 
-@jit
+@hook
 def update_norm(norm, film, phys, rtol):
     """The Newton norm with the fractions' updates (absolute) of ``split_update``."""
     if not held(phys):
@@ -106,7 +106,7 @@ def update_norm(norm, film, phys, rtol):
     return norm
 
 
-@jit
+@hook
 def error_in_time(film, phys, perr, dh):
     """The floor's part of ``step.step_error``: while a cavity is open (or a JFO cell refilled in
     this step) the pressure is not smooth in time, and its errors leave the norm (``perr`` to 0);
@@ -146,7 +146,7 @@ def _cavity_in_time(cavity, phys):
     return open_cavity or _refilled(cavity, phys)
 
 
-@jit
+@hook
 def record(row, grid, p, h, pmax, pmin, cavity, phys, floor_fraction):
     """The cavity's columns of the series row (radius and void volume; 0 for a film without a
     floor) and the error scale's update (``step.record``); returns the radius the terminal events
@@ -181,7 +181,7 @@ def record(row, grid, p, h, pmax, pmin, cavity, phys, floor_fraction):
     return r_event
 
 
-@jit
+@hook
 def accept(grid, h0, h1, q, dt, film, phys):
     """The floor's state after an accepted step (``h0`` its gap, ``h1`` the previous one's, ``q``
     its face fluxes): the work against the floor (JFO: ``Pi dV_void`` exactly, film.jfo_void;

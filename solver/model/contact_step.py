@@ -11,7 +11,7 @@ pressures of the last gap computed, the unloading's set state, the film pressure
 
 import numpy as np
 
-from .._jit import copy_into, jit
+from .._jit import copy_into, hook, jit
 from ..observables import SERIES_INDEX
 from ..physics import E_DRY, PI, ROUGHNESS, ST
 from .cavity_step import held_cells
@@ -41,7 +41,7 @@ def _held(film, phys, n):
     return held
 
 
-@jit
+@hook
 def surface_gap(grid, phys, y, film, w, h):
     """The deflection ``W`` and gap ``H`` of the iterate ``y`` into ``w``, ``h``: ``W = K y``
     for a smooth film (film.gap); a rough film's with the contact pressure and film pressure
@@ -56,7 +56,7 @@ def surface_gap(grid, phys, y, film, w, h):
         h[:] = np.nan
 
 
-@jit
+@hook
 def film_pressure(y, film, phys):
     """The film pressure of the state whose gap ``surface_gap`` computed last: the slots
     themselves for a smooth film (no copy), ``y - p_a`` where rough surfaces touch."""
@@ -98,7 +98,7 @@ def accepted_pressures(y0, y1, film, phys):
     return y0, y1
 
 
-@jit
+@hook
 def relaxing_deflection(w, w_absmax, film, phys):
     """The largest ``|W|`` the terminal events wait to relax (``w_absmax``, ``max |W|``): a rough
     film's permanent set (model/contact.py) never relaxes, so ``max |W - (1 - c) K T_set|``."""
@@ -111,7 +111,7 @@ def relaxing_deflection(w, w_absmax, film, phys):
     return out
 
 
-@jit
+@hook
 def total_force(weight, y, film, phys):
     """``Int (P + p_a) R dR``, the force on the spheres (film.film_force), with the film and
     contact pressures of the last ``surface_gap``."""
@@ -121,7 +121,7 @@ def total_force(weight, y, film, phys):
     return film_force(weight, film.contact.p_film) + film_force(weight, film.contact.pa)
 
 
-@jit
+@hook
 def strain(grid, phys, p, w, film, smooth_strain):
     """The strain energy of a rough film: of the total load ``P + p_a`` on the elastic part of
     ``W`` (less the permanent set); ``smooth_strain`` (film.energy_rates') for a smooth one."""
@@ -132,7 +132,7 @@ def strain(grid, phys, p, w, film, smooth_strain):
     return strain_energy(grid.weight, grid.s[n - 1], p + pa, w - w_set, phys)
 
 
-@jit
+@hook
 def motion(weight, phys, bh, film, res):
     """The contact load's part of the motion row of ``film.residual``: ``bh F_a / (3 St)``, with
     the contact pressure of the last ``surface_gap`` (nothing for a smooth film)."""
@@ -164,7 +164,7 @@ def coupling(grid, phys, film):
     return Coupling(k_eff, dh_dx, force_dp, force_dx, dp_dh)
 
 
-@jit
+@hook
 def film_change(dy, dh, y, h, film, phys, dp):
     """The change of the film pressure over a Newton update of the slots by ``dy`` that moved the
     gap by ``dh`` (to ``h``), and the scale it is measured against: the slots' own change and
@@ -189,7 +189,7 @@ def film_change(dy, dh, y, h, film, phys, dp):
     return dp, scale
 
 
-@jit
+@hook
 def record(row, grid, h, film, phys):
     """The contact's columns of the series row (contact force, asperity energy, the energy lost
     in the solids; 0 for smooth surfaces), and what it tells the end of the coupled phase
@@ -206,7 +206,7 @@ def record(row, grid, h, film, phys):
     return contact_state(h, row[_V], phys)
 
 
-@jit
+@hook
 def accept(grid, y0, w, h0, film, phys):
     """A rough film's state after an accepted step (``y0`` its solution, ``w`` and ``h0`` its
     deflection and gap): the onset of the solids' unloading (``unload``) and the history of its

@@ -30,7 +30,7 @@ physics array ``phys`` (solver/physics.py, ``Physics.as_array``) carries the dim
 
 import numpy as np
 
-from .._jit import jit
+from .._jit import hook, jit
 from ..integration.linalg import matvec
 from ..physics import CAVITATION, CAVITATION_MODELS, DENSITY, PI, SLIP, ST
 from .liquid import (CONSTANT, compression_energy, density, isoviscous, kirchhoff_difference,
@@ -281,18 +281,27 @@ def plain_flux(phys):
     return isoviscous(phys) and phys[SLIP] == 0.0
 
 
-@jit
-def face_fluxes(s, s_face, p, h, phys, q_out):
-    """Face fluxes ``q_f`` of every face into ``q_out`` (N-1 entries). The liquid's law is
-    decided once, outside the loop: for an isoviscous liquid the drive is ``P_hi - P_lo``
-    (``kirchhoff_difference``'s value there) and the loop, ``flux_law`` inlined, is one the
-    compiler vectorises (the liquid's law called per face made the classic residual slower,
-    measured in docs/solver.md: 19 us against 0.6 us); slip (model/slip.py) takes the general
-    loop."""
+@hook
+def face_fluxes(grid, p, h, phys, q_out):
+    """Face fluxes ``q_f`` of every face of the grid ``grid`` (integration/grid.py: ``Nodes``)
+    into ``q_out`` (N-1 entries). The liquid's law is decided once, outside the loop: for an
+    isoviscous liquid the drive is ``P_hi - P_lo`` (``kirchhoff_difference``'s value there) and
+    the loop, ``flux_law`` inlined, is one the compiler vectorises (the liquid's law called per
+    face made the classic residual slower, measured in docs/solver.md: 19 us against 0.6 us);
+    slip (model/slip.py) and the pressure-dependent liquids take ``general_fluxes``. Inlined
+    into its callers (``hook``), so the choice costs them no reference counts."""
     if plain_flux(phys):
+        s, s_face = grid.s, grid.s_face
         for f in range(s.size - 1):
             q_out[f] = flux_law(s[f], s[f + 1], s_face[f], h[f], h[f + 1], p[f + 1] - p[f])[0]
-        return
+    else:
+        general_fluxes(grid, p, h, phys, q_out)
+
+
+@jit
+def general_fluxes(grid, p, h, phys, q_out):
+    """``face_fluxes`` through ``face_flux`` at every face: any liquid law, slip."""
+    s, s_face = grid.s, grid.s_face
     for f in range(s.size - 1):
         q_out[f] = face_flux(s[f], s[f + 1], s_face[f], p[f], p[f + 1], h[f], h[f + 1], phys)[0]
 
@@ -303,23 +312,24 @@ def residual(grid, phys, step, x, v, p, theta, h, q, res):
     liquid content ``cell_content(theta_i, H_i)`` against its history, ``theta H - C_hist =
     bh dq/ds`` (``C_hist`` the BDF combination of the content at the accepted states; full cells
     have ``theta = 1``, and ``1 * H = H`` bit for bit), the far-field boundary row,
-    ``X - X_hist = -bh V`` and ``V - V_hist = -bh F/(3 St)``. ``q`` receives the face fluxes.
-    ``constrain`` then replaces the rows of Reynolds-cavitated cells; the JFO film keeps these
-    rows in its cavitated cells, where the unknown is ``theta``. ``grid`` is the scene's
+    ``X - X_hist = -bh V`` and ``V - V_hist = -bh F/(3 St)``. ``q`` holds the face fluxes of
+    ``p``, ``h`` (``face_fluxes``, which the caller calls first: this function then calls none
+    that is not inlined, and numba counts no reference in it; docs/solver.md, "Reference
+    counting"). ``constrain`` then replaces the rows of Reynolds-cavitated cells; the JFO film
+    keeps these rows in its cavitated cells, where the unknown is ``theta``. ``grid`` is the scene's
     (integration/grid.py: ``Nodes``), ``step`` the attempt's ``bh`` and history (model/state.py:
     ``Step``)."""
     s, area = grid.s, grid.area
     bh, c_hist = step.bh, step.c_hist
     n = s.size
-    face_fluxes(s, grid.s_face, p, h, phys, q)
-    if phys[DENSITY] == CONSTANT:  # the content is theta H (cell_content with rho = 1)
-        for i in range(n - 1):
-            dq = q[i] - (q[i - 1] if i > 0 else 0.0)
-            res[i] = theta[i] * h[i] - c_hist[i] - bh / area[i] * dq
-    else:
-        for i in range(n - 1):
-            dq = q[i] - (q[i - 1] if i > 0 else 0.0)
-            res[i] = cell_content(theta[i], h[i], p[i], phys)[0] - c_hist[i] - bh / area[i] * dq
+    # one loop, the density's law chosen inside it: the compiler still makes two loops of it and
+    # vectorises the first, and numba's reference counts, which a loop in each branch of an if
+    # kept, are all removed (docs/solver.md, "Reference counting")
+    constant = phys[DENSITY] == CONSTANT  # the content is theta H (cell_content with rho = 1)
+    for i in range(n - 1):
+        dq = q[i] - (q[i - 1] if i > 0 else 0.0)
+        content = theta[i] * h[i] if constant else cell_content(theta[i], h[i], p[i], phys)[0]
+        res[i] = content - c_hist[i] - bh / area[i] * dq
     res[n - 1] = far_field_row(p[n - 2], p[n - 1], h[n - 2], h[n - 1])[0]
     res[n] = x - step.x_hist + bh * v
     res[n + 1] = v - step.v_hist + bh * film_force(grid.weight, p) / (3.0 * phys[ST])

@@ -39,7 +39,7 @@ model/film.py (terms), model/contact.py and docs/model.md (Cavitation; Pressure-
 viscosity and density; Surface roughness).
 """
 
-from .._jit import copy_into, jit
+from .._jit import copy_into, hook, jit
 from ..integration.events import ENDED, HELD
 from ..observables import SERIES_INDEX
 from ..physics import DENSITY
@@ -63,7 +63,7 @@ from .state import new_film  # noqa: F401 (new_film: the contract's start)
 _W_VOID, _E_C = SERIES_INDEX["void_work"], SERIES_INDEX["E_c"]
 
 
-@jit
+@hook
 def energies(grid, phys, y, w, h, q, film):
     """Strain energy and dissipation rate of the state (film.energy_rates; the strain energy of
     rough surfaces' total load: contact_step.strain)."""
@@ -86,7 +86,7 @@ def pressure_scale(film):
     return film.cavity.p_abs[0]
 
 
-@jit
+@hook
 def content_history(a1, a2, y0, y1, h0, h1, film, phys, out):
     """``a1 C(state 0) + a2 C(state 1)`` per cell (``C = rho_bar theta H``, ``film.cell_content``),
     and the same combination of the boundary node's gap, into ``out`` (the film pressure of the
@@ -104,17 +104,18 @@ def content_history(a1, a2, y0, y1, h0, h1, film, phys, out):
     out[n - 1] = a1 * h0[n - 1] + a2 * h1[n - 1]
 
 
-@jit
+@hook
 def step_residual(grid, phys, step, y, film, decide, q, w, h, res):
     """The scaled residual of the step ``step`` (state.Step) at the iterate ``y``
     (``film.residual``) into ``res``; where ``decide``, the active set is decided first from it
     (cavity_step.decide: a JFO switch moves slots to the floor, so the gap ``w, h`` and the rows
     follow); the rows of a Reynolds cavity are replaced by their constraint. ``q`` receives the
-    face fluxes. ``w``, ``h`` (and a rough film's contact and film pressures) must be
-    ``surface_gap``'s of ``y``."""
+    face fluxes (``film.face_fluxes``). ``w``, ``h`` (and a rough film's contact and film
+    pressures) must be ``surface_gap``'s of ``y``."""
     n = grid.s.size
     p = film_pressure(y, film, phys)
     theta = film.cavity.theta
+    face_fluxes(grid, p, h, phys, q)
     residual(grid, phys, step, y[n], y[n + 1], p, theta, h, q, res)
     contact_step.motion(grid.weight, phys, step.bh, film, res)
     if not has_active_set(phys):
@@ -123,6 +124,7 @@ def step_residual(grid, phys, step, y, film, decide, q, w, h, res):
         contact_step.hold_switched(y, film, phys)
         surface_gap(grid, phys, y, film, w, h)
         p = film_pressure(y, film, phys)
+        face_fluxes(grid, p, h, phys, q)
         residual(grid, phys, step, y[n], y[n + 1], p, theta, h, q, res)
         contact_step.motion(grid.weight, phys, step.bh, film, res)
     cavity_step.constrain_rows(p, res, film, phys)
@@ -171,7 +173,7 @@ def changed_slots(film, slots):
     return k
 
 
-@jit
+@hook
 def step_error(y, y_pred, err_fac, h, film, phys, perr, dh, scale):
     """Adjust the local error estimate of a converged step. On entry ``perr`` holds the pressure
     part ``err_fac (y - y_pred)`` and ``dh`` the gap's.
@@ -205,7 +207,7 @@ def step_error(y, y_pred, err_fac, h, film, phys, perr, dh, scale):
     return kirchhoff
 
 
-@jit
+@hook
 def record(row, grid, p, h, pmax, pmin, film, phys, floor_fraction):
     """The model's columns of the series row of an accepted state (compression energy, work
     against the floor; the contact's columns, contact_step.record; the cavity's,
@@ -226,7 +228,7 @@ def record(row, grid, p, h, pmax, pmin, film, phys, floor_fraction):
     return r_event
 
 
-@jit
+@hook
 def accept(grid, y0, w, h0, h1, q, dt, film, phys):
     """The model's state after an accepted step (``y0`` its solution, ``w`` and ``h0`` its
     deflection and gap, ``h1`` the previous one's, ``q`` its face fluxes): each piece's
