@@ -20,6 +20,9 @@
   code (``numba.np.arrayobj.raise_with_shape_context``), and its string machinery, linked into
   every function that assigns a slice and into each of their callers, cost a sixth of the
   solver's cold compile (benchmarks/compile.md: 45.5 s of CPU before, 38.6 s after).
+- ``hook``: ``jit`` with numba's ``inline="always"``, for the film contract's small answers on
+  the loop's path: inlined, they cost their callers no reference counts (docs/solver.md,
+  "Reference counting"), and the cold compile fell with them (0.91x, 3 alternated rounds).
 """
 
 import hashlib
@@ -109,9 +112,9 @@ def jit(func):
 
 def hook(func):
     """``jit``, and inlined into every compiled caller by numba itself: for the film contract's
-    small hooks that choose between the classic film and a piece (model/step.py). Called, a hook
-    made its caller keep the reference counts of everything it held, because the piece's branch
-    is a call (docs/solver.md, "Reference counting")."""
+    small hooks that choose between the classic film and a piece (model/step.py). Called rather
+    than inlined, such a hook kept the reference counts of everything it received, because its
+    piece's branch makes a call (docs/solver.md, "Reference counting")."""
     return numba.njit(cache=CACHE_DIR is not None, nogil=True, fastmath=FASTMATH,
                       error_model="numpy", inline="always")(func)
 
