@@ -238,7 +238,8 @@ def per_operation():
     from solver import collide
     from solver.collision import handover_separation, scene_grid
     from solver.integration.linalg import lu_factor, lu_solve
-    from solver.model.film import gap, jacobian, residual
+    from solver.model.film import face_fluxes, gap, jacobian, residual
+    from solver.model.state import Coupling, Step
     from solver.settings import resolve
 
     st, eps = PROFILE_SCENE
@@ -255,15 +256,16 @@ def per_operation():
     jac, dres_dh, piv = np.empty((n + 2, n + 2)), np.empty((n, 3)), np.empty(n + 2, dtype=np.int32)
     gap(g.s, g.influence, x, p, w, h)
     c_hist, bh, v = h.copy(), 1e-4, float(c.series["V"][c.series["phase"] == 1][k])
+    nodes, step = g.nodes(), Step(bh, c_hist, x, v)
+    smooth = Coupling(g.influence, np.ones(n), g.force_weight, 0.0, np.empty(0))
 
     def factorise(phys):
-        jacobian(g.s, g.s_face, g.area, g.force_weight, g.influence, phys, bh, p, theta, h, active,
-                 jac, dres_dh, np.ones(g.s.size), g.force_weight, 0.0, np.empty(0))
+        jacobian(nodes, phys, bh, p, theta, h, active, smooth, jac, dres_dh)
         lu_factor(jac, piv)
 
     def newton(phys):
-        residual(g.s, g.s_face, g.area, g.force_weight, phys, bh, c_hist, x, v, x, v, p, theta, h,
-                 q, res)
+        face_fluxes(nodes, p, h, phys, q)
+        residual(nodes, phys, step, x, v, p, theta, h, q, res)
         lu_solve(jac, piv, res)
         gap(g.s, g.influence, x, p, w, h)
 
