@@ -84,8 +84,28 @@ def solver_version(repo: Path = REPO, commit: str | None = None) -> str:
 def machine() -> dict:
     return {"system": platform.system(), "machine": platform.machine(),
             "processor": platform.processor() or platform.machine(), "cores": os.cpu_count(),
-            "python": platform.python_version(),
+            "cpu": cpu(), "python": platform.python_version(),
             "blas_threads": os.environ.get("OPENBLAS_NUM_THREADS", "unset")}
+
+
+# the instruction sets numba's code generation for the host CPU can use: the solver's last bits
+# may differ between machines that differ in them (fused multiply-add, vector width)
+_CPU_FLAGS = ("avx", "avx2", "fma", "avx512f")
+
+
+def cpu() -> str:
+    """The CPU's model name and which of ``_CPU_FLAGS`` it has (Linux: /proc/cpuinfo), else
+    ``platform.processor()``."""
+    try:
+        text = Path("/proc/cpuinfo").read_text()
+    except OSError:
+        return platform.processor() or "unknown"
+    model = next((line.split(":", 1)[1].strip() for line in text.splitlines()
+                  if line.startswith("model name")), platform.processor() or "unknown")
+    flags = next((set(line.split(":", 1)[1].split()) for line in text.splitlines()
+                  if line.startswith("flags")), set())
+    present = [f for f in _CPU_FLAGS if f in flags]
+    return f"{model} ({' '.join(present) or 'none of ' + ' '.join(_CPU_FLAGS)})"
 
 
 def load_now() -> list[float]:
@@ -159,8 +179,9 @@ def describe(doc: dict) -> str:
     load_text = (f"load average {load['start'][0]:.1f} at the start, {load['end'][0]:.1f} at the "
                  "end" if isinstance(load, dict) else "load not recorded")
     m = doc.get("machine")
-    where = (f"{m['cores']} cores ({m['machine']}), OPENBLAS_NUM_THREADS={m['blas_threads']}"
-             if isinstance(m, dict) else "machine not recorded")
+    where = (f"{m['cores']} cores ({m['machine']}{', ' + m['cpu'] if m.get('cpu') else ''}), "
+             f"OPENBLAS_NUM_THREADS={m['blas_threads']}" if isinstance(m, dict)
+             else "machine not recorded")
     text = (f"solver {doc.get('solver_version', NOT_RECORDED)}, commit {short}"
             f"{' with uncommitted changes' if doc.get('dirty') is True else ''}, {doc.get('date')}, "
             f"{where}, {load_text}")

@@ -104,6 +104,19 @@ def test_written_results_keep_their_keys_and_add_the_provenance(harness, tmp_pat
     assert doc["machine"]["cores"] >= 1
 
 
+def test_the_machine_names_its_cpu_and_the_instruction_sets_that_move_the_last_bits(harness):
+    """numba compiles for the host CPU: fused multiply-add and the vector width can change a
+    result's last bits between machines, so a result file says which it ran on."""
+    cpu = harness.machine()["cpu"]
+    assert cpu and cpu in harness.describe({"machine": harness.machine(), "load": None})
+    info = Path("/proc/cpuinfo")
+    if info.exists():  # each flag named exactly when the kernel lists it
+        flags = next(line for line in info.read_text().splitlines() if line.startswith("flags"))
+        listed = set(flags.split(":", 1)[1].split())
+        named = set(cpu.rsplit("(", 1)[1].rstrip(")").split())
+        assert {f for f in harness._CPU_FLAGS if f in listed} == named & set(harness._CPU_FLAGS)
+
+
 def test_solver_version_read_from_history_matches_the_source(harness):
     from solver import SOLVER_VERSION
 
