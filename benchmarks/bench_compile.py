@@ -23,6 +23,7 @@ Usage: ``python benchmarks/bench_compile.py [--repeat N] [--compare DIR] [--case
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 import tempfile
@@ -177,16 +178,24 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--repeat", type=int, default=3, help="runs per case (default 3)")
     p.add_argument("--cases", nargs="+", choices=list(CASES), default=list(CASES))
-    p.add_argument("--compare", default=None,
-                   help="also time the checkout in DIR, alternated (shown as 'before')")
+    p.add_argument("--compare", default=None, metavar="DIR|COMMIT",
+                   help="also time the checkout in DIR, or this repository's COMMIT checked out "
+                        "in a temporary folder, alternated (shown as 'before')")
     p.add_argument("--out", default=str(REPO / "benchmarks" / "compile.md"),
                    help="markdown file for the table ('-': print only); the JSON goes beside it")
     args = p.parse_args(argv)
     load_start = harness.load_now()
     launches = {"this": harness.source_env(REPO)}
-    if args.compare:
-        launches = {"before": harness.source_env(Path(args.compare)), **launches}
-    with tempfile.TemporaryDirectory(prefix="ehd-bench-compile-") as keep:
+    with contextlib.ExitStack() as stack:
+        if args.compare:
+            before = Path(args.compare)
+            if not (before / "solver").is_dir():  # not a checkout: a commit of this repository
+                if not harness.resolve_commit(args.compare):
+                    p.error(f"--compare {args.compare}: neither a checkout (no solver/ folder "
+                            "in it) nor a commit of this repository")
+                before = stack.enter_context(harness.checkout(args.compare))
+            launches = {"before": harness.source_env(before), **launches}
+        keep = stack.enter_context(tempfile.TemporaryDirectory(prefix="ehd-bench-compile-"))
         runs = measure(args.cases, args.repeat, launches, Path(keep))
         first = Path(keep) / "classic.json"
         found = attribution(first) if first.exists() else None
