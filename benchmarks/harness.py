@@ -100,11 +100,12 @@ def cpu() -> str:
         text = Path("/proc/cpuinfo").read_text()
     except OSError:
         return platform.processor() or "unknown"
-    model = next((line.split(":", 1)[1].strip() for line in text.splitlines()
-                  if line.startswith("model name")), platform.processor() or "unknown")
-    flags = next((set(line.split(":", 1)[1].split()) for line in text.splitlines()
-                  if line.startswith("flags")), set())
-    present = [f for f in _CPU_FLAGS if f in flags]
+    fields = {}  # the first processor's lines, "key : value"
+    for line in text.splitlines():
+        key, _, value = line.partition(":")
+        fields.setdefault(key.strip(), value.strip())
+    model = fields.get("model name") or platform.processor() or "unknown"
+    present = [f for f in _CPU_FLAGS if f in fields.get("flags", "").split()]
     return f"{model} ({' '.join(present) or 'none of ' + ' '.join(_CPU_FLAGS)})"
 
 

@@ -141,6 +141,8 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--top", type=int, default=40, help="functions listed (default 40)")
     args = p.parse_args(argv)
+    if args.top < 1:
+        p.error(f"--top {args.top}: list at least one function")
     if shutil.which("gdb") is None:
         print("refcount_callers: needs gdb (apt-get install gdb)", file=sys.stderr)
         return 2
@@ -153,9 +155,16 @@ def main(argv=None) -> int:
                                                     counts=str(counts)))
         env = {**os.environ, "EHD_CACHE_DIR": str(folder / "cache"), "OPENBLAS_NUM_THREADS": "1",
                "PYTHONPATH": str(HERE.parent)}
-        subprocess.run(["gdb", "-batch", "-x", str(folder / "count.py"), "--args",
-                        sys.executable, str(folder / "child.py"), str(functions)],
-                       env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        log = folder / "gdb.log"
+        with log.open("w") as out:
+            done = subprocess.run(["gdb", "-batch", "-x", str(folder / "count.py"), "--args",
+                                   sys.executable, str(folder / "child.py"), str(functions)],
+                                  env=env, stdout=out, stderr=subprocess.STDOUT)
+        if not counts.exists():  # the child failed before its second stop, or gdb could not run
+            last = log.read_text().strip().splitlines()[-1:] or ["no output"]
+            print(f"refcount_callers: the counted run did not finish (gdb exit {done.returncode}, "
+                  f"its last line: {last[0]}); nothing written", file=sys.stderr)
+            return 1
         per, newton = tally(functions, counts)
     data = harness.write_json(HERE / "refcount_callers.json",
                               {"newton_iterations": newton,
@@ -167,4 +176,8 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except KeyboardInterrupt:
+        print("refcount_callers: interrupted; nothing written", file=sys.stderr)
+        sys.exit(130)

@@ -104,10 +104,12 @@ if CACHE_DIR is not None:
     numba.config.CACHE_DIR = CACHE_DIR
 
 
+# no cache at all rather than numba's silent fallback to __pycache__ (no source-hash guard)
+_FLAGS = dict(cache=CACHE_DIR is not None, nogil=True, fastmath=FASTMATH, error_model="numpy")
+
+
 def jit(func):
-    # no cache at all rather than numba's silent fallback to __pycache__ (no source-hash guard)
-    return numba.njit(cache=CACHE_DIR is not None, nogil=True, fastmath=FASTMATH,
-                      error_model="numpy")(func)
+    return numba.njit(**_FLAGS)(func)
 
 
 def hook(func):
@@ -115,8 +117,7 @@ def hook(func):
     small hooks that choose between the classic film and a piece (model/step.py). Called rather
     than inlined, such a hook kept the reference counts of everything it received, because its
     piece's branch makes a call (docs/solver.md, "Reference counting")."""
-    return numba.njit(cache=CACHE_DIR is not None, nogil=True, fastmath=FASTMATH,
-                      error_model="numpy", inline="always")(func)
+    return numba.njit(**_FLAGS, inline="always")(func)
 
 
 @jit

@@ -51,11 +51,11 @@ from .cavity_step import split_update, start_attempt, update_norm  # noqa: F401
 from .contact_step import (begin, film_change, film_pressure, relaxing_deflection,  # noqa: F401
                            surface_gap, total_force)
 from .contact import HOLD, REST
-from .film import cell_content, compression_work, energy_rates, jacobian, residual
-# the film's face fluxes of a state (what the loop records and the void's work reads), and the
-# gap of the rigid start, before the film's own state exists (its slots are the rigid film's
+# face_fluxes: the film's face fluxes of a state, which the residual reads, and the loop records
+# and the void's work reads too
+from .film import cell_content, compression_work, energy_rates, face_fluxes, jacobian, residual
+# the gap of the rigid start, before the film's own state exists (its slots are the rigid film's
 # pressures whatever the pieces)
-from .film import face_fluxes  # noqa: F401
 from .film import gap as start_gap  # noqa: F401
 from .liquid import CONSTANT, isoviscous, kirchhoff_difference
 from .state import new_film  # noqa: F401 (new_film: the contract's start)
