@@ -31,7 +31,8 @@ from .cli_shared import (add_numerics_flags, check_output_dir, check_output_path
                          numerics_overrides)
 from .errors import (BUG_REPORT, EXIT_BROKEN_PIPE, EXIT_INTERNAL, EXIT_INTERRUPTED,
                      EXIT_SCENE_FAILED, EXIT_TERMINATED, EXIT_WRITE, EhdError, PathError,
-                     Terminated, UsageError, interrupt_cause)
+                     Terminated, UsageError, interrupt_cause, interrupt_handled, on_signal,
+                     raise_lost_interrupt)
 
 __all__ = ["main", "COMMANDS", "UsageError", "check_output_paths", "check_output_dir"]
 
@@ -351,6 +352,7 @@ def _parser(argv=None) -> argparse.ArgumentParser:
 
 
 def _interrupted(name: str, terminated: bool = False) -> int:
+    interrupt_handled()
     _quiet_dask()
     _flush_quietly()
     how = "terminated (SIGTERM)" if terminated else "interrupted"
@@ -358,21 +360,38 @@ def _interrupted(name: str, terminated: bool = False) -> int:
     return EXIT_TERMINATED if terminated else EXIT_INTERRUPTED
 
 
-def _on_sigterm(signum, frame):
-    raise Terminated()
-
-
-def _handle_sigterm():
-    """SIGTERM unwinds like Ctrl-C (the journal keeps every finished scene; exit 143). Returns
-    a function that puts the previous handler back (``main`` called from Python code, e.g. a
-    test, leaves the process as it found it)."""
+def _handle_signals():
+    """Ctrl-C and SIGTERM raise ``KeyboardInterrupt`` and ``Terminated`` through
+    ``errors.on_signal``, which remembers them: one that Python drops (raised inside a weakref
+    callback or a ``__del__``) is raised again by the next ``raise_lost_interrupt`` (the sweep
+    calls it after each scene, ``_main`` after the command), and its "Exception ignored"
+    traceback is not printed. SIGTERM unwinds like Ctrl-C (the journal keeps every finished
+    scene; exit 143). An ignored SIGINT (a job started in the background) stays ignored.
+    Returns a function that puts the previous handlers back (``main`` called from Python code,
+    e.g. a test, leaves the process as it found it)."""
     import signal
     import threading
 
     if threading.current_thread() is not threading.main_thread():
         return lambda: None
-    previous = signal.signal(signal.SIGTERM, _on_sigterm)
-    return lambda: signal.signal(signal.SIGTERM, previous)
+    previous = {signal.SIGTERM: signal.signal(signal.SIGTERM, on_signal)}
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        previous[signal.SIGINT] = signal.signal(signal.SIGINT, on_signal)
+    previous_hook = sys.unraisablehook
+
+    def unraisable(report):
+        if report.exc_type is not None and issubclass(report.exc_type,
+                                                      (KeyboardInterrupt, Terminated)):
+            return  # raised again where it can propagate
+        previous_hook(report)
+
+    sys.unraisablehook = unraisable
+
+    def restore():
+        sys.unraisablehook = previous_hook
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+    return restore
 
 
 def _closed_stdout() -> bool:
@@ -422,13 +441,15 @@ def _to_devnull() -> None:
 def main(argv=None) -> int:
     """Run one ``ehd`` command: the error boundary of them all (see the module docstring).
     Never raises but ``SystemExit`` of argparse (``--help``, a bad flag: exit 2)."""
-    restore = _handle_sigterm()
+    interrupt_handled()  # nothing left over from an earlier call in this process
+    restore = _handle_signals()
     try:
         return _main(argv)
     except SystemExit:
         raise
     except BaseException as exc:  # noqa: BLE001 - the boundary of the boundary
         if interrupt_cause(exc) is not None:
+            interrupt_handled()
             return EXIT_TERMINATED if isinstance(interrupt_cause(exc), Terminated) \
                 else EXIT_INTERRUPTED
         try:
@@ -484,6 +505,7 @@ def _main(argv=None) -> int:
             return _stdout_closed_line(name)
         name = f"ehd {args.command}"
         code = args.func(args)
+        raise_lost_interrupt()  # a Ctrl-C Python dropped still ends as one
         sys.stdout.flush()  # a closed pipe or a full stdout shows here, not at interpreter exit
         return code
     except _StdoutLost as exc:

@@ -562,6 +562,19 @@ def test_cli_sweep_status_and_exit_codes(tmp_path, capsys):
 
 
 # ---- analysis and figures -----------------------------------------------------------------------
+def stand_in_render(ds, out):
+    """For ``sweep_maps.render_all`` where the stamp's logic is under test, not the drawing
+    (which takes ~15 s): writes a stand-in of every file the real one names."""
+    from pipeline.plots import sweep_maps
+
+    paths = [out / f"{n}.{f}" for n in sweep_maps.FIGURES for f in sweep_maps.FORMATS]
+    paths.append(out / sweep_maps.CSV_NAME)
+    out.mkdir(parents=True, exist_ok=True)
+    for p in paths:
+        p.write_text("x")
+    return paths
+
+
 def synthetic_store(tmp_path):
     """Stand-in results with a failed column (St = 2), a raised scene and a not-run corner."""
     St = [round(float(v), 6) for v in np.geomspace(0.5, 60.0, 14)] + [2.0, 4.0]

@@ -185,16 +185,9 @@ def test_named_sweep_runs_without_a_path(tmp_path, monkeypatch, capsys):
 def test_figures_stamp_skips_reading_an_unchanged_store(tmp_path, monkeypatch):
     from pipeline.plots import stamp, sweep_maps
     from pipeline.plots.sweep_maps import update_figures
-    from tests.test_pipeline import open_results, synthetic_store
+    from tests.test_pipeline import open_results, stand_in_render, synthetic_store
 
-    def render(ds, out):  # the stamp's logic only: a stand-in that writes the files it names
-        paths = [out / f"{n}.{f}" for n in sweep_maps.FIGURES for f in sweep_maps.FORMATS]
-        paths.append(out / sweep_maps.CSV_NAME)
-        for p in paths:
-            p.write_text("x")
-        return paths
-
-    monkeypatch.setattr(sweep_maps, "render_all", render)
+    monkeypatch.setattr(sweep_maps, "render_all", stand_in_render)  # the stamp's logic only
     ds = synthetic_store(tmp_path)
     store = tmp_path / "s.zarr"
     assert stamp.up_to_date(store, tmp_path / "f") is None  # nothing drawn yet

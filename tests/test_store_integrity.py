@@ -352,9 +352,12 @@ def test_figures_record_the_state_they_read(ws, capsys, monkeypatch):
     the figures of the half store were then certified "up to date"): the next ``ehd figures``
     reads the store again and redraws."""
     import pipeline.sweeps.commands as commands
+    from pipeline.plots import sweep_maps
     from pipeline.plots.sweep_maps import fingerprint
     from pipeline.sweeps.integrity import load_checked
+    from tests.test_pipeline import stand_in_render
 
+    monkeypatch.setattr(sweep_maps, "render_all", stand_in_render)  # the stamp is under test
     (ws / "more.toml").write_text(sweep_text(ST + [40.0, 60.0], EPS, store="s.zarr"))
     real = commands._open_checked
 

@@ -37,7 +37,7 @@ import time
 from concurrent.futures import as_completed
 from contextlib import contextmanager
 
-from ..errors import SchedulerError, SchedulerLost
+from ..errors import SchedulerError, SchedulerLost, raise_lost_interrupt
 
 __all__ = ["open_runner", "check_runner", "check_seconds", "check_address", "probe_scheduler",
            "scheduler_address", "CONNECT_SECONDS", "default_workers", "max_local_workers", "RUNNERS",
@@ -288,9 +288,11 @@ class Runner:
         if self._executor is None:
             for tag, args in jobs:  # lazily: each result reaches the store before the next runs
                 try:
-                    yield tag, fn(*args)
+                    result = fn(*args)
                 except Exception as exc:
-                    yield tag, exc
+                    result = exc
+                yield tag, result
+                raise_lost_interrupt()  # the scene is stored: a Ctrl-C Python dropped ends here
             return
         futures = {self._executor.submit(fn, *args): (tag, args) for tag, args in jobs}
         # A worker process that dies takes every scene assigned to it, the queued ones too, and
@@ -307,6 +309,7 @@ class Runner:
                     continue
                 done += 1
                 yield tag, (exc if exc is not None else fut.result())
+                raise_lost_interrupt()
             for tag, args in killed:
                 fut = self._executor.submit(fn, *args)
                 futures[fut] = (tag, args)
@@ -314,6 +317,7 @@ class Runner:
                 del futures[fut]
                 done += 1
                 yield tag, (exc if exc is not None else fut.result())
+                raise_lost_interrupt()
         finally:
             if futures:  # interrupted: do not leave scenes running on a shared cluster
                 # quiet first: each cancel runs a callback on the client's event loop thread that
