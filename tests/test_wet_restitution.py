@@ -74,9 +74,14 @@ def test_x_ref_is_consistent_with_the_rigid_approach():
     st_ref = rigid.impact_stokes(stokes, x0, x_ref)
     assert rigid.stokes_at_start(st_ref, x0, x_ref) == pytest.approx(stokes, rel=1e-15)
     v_ref = st_ref / stokes  # approach speed at x_ref in units of v0
+
+    def at_x0(t, y):
+        return y[0] - x0
+
+    at_x0.terminal = True  # past x0 the march would crawl into x = 0 (26 s instead of 5 ms)
     sol = integrate.solve_ivp(lambda t, y: [-y[1], -y[1] / (stokes * y[0])], (0.0, 1e3),
-                              [x_ref, v_ref], events=lambda t, y: y[0] - x0, rtol=1e-12,
-                              atol=1e-14, method="DOP853")
+                              [x_ref, v_ref], events=at_x0, rtol=1e-12, atol=1e-14,
+                              method="DOP853")
     assert sol.y_events[0][0][1] == pytest.approx(1.0, rel=1e-9)
     # and e_wet at x_ref follows from e_wet at x0: St_ref e(x_ref) = St e(x0) - ln(x_ref/x0)
     # (a scene that releases inside x0, so both use the rigid departure from the same state)

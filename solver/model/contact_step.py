@@ -35,8 +35,10 @@ def on(phys):
 
 
 @jit
-def _held(film, phys, n):
-    held = np.empty(n, dtype=np.bool_)
+def _held(film, phys):
+    """The nodes held at the floor now (cavity_step.held_cells), into the contact's work array
+    (a rough film asks at every Newton iteration: no allocation there)."""
+    held = film.contact.held
     held_cells(film.cavity, phys, held)
     return held
 
@@ -52,7 +54,7 @@ def surface_gap(grid, phys, y, film, w, h):
     if not on(phys):
         gap(grid.s, grid.influence, y[n], y[:n], w, h)
         return
-    if not contact_gap(grid, y[n], y, film.contact, _held(film, phys, n), phys, w, h):
+    if not contact_gap(grid, y[n], y, film.contact, _held(film, phys), phys, w, h):
         h[:] = np.nan
 
 
@@ -151,7 +153,7 @@ def coupling(grid, phys, film):
     if not on(phys):
         return Coupling(grid.influence, np.ones(n), grid.weight, 0.0, np.empty(0))
     c, slope = film.contact.load_scale[0], film.contact.slope
-    held = _held(film, phys, n)
+    held = _held(film, phys)
     dp_dh = np.empty(n)
     m = contact_slopes(slope, held, dp_dh)
     if m == 0 and c == 1.0:
@@ -177,7 +179,7 @@ def film_change(dy, dh, y, h, film, phys, dp):
     n = h.size
     if not on(phys):
         return dy, y[:n]
-    held = _held(film, phys, n)
+    held = _held(film, phys)
     contact = film.contact
     p, pa = contact.p_film, contact.pa
     scale, slope = contact.p_scale, contact.slope

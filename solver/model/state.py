@@ -89,10 +89,11 @@ Cavity = array_record("Cavity", (
 #   scale step.film_change measures the film pressure by;
 # ``load_scale``, ``touched``, ``solid_lost`` (1,): the solids' unloading scale c (1 while they
 #   load, e_dry^2 once they unload), 1 once the asperities carried load on approach, the energy
-#   lost in the solids.
+#   lost in the solids;
+# ``held`` (N, bool): work array, the nodes whose slot is not their load (contact_step._held).
 Contact = array_record("Contact", (
     "pa", "p_film", "slope", "t_set", "w_set", "h_set", "p_acc0", "p_acc1", "p_scale",
-    "load_scale", "touched", "solid_lost"), "Rough surfaces' state (model/state.py).")
+    "load_scale", "touched", "solid_lost", "held"), "Rough surfaces' state (model/state.py).")
 
 
 class Film(NamedTuple):
@@ -151,5 +152,5 @@ def new_film(q):
                     q.copy(), _one(0.0), _one(1e-12), _one(0.0), _one(0.0))
     contact = Contact(np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
                       np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), _one(1.0), _one(0.0),
-                      _one(0.0))
+                      _one(0.0), np.zeros(n, dtype=np.bool_))
     return Film(cavity, contact)
