@@ -1,7 +1,7 @@
 """Shared test set-up: Agg backend, figures closed after each test, the ``slow`` marker.
 
 Two tiers (README, "Development"; docs/developer.md): ``make test`` runs every test (the suite
-CI runs, about 6 minutes on 2 cores); ``make test-fast`` leaves out the tests marked ``slow``
+CI runs, about 8 minutes on 2 cores); ``make test-fast`` leaves out the tests marked ``slow``
 (listed in ``SLOW`` below) for the inner loop, in under 2 minutes. The long convergence and
 accuracy studies are validation benchmarks (``make bench-validation``, benchmarks/accuracy.md);
 tests/test_convergence.py checks the observed orders on a short refinement ladder by default.
