@@ -133,6 +133,15 @@ def test_sigterm_inside_the_compiled_solve_of_a_serial_sweep_stores_nothing(tmp_
     assert resumed.stdout.count("solving") == 1
 
 
+@pytest.fixture
+def python_ctrl_c():
+    """Ctrl-C handled by Python's own handler, as in a terminal, whatever this process
+    inherited (a job started in the background ignores SIGINT, and ``ehd`` keeps it ignored)."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
 def _drop_a_ctrl_c():
     """Ctrl-C delivered while a weakref callback runs: Python runs the handler inside it and
     drops its ``KeyboardInterrupt`` (printing "Exception ignored in"), as when the garbage
@@ -149,7 +158,8 @@ def _drop_a_ctrl_c():
 
 
 @pytest.mark.parametrize("kind", ["serial", "threads"])
-def test_a_ctrl_c_python_dropped_is_raised_after_the_scene_that_finished(kind, capsys):
+def test_a_ctrl_c_python_dropped_is_raised_after_the_scene_that_finished(kind, capsys,
+                                                                          python_ctrl_c):
     from pipeline.cli import _handle_signals
     from pipeline.errors import interrupt_handled
     from pipeline.sweeps.runners import open_runner
@@ -171,7 +181,7 @@ def test_a_ctrl_c_python_dropped_is_raised_after_the_scene_that_finished(kind, c
 
 
 def test_a_sweep_whose_ctrl_c_python_dropped_is_exit_130_and_keeps_its_scenes(
-        tmp_path, capsys, monkeypatch):
+        tmp_path, capsys, monkeypatch, python_ctrl_c):
     import functools
 
     import pipeline.sweeps.run as run_module
@@ -206,7 +216,7 @@ def test_a_sweep_whose_ctrl_c_python_dropped_is_exit_130_and_keeps_its_scenes(
 
 
 def test_a_ctrl_c_dropped_in_a_command_without_scenes_still_ends_it_as_one(
-        tmp_path, capsys, monkeypatch):
+        tmp_path, capsys, monkeypatch, python_ctrl_c):
     """Where no loop asks (here ``ehd examples``), the boundary asks once the command is done."""
     import pipeline.cli as cli
     from pipeline.errors import EXIT_INTERRUPTED
@@ -222,3 +232,22 @@ def test_a_ctrl_c_dropped_in_a_command_without_scenes_still_ends_it_as_one(
     err = capsys.readouterr().err
     assert code == EXIT_INTERRUPTED, err
     assert "Exception ignored" not in err
+
+
+def test_ehd_keeps_an_ignored_ctrl_c_ignored_and_puts_every_handler_back():
+    """A job started in the background inherits SIGINT ignored: ``ehd`` leaves it so (Ctrl-C
+    in the terminal is not meant for it), takes SIGTERM, and restores both afterwards."""
+    from pipeline.cli import _handle_signals
+    from pipeline.errors import on_signal
+
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    term = signal.getsignal(signal.SIGTERM)
+    try:
+        restore = _handle_signals()
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        assert signal.getsignal(signal.SIGTERM) is on_signal
+        restore()
+        assert signal.getsignal(signal.SIGTERM) is term
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, previous)
