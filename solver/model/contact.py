@@ -147,14 +147,14 @@ def contact_gap(grid, x, y, contact, held, phys, w, h):
     pa, slope, p = contact.pa, contact.slope, contact.p_film
     n = s.size
     sigma = phys[ROUGHNESS]
-    load = np.empty(n)
+    load = contact.load
     for i in range(n):
         load[i] = -phys[PI] if held[i] else y[i]
     if c == 1.0:
         matvec(influence, load, w)
     else:
         matvec(influence, c * load + (1.0 - c) * t_set, w)
-    idx = np.empty(n, dtype=np.int64)  # the held cells that touch (their gap is implicit)
+    idx = contact.touching  # the held cells that touch (their gap is implicit)
     m = 0
     for i in range(n):
         pa[i] = 0.0

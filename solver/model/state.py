@@ -90,10 +90,13 @@ Cavity = array_record("Cavity", (
 # ``load_scale``, ``touched``, ``solid_lost`` (1,): the solids' unloading scale c (1 while they
 #   load, e_dry^2 once they unload), 1 once the asperities carried load on approach, the energy
 #   lost in the solids;
-# ``held`` (N, bool): work array, the nodes whose slot is not their load (contact_step._held).
+# work arrays, so that a Newton iteration allocates nothing: ``held`` (N, bool) the nodes whose
+# slot is not their load (contact_step._held); ``load`` (N) the load of every node and
+# ``touching`` (N, int) the held nodes that touch (contact.contact_gap).
 Contact = array_record("Contact", (
     "pa", "p_film", "slope", "t_set", "w_set", "h_set", "p_acc0", "p_acc1", "p_scale",
-    "load_scale", "touched", "solid_lost", "held"), "Rough surfaces' state (model/state.py).")
+    "load_scale", "touched", "solid_lost", "held", "load", "touching"),
+    "Rough surfaces' state (model/state.py).")
 
 
 class Film(NamedTuple):
@@ -152,5 +155,6 @@ def new_film(q):
                     q.copy(), _one(0.0), _one(1e-12), _one(0.0), _one(0.0))
     contact = Contact(np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
                       np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), _one(1.0), _one(0.0),
-                      _one(0.0), np.zeros(n, dtype=np.bool_))
+                      _one(0.0), np.zeros(n, dtype=np.bool_), np.zeros(n),
+                      np.zeros(n, dtype=np.int64))
     return Film(cavity, contact)
