@@ -147,13 +147,11 @@ def contact_gap(grid, x, y, contact, held, phys, w, h):
     pa, slope, p = contact.pa, contact.slope, contact.p_film
     n = s.size
     sigma = phys[ROUGHNESS]
-    load = contact.load
+    load = contact.load  # the elastic load of every node: the set's part too while unloading
     for i in range(n):
-        load[i] = -phys[PI] if held[i] else y[i]
-    if c == 1.0:
-        matvec(influence, load, w)
-    else:
-        matvec(influence, c * load + (1.0 - c) * t_set, w)
+        own = -phys[PI] if held[i] else y[i]
+        load[i] = own if c == 1.0 else c * own + (1.0 - c) * t_set[i]
+    matvec(influence, load, w)
     idx = contact.touching  # the held cells that touch (their gap is implicit)
     m = 0
     for i in range(n):

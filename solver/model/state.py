@@ -91,7 +91,7 @@ Cavity = array_record("Cavity", (
 #   load, e_dry^2 once they unload), 1 once the asperities carried load on approach, the energy
 #   lost in the solids;
 # work arrays, so that a Newton iteration allocates nothing: ``held`` (N, bool) the nodes whose
-# slot is not their load (contact_step._held); ``load`` (N) the load of every node and
+# slot is not their load (contact_step._held); ``load`` (N) the elastic load of every node and
 # ``touching`` (N, int) the held nodes that touch (contact.contact_gap).
 Contact = array_record("Contact", (
     "pa", "p_film", "slope", "t_set", "w_set", "h_set", "p_acc0", "p_acc1", "p_scale",
