@@ -19,8 +19,10 @@ time is the steadier measure; both are shown.
 venv's packages: ``python -S -P -m pipeline.cli`` with ``PYTHONPATH=DIR:site-packages`` instead of
 the ``ehd`` script (``--before FILE`` shows such a run as "before" columns). ``--compare DIR``
 measures the no-op ``make sweep`` and the warm ``ehd run`` of DIR in the same run, alternating
-with this checkout's (both started the ``--source`` way, the sweep on the same store), and shows
-them as the "before" columns of those rows: the load of a shared machine then falls on both alike.
+with this checkout's (both started the ``--source`` way), and shows them as the "before" columns
+of those rows: the load of a shared machine then falls on both alike. DIR sweeps a paper store of
+its own, which its solver writes first (about a minute): a store of another solver version is
+refused, and two versions are what a comparison is for.
 
 Usage: ``python benchmarks/bench_startup.py [--repeat N] [--store S] [--source DIR] [--compare DIR]
 [--out FILE]`` (writes ``benchmarks/startup.md`` and ``startup.json``, with the provenance of
@@ -110,11 +112,12 @@ def measure(repeat: int, store: Path, figures: Path, ehd: list[str], env: dict) 
 NOOP_ROWS = ("ehd sweep (nothing to do)", "ehd figures (up to date)", "no-op make sweep (both)")
 
 
-def compare_noop(repeat: int, store: Path, tmp: Path, launches: dict) -> dict:
-    """The no-op ``make sweep`` of each ``{label: (argv, env)}`` (``_alternated``; the store
-    must be complete; each label draws its own figures once)."""
+def compare_noop(repeat: int, stores: dict, tmp: Path, launches: dict) -> dict:
+    """The no-op ``make sweep`` of each ``{label: (argv, env)}`` (``_alternated``) on its store
+    ``stores[label]``, which its first sweep completes; each label draws its own figures once."""
     sides = {}
     for label, (ehd, env) in launches.items():
+        store = stores[label]
         sweep = [*ehd, "sweep", "sweeps/paper.toml", "--store", str(store)]
         figs = [*ehd, "figures", str(store), "--out", str(tmp / f"figures-{label}")]
         _timed(sweep, env, ok=(0, 3))
@@ -198,8 +201,8 @@ def render(results: dict, meta: dict, before: dict | None, doc: dict) -> str:
                   f"{before[BASE]['wall_s']:.3f} s wall, {before[BASE]['cpu_s']:.3f} s CPU."]
     elif before:
         lines += ["", "Before (the no-op rows and the warm run): "
-                  f"{meta.get('before_source')}, measured in this run (`--compare`), its runs alternated with this checkout's on the same "
-                  "store, both run as `python -S -P -m pipeline.cli` with this venv's packages: "
+                  f"{meta.get('before_source')}, measured in this run (`--compare`), its runs alternated with this checkout's, each on a paper "
+                  "store its own solver wrote, both run as `python -S -P -m pipeline.cli` with this venv's packages: "
                   + ", ".join(f"{row} {meta['compared'][row]['wall_s']:.3f} s wall, "
                               f"{meta['compared'][row]['cpu_s']:.3f} s CPU"
                               for row in (*NOOP_ROWS[2:], RUN))
@@ -223,7 +226,7 @@ def render(results: dict, meta: dict, before: dict | None, doc: dict) -> str:
               "The up-to-date `ehd figures` lists the store's files and reads nothing "
               "(`pipeline/plots/stamp.py`). The warm `ehd run` (timed inside one such run, "
               "-S -P, 3 runs, 2026-12-03): importing numba 0.27 s and scipy 0.32 s (linalg for "
-              "the LAPACK addresses, special for the elastic kernel, optimize for one root), the "
+              "the LAPACK addresses, special for the elastic kernel; not optimize since solver 1.11.0, which finds the hand-over's root itself: about 0.2 s), the "
               "solver's modules 0.07 s, loading the compiled kernels from the cache 0.30 s, the "
               "solve 0.06 s. Before, the grid's record was built by its Python constructor, which "
               "numba compiles in every process (now `grid._as_nodes`, compiled and cached), and "
@@ -269,7 +272,8 @@ def main(argv=None) -> int:
         if args.compare:
             launches = {"before": harness.cli_launch(args.compare, env),
                         "after": harness.cli_launch(args.source or REPO, env)}
-            compared = compare_noop(args.repeat, store, tmp, launches)
+            compared = compare_noop(args.repeat, {"before": tmp / "paper-before.zarr",
+                                                  "after": store}, tmp, launches)
             compared_run = compare_run(args.repeat, launches)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)

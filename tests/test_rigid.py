@@ -49,6 +49,30 @@ def test_handover_on_the_rigid_path():
     assert x > x0 * math.exp(0.4 - stokes)
 
 
+@pytest.mark.parametrize("stokes", [0.5, 2.0, 10.0, 300.0, 3000.0])
+def test_handover_is_the_first_root_to_the_last_bits(stokes):
+    """The hand-over's own root finder (Newton from the start, rigid._rigid_onset) lands on the
+    criterion: ``W(0)/X`` equals the threshold to 1e-12 relative (the ratio evaluated through
+    ``exp(2.5 u)``, ``u`` up to 25 here: rounding of about 1e-14), from far below the peak to
+    just under it, where the slope vanishes and Newton converges only linearly (thresholds up
+    to 1: at large St the peak itself overflows)."""
+    x0 = 1e-6**-0.4
+    u_peak = stokes - 0.4
+    if u_peak <= 0.0:  # the ratio only falls from the start
+        assert rigid.handover_separation(x0, stokes, 1e-5) is None
+        return
+    log_peak = math.log(rigid.HANDOVER_COEFF * 0.4 / stokes) - 2.5 * math.log(x0) + 2.5 * u_peak
+    for below in (20.0, 1.0, 1e-3, 1e-9):
+        threshold = math.exp(min(log_peak - below, 0.0))  # at large St the peak overflows
+        x = rigid.handover_separation(x0, stokes, threshold)
+        if x == x0:  # reached at the start
+            assert rigid.deformation_ratio(x0, 1.0) >= threshold
+            continue
+        v = rigid.velocity(x, x0, 1.0, stokes)
+        assert rigid.deformation_ratio(x, v) == pytest.approx(threshold, rel=1e-12)
+        assert x >= x0 * math.exp(-u_peak)  # the first crossing, before the peak
+
+
 def test_handover_peak_and_never():
     x0 = 1e-6**-0.4
     # docs/model.md "Small deformation": W/X peaks at 3 pi^2 eps exp(2.5 St - 1)/(10 sqrt 2 St) for St > 0.4

@@ -36,7 +36,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._jit import copy_into, jit
+from .._jit import copy_into, hook, jit
 from ..model import step as model
 from ..model.state import Step, array_record
 from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
@@ -99,10 +99,11 @@ class Control(NamedTuple):
 
 
 # The accepted states the BDF2 step and its predictor read: solutions ``y0`` (newest), ``y1``,
-# ``y2``, gaps ``h0``, ``h1``, their times ``t`` (3,) and how many are held, ``n`` (1,), at most
-# 3. A record, not a NamedTuple: a NamedTuple's seven arrays were seven reference counts at each
-# call of a function that takes it (docs/solver.md, "Reference counting").
-History = array_record("History", ("y0", "y1", "y2", "h0", "h1", "t", "n"),
+# ``y2``, gaps ``h0``, ``h1``, the cells' content ``c0``, ``c1`` (model/step.py:
+# ``accepted_content``), their times ``t`` (3,) and how many are held, ``n`` (1,), at most 3. A
+# record, not a NamedTuple: a NamedTuple's arrays were a reference count each at each call of a
+# function that takes it (docs/solver.md, "Reference counting").
+History = array_record("History", ("y0", "y1", "y2", "h0", "h1", "c0", "c1", "t", "n"),
                        "The accepted states the step reads (integration/stepper.py).", __name__)
 
 
@@ -168,6 +169,13 @@ def _bdf2(dt, t0, t1, n_hist):
     om = dt / (t0 - t1)
     return ((1.0 + om) ** 2 / (1.0 + 2.0 * om), -(om**2) / (1.0 + 2.0 * om),
             (1.0 + om) / (1.0 + 2.0 * om))
+
+
+@hook
+def _combine(a1, u1, a2, u2, out):
+    """``a1 u1 + a2 u2`` into ``out`` (the history term of a step, ``_bdf2``)."""
+    for i in range(out.size):
+        out[i] = a1 * u1[i] + a2 * u2[i]
 
 
 @jit
@@ -490,7 +498,7 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
             status = STEP_UNDERFLOW
             break
         a1, a2, b = _bdf2(dt, t0, t1, n_hist)
-        model.content_history(a1, a2, y0, y1, hist.h0, hist.h1, film, phys, work.c_hist)
+        _combine(a1, hist.c0, a2, hist.c1, work.c_hist)
         x_hist = a1 * y0[n] + a2 * y1[n]
         v_hist = a1 * y0[n + 1] + a2 * y1[n + 1]
         err_fac = _predict(dt, t0, t1, t2, n_hist, y0, y1, hist.y2, work.y_pred)
@@ -539,7 +547,9 @@ def _history(grid, start):
     model.start_gap(s, grid.influence, start.x, start.p, w, h)
     t = np.empty(3)
     t[:] = start.t
-    return History(y0, y0.copy(), y0.copy(), h, h.copy(), t, np.ones(1, dtype=np.int64))
+    c = np.full(n, np.nan)  # integrate writes the content once the film's state exists
+    return History(y0, y0.copy(), y0.copy(), h, h.copy(), c, c.copy(), t,
+                   np.ones(1, dtype=np.int64))
 
 
 @jit
@@ -555,6 +565,19 @@ def _shift(hist, dt, work):
     hist.t[0] = hist.t[0] + dt
     hist.n[0] = min(hist.n[0] + 1, 3)
     work.counters[STEPS] += 1
+
+
+@jit
+def _accept(grid, phys, hist, dt, film, work):
+    """The accepted step of size ``dt`` becomes the newest state (``_shift``): its face fluxes
+    into ``work.q``, the film's state after it (model/step.py: ``accept``) and its cells'
+    content in the history."""
+    _shift(hist, dt, work)
+    y0 = hist.y0
+    model.face_fluxes(grid, model.film_pressure(y0, film, phys), work.h, phys, work.q)
+    model.accept(grid, y0, work.w, hist.h0, hist.h1, work.q, dt, film, phys)
+    copy_into(hist.c1, hist.c0)
+    model.accepted_content(y0, hist.h0, film, phys, hist.c0)
 
 
 @jit
@@ -597,9 +620,10 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
     model.face_fluxes(grid, hist.y0[:n], h, phys, q)
     film = model.new_film(q)
     model.surface_gap(grid, phys, hist.y0, film, w, h)  # with a contact load, if any
-    model.begin(film, phys)
     copy_into(hist.h0, h)
     copy_into(hist.h1, h)
+    model.accepted_content(hist.y0, h, film, phys, hist.c0)
+    copy_into(hist.c1, hist.c0)
     strain, diss_rate = model.energies(grid, phys, hist.y0, w, h, q, film)
     dissipated = start.dissipated
     n_rows = 0
@@ -633,11 +657,8 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
             model.start_attempt(hist.y0, film, phys)
             model.surface_gap(grid, phys, hist.y0, film, w, h)
             continue
-        _shift(hist, dt, work)
-        y0 = hist.y0
-        model.face_fluxes(grid, model.film_pressure(y0, film, phys), h, phys, q)
-        model.accept(grid, y0, w, hist.h0, hist.h1, q, dt, film, phys)
-        strain_new, diss_new = model.energies(grid, phys, y0, w, h, q, film)
+        _accept(grid, phys, hist, dt, film, work)
+        strain_new, diss_new = model.energies(grid, phys, hist.y0, w, h, q, film)
         dissipated += 0.5 * (diss_rate + diss_new) * dt
         strain = strain_new
         diss_rate = diss_new

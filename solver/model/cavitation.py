@@ -26,7 +26,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import optimize
 
 __all__ = ["cavity_fraction", "separation_force", "departure", "speed_at", "restitution",
            "exact_for"]
@@ -59,6 +58,7 @@ def cavity_fraction(g):
         return math.inf
     # f ~ 1/(6 sigma^2) for large sigma brackets the root from above
     hi = max(2.0, 2.0 / math.sqrt(6.0 * g))
+    from scipy import optimize  # here: a run without this piece never imports it (0.2 s)
     return optimize.brentq(lambda z: _f(z) - g, 0.0, hi, xtol=1e-15, rtol=1e-14)
 
 

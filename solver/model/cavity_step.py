@@ -185,13 +185,13 @@ def record(row, grid, p, h, pmax, pmin, cavity, phys, floor_fraction):
 def accept(grid, h0, h1, q, dt, film, phys):
     """The floor's state after an accepted step (``h0`` its gap, ``h1`` the previous one's, ``q``
     its face fluxes): the work against the floor (JFO: ``Pi dV_void`` exactly, film.jfo_void;
-    Reynolds: film.void_work), the fractions' history, where new cavity cells opened, and the
+    Reynolds: film.void_work), the accepted fractions, where new cavity cells opened, and the
     accepted cavity."""
     if not on(phys):
         return
     cavity = film.cavity
     active, active0 = cavity.active, cavity.active0
-    theta, theta0, theta1 = cavity.theta, cavity.theta0, cavity.theta1
+    theta, theta0 = cavity.theta, cavity.theta0
     area = grid.area
     if held(phys):
         cavity.worked[0] += 2.0 * phys[PI] * (jfo_void(area, theta, h0, active)
@@ -199,7 +199,6 @@ def accept(grid, h0, h1, q, dt, film, phys):
             / (3.0 * phys[ST])
     else:
         cavity.worked[0] += void_work(area, h0, h1, q, cavity.q_prev, dt, active, phys)
-    copy_into(theta1, theta0)
     copy_into(theta0, theta)
     for i in range(active.size):
         if active[i] and not active0[i]:

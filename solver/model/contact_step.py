@@ -81,25 +81,6 @@ def hold_switched(y, film, phys):
             y[i] = -phys[PI] + pa[i]
 
 
-@jit
-def begin(film, phys):
-    """The film's history at the first state: a rough film's film pressure of the accepted
-    states (``accepted_pressures``)."""
-    if on(phys):
-        contact = film.contact
-        copy_into(contact.p_acc0, contact.p_film)
-        copy_into(contact.p_acc1, contact.p_film)
-
-
-@jit
-def accepted_pressures(y0, y1, film, phys):
-    """The film pressure of the last two accepted states: their slots for a smooth film, the
-    ``Contact``'s history for a rough one (its slots hold their loads)."""
-    if on(phys):
-        return film.contact.p_acc0, film.contact.p_acc1
-    return y0, y1
-
-
 @hook
 def relaxing_deflection(w, w_absmax, film, phys):
     """The largest ``|W|`` the terminal events wait to relax (``w_absmax``, ``max |W|``): a rough
@@ -211,13 +192,9 @@ def record(row, grid, h, film, phys):
 @hook
 def accept(grid, y0, w, h0, film, phys):
     """A rough film's state after an accepted step (``y0`` its solution, ``w`` and ``h0`` its
-    deflection and gap): the onset of the solids' unloading (``unload``) and the history of its
-    film pressure."""
+    deflection and gap): the onset of the solids' unloading (``unload``)."""
     if on(phys):
-        contact = film.contact
-        unload(grid, y0, w, h0, contact, phys)
-        copy_into(contact.p_acc1, contact.p_acc0)
-        copy_into(contact.p_acc0, contact.p_film)
+        unload(grid, y0, w, h0, film.contact, phys)
 
 
 @jit

@@ -58,7 +58,6 @@ from dataclasses import dataclass, field
 from types import SimpleNamespace
 
 import numpy as np
-from scipy import optimize
 
 from ..physics import TENSION_CHOICES
 from .rigid import I0
@@ -537,6 +536,8 @@ def _path_end(sol, t_events, thresholds, u_stop=None):
     """``(u_end, event)``: the terminal event (or ``"contact"`` at ``u_stop`` where the
     integration stopped there), or an earlier crossing hidden inside one step (its function's
     maximum lies above the threshold)."""
+    from scipy import optimize  # here: a run without this piece never imports it (0.2 s)
+
     def v_at(u):
         return float(sol.sol(u)[0])
 

@@ -29,7 +29,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import optimize
 
 from .._jit import jit
 from ..physics import SLIP
@@ -140,6 +139,7 @@ def rest_separation(x_from, v_from, stokes, c):
             if abs(step) < 1e-15 * max(1.0, abs(ln_x)):
                 break
         return ln_x
+    from scipy import optimize  # here: a run without this piece never imports it (0.2 s)
     return math.log(optimize.brentq(lambda x: float(potential(x, c)) - target, 0.0, FAR * c,
                                     xtol=1e-300, rtol=1e-15))
 
@@ -236,6 +236,7 @@ def approach(x_start, stokes, c, switch, x_stop=0.0, samples=60) -> RigidSlipPat
     """The rigid slip approach from ``(x_start, V = 1, T = 0)`` until ``W(0)/X`` reaches
     ``switch`` (the hand-over), ``x_stop``, or rest; sampled uniformly in ``ln X``, the end
     included (``t = inf`` at a rest)."""
+    from scipy import optimize  # here: a run without this piece never imports it (0.2 s)
     ln_rest = rest_separation(x_start, 1.0, stokes, c)
     ln_lo = max(ln_rest, math.log(x_stop) if x_stop > 0.0 else -math.inf)
 

@@ -68,15 +68,15 @@ def _getter(field: str):
 #   cells of the current iterate, of the Jacobian the loop solves with, of the last accepted
 #   state, of the Jacobian it factorised (which low-rank updates correct to ``active_lu``), and
 #   of the iterate before its set was last decided (model/cavity_step.py: ``decide``);
-# ``theta``, ``theta0``, ``theta1``: the liquid fraction of the iterate and of the last two
-#   accepted states (1 in full cells, and in every cell but a JFO cavity's); ``dtheta``: its
+# ``theta``, ``theta0``: the liquid fraction of the iterate and of the last accepted state (1 in
+#   full cells, and in every cell but a JFO cavity's); ``dtheta``: its
 #   Newton update; ``h_onset``: the gap where each cell cavitated (the void volume); ``q_prev``:
 #   the face fluxes of the last accepted state;
 # ``worked``, ``p_abs``, ``p_seen``, ``r_edge`` (1,): the work against the floor so far, the
 #   absolute part of the pressure error scale (``new_film``), the largest pressure seen, the
 #   accepted state's cavity radius.
 Cavity = array_record("Cavity", (
-    "active", "active_lu", "active0", "active_base", "active_was", "theta", "theta0", "theta1", "dtheta",
+    "active", "active_lu", "active0", "active_base", "active_was", "theta", "theta0", "dtheta",
     "h_onset", "q_prev", "worked", "p_abs", "p_seen", "r_edge"),
     "A floor's state (model/state.py).")
 
@@ -85,8 +85,7 @@ Cavity = array_record("Cavity", (
 #   law's slope dp_a/dH at the last gap computed;
 # ``t_set``, ``w_set``, ``h_set``: the load T_set, the permanent set (1 - c) K T_set and the gap
 #   H_set where the solids began to unload;
-# ``p_acc0``, ``p_acc1``: the film pressure of the last two accepted states; ``p_scale``: the
-#   scale step.film_change measures the film pressure by;
+# ``p_scale``: the scale step.film_change measures the film pressure by;
 # ``load_scale``, ``touched``, ``solid_lost`` (1,): the solids' unloading scale c (1 while they
 #   load, e_dry^2 once they unload), 1 once the asperities carried load on approach, the energy
 #   lost in the solids;
@@ -94,7 +93,7 @@ Cavity = array_record("Cavity", (
 # slot is not their load (contact_step._held); ``load`` (N) the elastic load of every node and
 # ``touching`` (N, int) the held nodes that touch (contact.contact_gap).
 Contact = array_record("Contact", (
-    "pa", "p_film", "slope", "t_set", "w_set", "h_set", "p_acc0", "p_acc1", "p_scale",
+    "pa", "p_film", "slope", "t_set", "w_set", "h_set", "p_scale",
     "load_scale", "touched", "solid_lost", "held", "load", "touching"),
     "Rough surfaces' state (model/state.py).")
 
@@ -151,10 +150,10 @@ def new_film(q):
     # a film that never cavitates) keeps its instantaneous scale.
     cavity = Cavity(np.zeros(cells_n, dtype=np.bool_), np.zeros(cells_n, dtype=np.bool_),
                     np.zeros(cells_n, dtype=np.bool_), np.zeros(cells_n, dtype=np.bool_),
-                    np.zeros(cells_n, dtype=np.bool_), theta, theta.copy(), theta.copy(), np.zeros(cells_n), np.zeros(cells_n),
+                    np.zeros(cells_n, dtype=np.bool_), theta, theta.copy(), np.zeros(cells_n), np.zeros(cells_n),
                     q.copy(), _one(0.0), _one(1e-12), _one(0.0), _one(0.0))
     contact = Contact(np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
-                      np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), _one(1.0), _one(0.0),
+                      np.zeros(n), np.zeros(n), _one(1.0), _one(0.0),
                       _one(0.0), np.zeros(n, dtype=np.bool_), np.zeros(n),
                       np.zeros(n, dtype=np.int64))
     return Film(cavity, contact)

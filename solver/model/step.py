@@ -8,13 +8,13 @@ touch (model/contact.py); a JFO cavity's slot its liquid fraction. Everything a 
 needs the loop to do goes through the functions here, which read the physics array ``phys``
 (solver/physics.py) and decide:
 
-- ``new_film`` (model/state.py), ``begin``: the film's own state beyond ``y``, named records
-  (``Film``: a ``Cavity`` and a ``Contact``), which the loop carries and hands back but never
-  reads, and its history at the first state;
+- ``new_film`` (model/state.py): the film's own state beyond ``y``, named records (``Film``: a
+  ``Cavity`` and a ``Contact``), which the loop carries and hands back but never reads;
 - ``surface_gap``, ``film_pressure``, ``total_force``, ``energies``: the gap and deflection of
   a state, its film pressure (what the loop records and its fluxes carry), the force on the
   spheres, the strain energy and dissipation rate;
-- ``content_history``: the BDF combination of the cells' liquid content at the accepted states;
+- ``accepted_content``: the cells' liquid content of an accepted state, which the loop keeps
+  for its steps' history (the BDF combination is the loop's: the film knows no time scheme);
 - ``has_active_set``: whether the film has a complementarity constraint decided cell by cell
   (an active set); then a Newton iterate converges only with a settled set, a change refreshes
   the factorisation (``settled``), and the set is decided at the iterates ``decide`` marks;
@@ -48,7 +48,7 @@ from . import cavity_step, contact_step
 # wrapper here would cost a call and a reference count on the loop's hottest path)
 from .cavity_step import on as has_active_set  # a floor: an active set
 from .cavity_step import split_update, start_attempt, update_norm  # noqa: F401
-from .contact_step import (begin, film_change, film_pressure, relaxing_deflection,  # noqa: F401
+from .contact_step import (film_change, film_pressure, relaxing_deflection,  # noqa: F401
                            surface_gap, total_force)
 from .contact import HOLD, REST
 # face_fluxes: the film's face fluxes of a state, which the residual reads, and the loop records
@@ -87,21 +87,20 @@ def pressure_scale(film):
 
 
 @hook
-def content_history(a1, a2, y0, y1, h0, h1, film, phys, out):
-    """``a1 C(state 0) + a2 C(state 1)`` per cell (``C = rho_bar theta H``, ``film.cell_content``),
-    and the same combination of the boundary node's gap, into ``out`` (the film pressure of the
-    two states: contact_step.accepted_pressures)."""
+def accepted_content(y, h, film, phys, out):
+    """The liquid content of the accepted state ``y`` (gap ``h``) per cell, ``C = rho_bar theta
+    H`` (``film.cell_content``, with the accepted fractions and film pressure), and the boundary
+    node's gap, into ``out``: the loop keeps it for the history of its steps (state.Step)."""
     n = out.size
-    theta0, theta1 = film.cavity.theta0, film.cavity.theta1
+    theta0 = film.cavity.theta0
     if phys[DENSITY] == CONSTANT:  # C = theta H (rho = 1)
         for i in range(n - 1):
-            out[i] = a1 * (theta0[i] * h0[i]) + a2 * (theta1[i] * h1[i])
+            out[i] = theta0[i] * h[i]
     else:
-        p0, p1 = contact_step.accepted_pressures(y0, y1, film, phys)
+        p = film_pressure(y, film, phys)
         for i in range(n - 1):
-            out[i] = a1 * cell_content(theta0[i], h0[i], p0[i], phys)[0] \
-                + a2 * cell_content(theta1[i], h1[i], p1[i], phys)[0]
-    out[n - 1] = a1 * h0[n - 1] + a2 * h1[n - 1]
+            out[i] = cell_content(theta0[i], h[i], p[i], phys)[0]
+    out[n - 1] = h[n - 1]
 
 
 @hook
@@ -186,7 +185,8 @@ def step_error(y, y_pred, err_fac, h, film, phys, perr, dh, scale):
     - JFO: where a cavity closes the pressure jumps (the void's closing rate is finite up to the
       instant it vanishes), and the gap with it through ``W = K P``: no step size makes the
       extrapolation of the gap across it accurate. X and V stay continuous; they control this
-      step, and the history restarts after it. (Both: cavity_step.error_in_time.)
+      step (no history restart: docs/solver.md, "Cavitation"). (Both:
+      cavity_step.error_in_time.)
     - A pressure-dependent liquid: the pressure error in the variable the film sees, the
       Kirchhoff pressure ``Int rho/mu dP``, smooth where a glassy lens makes ``P`` itself spike
       (that spike moves the gap, X and V only through W and the force, both in the norm on their
