@@ -57,11 +57,15 @@ def add_numerics_flags(p) -> None:
                    help=f"time-step error tolerance (default: {preset_values('rtol')})")
     p.add_argument("--max-steps", type=int, default=None,
                    help=f"step budget of the coupled solve (default: {preset_values('max_steps')})")
+    p.add_argument("--max-order", type=int, default=None,
+                   help="highest order of the BDF time stepping, 1-5; above 2 the solver "
+                        "chooses each step's order where the film is smooth in time "
+                        f"(docs/solver.md; default: {preset_values('max_order')})")
 
 
 def numerics_overrides(args) -> dict:
     return {"switch": args.switch, "release": args.release, "n_inner": args.n_inner,
-            "rtol": args.rtol, "max_steps": args.max_steps}
+            "rtol": args.rtol, "max_steps": args.max_steps, "max_order": args.max_order}
 
 
 # Groups that act only when another group switches their piece of physics on: (the groups,

@@ -325,7 +325,8 @@ def _integrate(physics, numerics, head, shortcuts):
         stepper.Start(float(head.t), float(x_switch), float(v_switch), p_init,
                       float(1.0 - v_switch**2)),
         stepper.Control(float(numerics.rtol), float(1e-3 * time_scale),
-                        float(1e-12 * time_scale), int(numerics.max_steps)),
+                        float(1e-12 * time_scale), int(numerics.max_steps),
+                        int(numerics.max_order)),
         shortcuts.end_event, stop_params, numerics.save_profiles)
 
 

@@ -31,6 +31,9 @@ class Numerics:
     release: float  # max|W|/X below which the departing spheres are rigid again
     max_steps: int  # step budget: a scene that needs more fails with status "max_steps"
     save_profiles: bool = True  # keep P(R), W(R) at every step (sweeps switch this off)
+    # highest order of the BDF time stepping, 1-5 (integration/stepper.py); the presets' 2 is
+    # BDF2, above it the loop chooses each step's order (a film with a cavity stays at 2)
+    max_order: int = 2
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -61,6 +64,7 @@ _BOUNDS = {
     "switch": (1e-12, 1.0),
     "release": (1e-13, 1.0),
     "max_steps": (10, 10**8),
+    "max_order": (0, 5),
 }
 
 
@@ -95,7 +99,7 @@ def resolve(accuracy: str = "standard", **overrides) -> Numerics:
             raise ValueError(f"unknown numerical setting {name!r}; valid settings: {valid}")
         lo, hi = _BOUNDS[name]
         v = _check_number(name, value, lo, hi, open_lo=name not in ("stretch",))
-        if name in ("n_inner", "max_steps"):
+        if name in ("n_inner", "max_steps", "max_order"):
             if v != int(v):
                 raise ValueError(f"{name} must be a whole number, got {value!r}")
             v = int(v)

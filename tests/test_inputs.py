@@ -37,6 +37,11 @@ def test_bad_numerics():
         collide(5, 0.01, release=0.1)
     with pytest.raises(ValueError, match="n_inner must be a whole number"):
         collide(5, 0.01, n_inner=32.5)
+    for order, needle in ((0, r"max_order = 0 is outside its valid range \(0, 5\]"),
+                          (6, r"max_order = 6 is outside its valid range"),
+                          (2.5, "max_order must be a whole number")):
+        with pytest.raises(ValueError, match=needle):
+            collide(5, 0.01, max_order=order)
 
 
 def _ehd(*args):

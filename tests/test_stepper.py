@@ -26,32 +26,85 @@ def test_bdf2_is_exact_for_quadratics(dt, dt_prev):
     assert stepper._bdf2(dt, t0, t_prev, 1) == (1.0, 0.0, 1.0)  # implicit Euler to start
 
 
+# accepted times, newest first, unevenly spaced (the loop's history: stepper.History)
+TIMES = np.array([0.9, 0.72, 0.5, 0.41, 0.2, 0.0])
+
+
+def _rows(f, t):
+    return np.array([f(ti) for ti in t])
+
+
 def test_predictor_extrapolates_polynomials_exactly():
     """Through three states the predictor is the quadratic, through two the line; its error
     factor is ``dt / (t_new - t_oldest)``."""
-    t2, t1, t0, dt = 0.0, 0.2, 0.5, 0.15
+    t, dt = TIMES[3:], 0.15  # 0.41, 0.2, 0.0
     quad = lambda t: np.array([1.0 + 2.0 * t - 3.0 * t * t, -t * t])  # noqa: E731
     out = np.empty(2)
-    fac = stepper._predict(dt, t0, t1, t2, 3, quad(t0), quad(t1), quad(t2), out)
-    np.testing.assert_allclose(out, quad(t0 + dt), rtol=0, atol=1e-13)  # round-off of O(1) terms
-    assert fac == pytest.approx(dt / (t0 + dt - t2), rel=1e-15)
+    fac = stepper._predict(dt, t, 2, _rows(quad, t), out)
+    np.testing.assert_allclose(out, quad(t[0] + dt), rtol=0, atol=1e-13)  # round-off, O(1) terms
+    assert fac == pytest.approx(dt / (t[0] + dt - t[2]), rel=1e-15)
     line = lambda t: np.array([2.0 - t, 3.0 * t])  # noqa: E731
-    fac = stepper._predict(dt, t0, t1, t2, 2, line(t0), line(t1), line(t2), out)
-    np.testing.assert_allclose(out, line(t0 + dt), rtol=0, atol=1e-13)
-    assert fac == pytest.approx(dt / (t0 + dt - t1), rel=1e-15)
-    assert stepper._predict(dt, t0, t1, t2, 1, line(t0), line(t1), line(t2), out) == 0.0
-    np.testing.assert_array_equal(out, line(t0))
+    fac = stepper._predict(dt, t, 1, _rows(line, t), out)
+    np.testing.assert_allclose(out, line(t[0] + dt), rtol=0, atol=1e-13)
+    assert fac == pytest.approx(dt / (t[0] + dt - t[1]), rel=1e-15)
+    assert stepper._predict(dt, t, 0, _rows(line, t), out) == 0.0
+    np.testing.assert_array_equal(out, line(t[0]))
+
+
+@pytest.mark.parametrize("degree", [3, 4, 5])
+def test_higher_degree_predictor_is_exact_for_its_polynomials(degree):
+    """Through ``d + 1`` states the predictor of degree ``d`` reproduces every polynomial of that
+    degree at the new time (and not one of degree ``d + 1``: the points it uses are the newest
+    ``d + 1``); its error factor is ``dt / (t_new - t_d)``."""
+    dt = 0.11
+    poly = lambda t: np.array([(t - 0.3) ** degree, 1.0 - t ** (degree - 1)])  # noqa: E731
+    out = np.empty(2)
+    fac = stepper._predict(dt, TIMES, degree, _rows(poly, TIMES), out)
+    # 1e-12: Lagrange weights of size up to ~30 times O(1) values, a few roundings each
+    np.testing.assert_allclose(out, poly(TIMES[0] + dt), rtol=0, atol=1e-12)
+    assert fac == pytest.approx(dt / (TIMES[0] + dt - TIMES[degree]), rel=1e-15)
+    higher = lambda t: np.array([t ** (degree + 1), 0.0])  # noqa: E731
+    stepper._predict(dt, TIMES, degree, _rows(higher, TIMES), out)
+    assert abs(out[0] - higher(TIMES[0] + dt)[0]) > 1e-6
+
+
+@pytest.mark.parametrize("order", [1, 2, 3, 4, 5])
+def test_bdf_of_order_k_is_exact_for_polynomials_of_degree_k(order):
+    """The variable-step BDF of order ``k`` (``_coefficients``) holds exactly for every polynomial
+    of degree ``k`` on uneven steps, and its coefficients sum to 1 (a constant is kept). Orders 1
+    and 2 are ``_bdf2``'s closed form; the general formula agrees with it (checked at 2 by
+    computing the Lagrange form here)."""
+    dt = 0.13
+    t_new = TIMES[0] + dt
+    a = np.zeros(stepper.SLOTS)
+    b = stepper._coefficients(dt, TIMES, order, a)
+    assert a[:order].sum() == pytest.approx(1.0, abs=1e-12)
+    for shift in (0.0, 0.37):
+        f = lambda t: (t - shift) ** order  # noqa: E731
+        df = order * (t_new - shift) ** (order - 1)
+        history = sum(a[j] * f(TIMES[j]) for j in range(order))
+        # 1e-11: coefficients up to ~20 times O(1) values, a few roundings each
+        assert f(t_new) - history == pytest.approx(b * dt * df, abs=1e-11)
+    if order == 2:  # the closed form is the Lagrange form
+        d_new = 1 / (t_new - TIMES[0]) + 1 / (t_new - TIMES[1])
+        assert b == pytest.approx(1 / (d_new * dt), rel=1e-14)
 
 
 def test_step_factor_bounds_growth_and_keeps_the_lu():
     """Growth at most 2x (BDF2 zero-stability needs < 2.41x), shrink at most 5x, and a proposed
-    growth under 1.2x keeps the step (and so the factorised matrix)."""
-    assert stepper._step_factor(0.0) == 2.0
-    assert stepper._step_factor(1e-9) == 2.0
-    assert stepper._step_factor(1e3) == 0.2
-    assert stepper._step_factor(0.55) == 1.0  # 0.9 * 0.55^(-1/3) = 1.096: kept
+    growth under 1.2x keeps the step (and so the factorised matrix); above order 2 the growth
+    is held to ``GROWTH`` and the step follows the order's error ``~ dt^(k+1)``."""
+    assert stepper._step_factor(0.0, 2) == 2.0
+    assert stepper._step_factor(1e-9, 2) == 2.0
+    assert stepper._step_factor(1e3, 2) == 0.2
+    assert stepper._step_factor(0.55, 2) == 1.0  # 0.9 * 0.55^(-1/3) = 1.096: kept
     err = 0.2
-    assert stepper._step_factor(err) == pytest.approx(0.9 * err ** (-1.0 / 3.0), rel=1e-15)
+    assert stepper._step_factor(err, 2) == pytest.approx(0.9 * err ** (-1.0 / 3.0), rel=1e-15)
+    assert stepper._step_factor(err, 1) == stepper._step_factor(err, 2)  # BDF1 starts BDF2
+    for k in (3, 4, 5):
+        assert stepper._step_factor(1e-9, k) == stepper.GROWTH[k] < 2.0
+        assert stepper._step_factor(0.9, k) == pytest.approx(0.9 * 0.9 ** (-1.0 / (k + 1)),
+                                                             rel=1e-15)
 
 
 def test_norm_counts_small_pressures_as_absolute():

@@ -1,5 +1,6 @@
-"""The coupled time loop, entirely compiled (``nogil``): variable-step BDF2 on the film model's
-equations and the particle motion, Newton-coupled, with error-controlled steps.
+"""The coupled time loop, entirely compiled (``nogil``): variable-step BDF on the film model's
+equations and the particle motion, Newton-coupled, with error-controlled steps; of order 2 (the
+presets), or up to ``Control.max_order`` (at most ``MAX_ORDER``), the order chosen step by step.
 
 Dimensionless, scale ``x1`` (docs/model.md, "Scales"); ``T`` is time in units of ``x1 / v0``. The
 unknowns are ``y = (P_0..P_{N-1}, X, V)``. Everything that depends on the physics comes through
@@ -9,9 +10,11 @@ module names no piece of physics.
 
 The loop in parts, each a function of its own (in the spirit of SciPy's BDF, ``_step_impl``):
 
-- ``_bdf2``: the coefficients of ``y_{n+1} - a1 y_n - a2 y_{n-1} = b dt f(y_{n+1})``
-  (variable-step BDF2; the first step is implicit Euler);
+- ``_coefficients``: those of ``y_{n+1} - a1 y_n - ... - ak y_{n+1-k} = b dt f(y_{n+1})``
+  (variable-step BDF of order ``k``, the variable-step BDF2 in closed form, ``_bdf2``; the first
+  step is implicit Euler);
 - ``_predict``: the polynomial through the history at the new time, and the error factor;
+- ``_next_step``: the next step's size and, above order 2, its order (``_next_order``);
 - ``_newton``: a chord-Newton iteration whose LU is reused while ``b dt`` stays within 30 % of
   the factorised value; a stalled iteration first refreshes the Jacobian, then halves the step.
   With an active set, a converged iterate whose set would change goes on with the new set and
@@ -62,6 +65,13 @@ GAP_SCALE = 1e-2  # x1 units: below this the gap error counts as absolute
 PRESSURE_SCALE = 0.05  # fraction of max|P| below which the pressure error counts as absolute
 NEWTON_KAPPA = 0.05  # Newton stops when its predicted remaining error is this fraction of tol
 MAX_NEWTON = 7
+MAX_ORDER = 5  # the highest BDF order the loop takes (Control.max_order chooses up to it)
+SLOTS = MAX_ORDER + 1  # accepted states held: the order-5 predictor's points
+# The largest growth of the step per accepted step, by order: variable-step BDF2 stays
+# zero-stable below 1 + sqrt(2); the higher orders are zero-stable on grids whose steps change
+# smoothly (ratios 1 + O(1/N): BIT Numer. Math. 58 (2018), doi:10.1007/s10543-018-0716-y), so
+# their growth is held smaller (heuristic bounds, not proven ones)
+GROWTH = (2.0, 2.0, 2.0, 1.5, 1.5, 1.5)
 MAX_SET_CHANGES = 4  # changes of the active set within one step attempt before it halves
 SAFETY = 0.9
 
@@ -90,20 +100,24 @@ class Start(NamedTuple):
 
 
 class Control(NamedTuple):
-    """The step control: relative tolerance, first and smallest step, most accepted steps."""
+    """The step control: relative tolerance, first and smallest step, most accepted steps, the
+    highest BDF order (1 to ``MAX_ORDER``; 2: the presets' BDF2)."""
 
     rtol: float
     dt_init: float
     dt_min: float
     max_steps: int
+    max_order: int
 
 
-# The accepted states the BDF2 step and its predictor read: solutions ``y0`` (newest), ``y1``,
-# ``y2``, gaps ``h0``, ``h1``, the cells' content ``c0``, ``c1`` (model/step.py:
-# ``accepted_content``), their times ``t`` (3,) and how many are held, ``n`` (1,), at most 3. A
-# record, not a NamedTuple: a NamedTuple's arrays were a reference count each at each call of a
-# function that takes it (docs/solver.md, "Reference counting").
-History = array_record("History", ("y0", "y1", "y2", "h0", "h1", "c0", "c1", "t", "n"),
+# The accepted states the BDF step and its predictor read, newest first (row 0): solutions ``y``
+# (SLOTS, m), gaps ``h`` and the cells' content ``c`` (SLOTS, N) (model/step.py:
+# ``accepted_content``), their times ``t`` (SLOTS,) and how many are held, ``n`` (1,), at most
+# SLOTS; ``order`` (2,): the order the next step takes (as far as the history reaches) and the
+# steps accepted since it was chosen. A record, not a NamedTuple: a NamedTuple's arrays were a
+# reference count each at each call of a function that takes it (docs/solver.md, "Reference
+# counting").
+History = array_record("History", ("y", "h", "c", "t", "n", "order"),
                        "The accepted states the step reads (integration/stepper.py).", __name__)
 
 
@@ -113,9 +127,10 @@ History = array_record("History", ("y0", "y1", "y2", "h0", "h1", "c0", "c1", "t"
 # (N-1,): its face fluxes; ``c_hist`` (N,): the content's history (state.Step); ``dh``, ``kdp``,
 # ``scale`` (N,): the gap's change, the film pressure's change (a rough film's) or K times an
 # error, the pressure's error scale (model/step.py: step_error); ``dres_dh`` (N, 3): the
-# Jacobian's gap partials (film.jacobian); ``counters``: ``COUNTERS``.
+# Jacobian's gap partials (film.jacobian); ``a`` (SLOTS,): the step's BDF coefficients
+# (``_coefficients``); ``counters``: ``COUNTERS``.
 Work = array_record("Work", ("y", "y_pred", "res", "w", "h", "q", "c_hist", "dh", "kdp",
-                               "scale", "dres_dh", "counters"),
+                               "scale", "dres_dh", "a", "counters"),
                       "The time loop's work arrays (integration/stepper.py).", __name__)
 
 # The Newton matrix: ``jac`` (factorised in place) and its pivots ``piv``, ``base`` its copy
@@ -171,33 +186,86 @@ def _bdf2(dt, t0, t1, n_hist):
             (1.0 + om) / (1.0 + 2.0 * om))
 
 
+@jit
+def _coefficients(dt, t, k, a):
+    """The BDF step of order ``k`` and size ``dt`` after the accepted times ``t`` (newest first):
+    ``a[:k]`` and the returned ``b`` of ``y_new - sum_j a_j y_j = b dt f(y_new)``. Orders 1 and 2
+    in the closed form of ``_bdf2``; higher orders from the Lagrange basis ``l_j`` through
+    ``t_new`` and the ``k`` newest times: ``b dt = 1 / l_new'(t_new)``, ``a_j = -l_j'(t_new) /
+    l_new'(t_new)``."""
+    if k <= 2:
+        a1, a2, b = _bdf2(dt, t[0], t[1], k)
+        a[0] = a1
+        a[1] = a2
+        return b
+    t_new = t[0] + dt
+    d_new = 0.0  # l_new'(t_new)
+    for j in range(k):
+        d_new += 1.0 / (t_new - t[j])
+    for j in range(k):
+        num = 1.0
+        den = t[j] - t_new
+        for i in range(k):
+            if i != j:
+                num *= t_new - t[i]
+                den *= t[j] - t[i]
+        a[j] = -num / den / d_new
+    return 1.0 / (d_new * dt)
+
+
 @hook
-def _combine(a1, u1, a2, u2, out):
-    """``a1 u1 + a2 u2`` into ``out`` (the history term of a step, ``_bdf2``)."""
+def _history_term(a, k, u, out):
+    """``sum_j a_j u_j`` over the ``max(k, 2)`` newest rows of ``u`` into ``out`` (a step's
+    history of the cells' content, ``_coefficients``)."""
     for i in range(out.size):
-        out[i] = a1 * u1[i] + a2 * u2[i]
+        out[i] = a[0] * u[0, i] + a[1] * u[1, i]
+        for j in range(2, k):
+            out[i] += a[j] * u[j, i]
 
 
 @jit
-def _predict(dt, t0, t1, t2, n_hist, y0, y1, y2, y_pred):
-    """The polynomial through the available history at ``t0 + dt`` into ``y_pred``; returns the
-    error factor ``dt / (t_new - t_oldest)`` (0 when there is no history to compare with)."""
-    m = y0.size
+def _history_value(a, k, y, col):
+    """``sum_j a_j y_j`` of the column ``col`` of ``y`` (``_history_term``; X and V)."""
+    out = a[0] * y[0, col] + a[1] * y[1, col]
+    for j in range(2, k):
+        out += a[j] * y[j, col]
+    return out
+
+
+@jit
+def _predict(dt, t, d, y, y_pred):
+    """The polynomial of degree ``d`` through the ``d + 1`` newest states of ``y`` (times ``t``)
+    at ``t[0] + dt`` into ``y_pred``; returns the error factor ``dt / (t_new - t_d)`` (0 for
+    ``d = 0``: no history to compare with)."""
+    m = y_pred.size
+    t0 = t[0]
     t_new = t0 + dt
-    if n_hist >= 3:
+    if d == 0:
+        copy_into(y_pred, y[0])
+        return 0.0
+    if d == 2:
+        t1, t2 = t[1], t[2]
         l0 = (t_new - t1) * (t_new - t2) / ((t0 - t1) * (t0 - t2))
         l1 = (t_new - t0) * (t_new - t2) / ((t1 - t0) * (t1 - t2))
         l2 = (t_new - t0) * (t_new - t1) / ((t2 - t0) * (t2 - t1))
         for k in range(m):
-            y_pred[k] = l0 * y0[k] + l1 * y1[k] + l2 * y2[k]
+            y_pred[k] = l0 * y[0, k] + l1 * y[1, k] + l2 * y[2, k]
         return dt / (t_new - t2)
-    if n_hist == 2:
-        l0 = (t_new - t1) / (t0 - t1)
+    if d == 1:
+        l0 = (t_new - t[1]) / (t0 - t[1])
         for k in range(m):
-            y_pred[k] = l0 * y0[k] + (1.0 - l0) * y1[k]
-        return dt / (t_new - t1)
-    copy_into(y_pred, y0)
-    return 0.0
+            y_pred[k] = l0 * y[0, k] + (1.0 - l0) * y[1, k]
+        return dt / (t_new - t[1])
+    for k in range(m):
+        y_pred[k] = 0.0
+    for j in range(d + 1):
+        lj = 1.0
+        for i in range(d + 1):
+            if i != j:
+                lj *= (t_new - t[i]) / (t[j] - t[i])
+        for k in range(m):
+            y_pred[k] += lj * y[j, k]
+    return dt / (t_new - t[d])
 
 
 @jit
@@ -217,7 +285,7 @@ def _work(n):
     m = n + 2
     return Work(np.empty(m), np.empty(m), np.empty(m), np.empty(n), np.empty(n),
                 np.empty(n - 1), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
-                np.empty((n, 3)), np.zeros(len(COUNTERS), dtype=np.int64))
+                np.empty((n, 3)), np.zeros(SLOTS), np.zeros(len(COUNTERS), dtype=np.int64))
 
 
 @jit
@@ -462,20 +530,65 @@ def _record(row, t, grid, phys, y, w, h, strain, dissipated, film):
 
 
 @jit
-def _step_factor(err):
-    """The next step's size over this one's after an accepted step of error ``err``."""
-    factor = min(2.0, max(0.2, SAFETY * err ** (-1.0 / 3.0))) if err > 0.0 else 2.0
+def _step_factor(err, order):
+    """The next step's size over this one's after an accepted step of error ``err`` at
+    ``order`` (its error ``~ dt^(order+1)``; orders 1 and 2 as BDF2's), at most ``GROWTH``."""
+    growth = GROWTH[order]
+    factor = min(growth, max(0.2, SAFETY * err ** (-1.0 / (max(order, 2) + 1.0)))) \
+        if err > 0.0 else growth
     if 1.0 <= factor < 1.2:
         factor = 1.0
     return factor
 
 
 @jit
+def _next_order(grid, phys, control, hist, dt, err, film, work):
+    """After an accepted step (``work.y``) of order ``k = hist.order[0]`` with error ``err``,
+    once ``k + 1`` steps were taken at it: the local errors of orders ``k - 1`` and ``k + 1``
+    (``_local_error`` with their predictors; ``k + 1`` only where the history holds ``k + 2``
+    states and up to ``control.max_order``), and the order among the three whose error allows
+    the largest step. Returns that order and its error. A film whose solution is not smooth in
+    time (model/step.py, ``smooth_in_time``) stays at order 2, the presets' BDF2."""
+    k = hist.order[0]
+    if hist.order[1] < k + 1 or not model.smooth_in_time(phys):
+        return k, err
+    k_max = control.max_order
+    best, best_err = k, err
+    rate = err ** (-1.0 / (k + 1.0)) if err > 0.0 else np.inf
+    for q in (k - 1, k + 1):
+        if q < 1 or q > k_max or hist.n[0] < q + 1:
+            continue
+        fac = _predict(dt, hist.t, q, hist.y, work.y_pred)
+        e = _local_error(grid, phys, fac, control.rtol, film, work)
+        r = e ** (-1.0 / (q + 1.0)) if e > 0.0 else np.inf
+        if r > rate:
+            best, best_err, rate = q, e, r
+    return best, best_err
+
+
+@jit
+def _next_step(grid, phys, control, hist, dt, err, film, work):
+    """After an accepted step of error ``err``: the next step's order (``_next_order``, above
+    order 2) into ``hist.order``, and its size over this one's (``_step_factor``)."""
+    k = hist.order[0]
+    if control.max_order > 2:
+        k_next, err = _next_order(grid, phys, control, hist, dt, err, film, work)
+        if k_next != k:
+            hist.order[0] = k_next
+            hist.order[1] = -1
+            k = k_next
+    hist.order[1] += 1
+    return _step_factor(err, k)
+
+
+@jit
 def _attempt(grid, phys, control, hist, dt, film, fac, work):
-    """Attempt steps from the accepted state ``hist.y0`` at ``hist.t[0]`` until one is accepted
-    (its solution in ``work.y``, gap ``work.h``) or the loop must stop: a diverged Newton halves
-    the step once its Jacobian was fresh, a non-positive gap halves it, an error above the
-    tolerance shrinks it.
+    """Attempt steps from the newest accepted state at ``hist.t[0]`` until one is accepted (its
+    solution in ``work.y``, gap ``work.h``) or the loop must stop: a diverged Newton halves the
+    step once its Jacobian was fresh, a non-positive gap halves it, an error above the tolerance
+    shrinks it. The order is ``hist.order[0]``, as far as the history reaches; a halved step
+    above order 2 is tried again one order lower (not a step rejected for its error: lowering the
+    order there too took 65-113 rejections per classic collision at order 5, against 13-20).
 
     Returns
     -------
@@ -483,10 +596,10 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
         ``RUNNING`` or the failure; whether a step was accepted, its size and error.
     """
     counters = work.counters
-    y0, y1 = hist.y0, hist.y1
-    t0, t1, t2 = hist.t[0], hist.t[1], hist.t[2]
+    y, t = hist.y, hist.t
     n_hist = hist.n[0]
     n = work.h.size
+    a = work.a
     status = RUNNING
     err = 0.0
     accepted = False
@@ -497,11 +610,12 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
         if dt < control.dt_min:
             status = STEP_UNDERFLOW
             break
-        a1, a2, b = _bdf2(dt, t0, t1, n_hist)
-        _combine(a1, hist.c0, a2, hist.c1, work.c_hist)
-        x_hist = a1 * y0[n] + a2 * y1[n]
-        v_hist = a1 * y0[n + 1] + a2 * y1[n + 1]
-        err_fac = _predict(dt, t0, t1, t2, n_hist, y0, y1, hist.y2, work.y_pred)
+        k = min(hist.order[0], n_hist)
+        b = _coefficients(dt, t, k, a)
+        _history_term(a, k, hist.c, work.c_hist)
+        x_hist = _history_value(a, k, y, n)
+        v_hist = _history_value(a, k, y, n + 1)
+        err_fac = _predict(dt, t, min(n_hist - 1, k), y, work.y_pred)
         copy_into(work.y, work.y_pred)
         model.start_attempt(work.y, film, phys)
         step = Step(b * dt, work.c_hist, x_hist, v_hist)
@@ -513,18 +627,20 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
             if fresh:
                 dt *= 0.5
                 counters[REJECTED] += 1
+                _lower_order(hist)
             fac.valid[0] = False
             continue
         if not _positive(work.h):
             dt *= 0.5
             counters[REJECTED] += 1
+            _lower_order(hist)
             continue
         err = _local_error(grid, phys, err_fac, control.rtol, film, work)
         if not np.isfinite(err):
             status = NONFINITE
             break
         if err > 1.0:
-            dt *= max(0.2, SAFETY * err ** (-1.0 / 3.0))
+            dt *= max(0.2, SAFETY * err ** (-1.0 / (max(k, 2) + 1.0)))
             counters[REJECTED] += 1
             continue
         accepted = True
@@ -532,38 +648,56 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
 
 
 @jit
-def _history(grid, start):
-    """The history at the start: every slot the initial state (never read uninitialised: 0 *
-    NaN garbage is NaN)."""
+def _lower_order(hist):
+    """After a rejected step above order 2: the next attempt one order lower."""
+    if hist.order[0] > 2:
+        hist.order[0] -= 1
+        hist.order[1] = 0
+
+
+@jit
+def _history(grid, start, max_order):
+    """The history at the start: every slot the initial state and its rigid gap (never read
+    uninitialised: 0 * NaN garbage is NaN), the content written by ``integrate`` once the film's
+    state exists; the order 2, or ``max_order`` if lower."""
     s = grid.s
     n = s.size
-    m = n + 2
-    y0 = np.empty(m)
-    copy_into(y0[:n], start.p)
-    y0[n] = start.x
-    y0[n + 1] = start.v
+    y = np.empty((SLOTS, n + 2))
+    copy_into(y[0, :n], start.p)
+    y[0, n] = start.x
+    y[0, n + 1] = start.v
+    _fill(y, y[0])
     w = np.empty(n)
-    h = np.empty(n)
-    model.start_gap(s, grid.influence, start.x, start.p, w, h)
-    t = np.empty(3)
-    t[:] = start.t
-    c = np.full(n, np.nan)  # integrate writes the content once the film's state exists
-    return History(y0, y0.copy(), y0.copy(), h, h.copy(), c, c.copy(), t,
-                   np.ones(1, dtype=np.int64))
+    h = np.empty((SLOTS, n))
+    model.start_gap(s, grid.influence, start.x, start.p, w, h[0])
+    _fill(h, h[0])
+    order = np.zeros(2, dtype=np.int64)
+    order[0] = min(max_order, 2)
+    return History(y, h, np.full((SLOTS, n), np.nan), np.full(SLOTS, start.t),
+                   np.ones(1, dtype=np.int64), order)
+
+
+@jit
+def _fill(rows, row):
+    """Every row of ``rows`` a copy of ``row`` (the history at the start)."""
+    for j in range(rows.shape[0]):
+        copy_into(rows[j], row)
 
 
 @jit
 def _shift(hist, dt, work):
-    """The accepted step of size ``dt`` (``work.y``, ``work.h``) becomes the newest state."""
-    copy_into(hist.y2, hist.y1)
-    copy_into(hist.y1, hist.y0)
-    copy_into(hist.y0, work.y)
-    copy_into(hist.h1, hist.h0)
-    copy_into(hist.h0, work.h)
-    hist.t[2] = hist.t[1]
-    hist.t[1] = hist.t[0]
-    hist.t[0] = hist.t[0] + dt
-    hist.n[0] = min(hist.n[0] + 1, 3)
+    """The accepted step of size ``dt`` (``work.y``, ``work.h``) becomes the newest state; each
+    older one moves down a row (the content's newest row is written by ``_accept``)."""
+    y, h, c, t = hist.y, hist.h, hist.c, hist.t
+    for j in range(SLOTS - 1, 0, -1):
+        copy_into(y[j], y[j - 1])
+        copy_into(h[j], h[j - 1])
+        copy_into(c[j], c[j - 1])
+        t[j] = t[j - 1]
+    copy_into(y[0], work.y)
+    copy_into(h[0], work.h)
+    t[0] = t[0] + dt
+    hist.n[0] = min(hist.n[0] + 1, SLOTS)
     work.counters[STEPS] += 1
 
 
@@ -573,11 +707,10 @@ def _accept(grid, phys, hist, dt, film, work):
     into ``work.q``, the film's state after it (model/step.py: ``accept``) and its cells'
     content in the history."""
     _shift(hist, dt, work)
-    y0 = hist.y0
+    y0, h0 = hist.y[0], hist.h[0]
     model.face_fluxes(grid, model.film_pressure(y0, film, phys), work.h, phys, work.q)
-    model.accept(grid, y0, work.w, hist.h0, hist.h1, work.q, dt, film, phys)
-    copy_into(hist.c1, hist.c0)
-    model.accepted_content(y0, hist.h0, film, phys, hist.c0)
+    model.accept(grid, y0, work.w, h0, hist.h[1], work.q, dt, film, phys)
+    model.accepted_content(y0, h0, film, phys, hist.c[0])
 
 
 @jit
@@ -609,22 +742,22 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
         ``save_profiles``, else (0, N-1).
     """
     n = grid.s.size
-    hist = _history(grid, start)
+    hist = _history(grid, start, control.max_order)
     work = _work(n)
     fac = _factorisation(n + 2)
     w, h, q = work.w, work.h, work.q
-    copy_into(h, hist.h0)
+    y0 = hist.y[0]  # the newest accepted state: _shift writes each new one into this row
+    copy_into(h, hist.h[0])
     rows = 256
     series, p_hist, w_hist, theta_hist = _series(rows, n, save_profiles)
     # initial row
-    model.face_fluxes(grid, hist.y0[:n], h, phys, q)
+    model.face_fluxes(grid, y0[:n], h, phys, q)
     film = model.new_film(q)
-    model.surface_gap(grid, phys, hist.y0, film, w, h)  # with a contact load, if any
-    copy_into(hist.h0, h)
-    copy_into(hist.h1, h)
-    model.accepted_content(hist.y0, h, film, phys, hist.c0)
-    copy_into(hist.c1, hist.c0)
-    strain, diss_rate = model.energies(grid, phys, hist.y0, w, h, q, film)
+    model.surface_gap(grid, phys, y0, film, w, h)  # with a contact load, if any
+    _fill(hist.h, h)
+    model.accepted_content(y0, h, film, phys, hist.c[0])
+    _fill(hist.c, hist.c[0])
+    strain, diss_rate = model.energies(grid, phys, y0, w, h, q, film)
     dissipated = start.dissipated
     n_rows = 0
     dt = control.dt_init
@@ -636,17 +769,17 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
             if save_profiles:
                 p_hist, w_hist, theta_hist = (_grow(p_hist, rows), _grow(w_hist, rows),
                                               _grow(theta_hist, rows))
-        wmax, r_event = _record(series[n_rows], hist.t[0], grid, phys, hist.y0, w, h, strain,
+        wmax, r_event = _record(series[n_rows], hist.t[0], grid, phys, y0, w, h, strain,
                                 dissipated, film)
         if save_profiles:
-            copy_into(p_hist[n_rows], model.film_pressure(hist.y0, film, phys))
+            copy_into(p_hist[n_rows], model.film_pressure(y0, film, phys))
             copy_into(w_hist[n_rows], w)
             copy_into(theta_hist[n_rows], model.fluid_fraction(film))
         n_rows += 1
         if status != RUNNING:
             break
-        if reached(stop_kind, stop_params, work.counters[STEPS], hist.y0[n], hist.y0[n + 1],
-                   wmax, r_event):
+        if reached(stop_kind, stop_params, work.counters[STEPS], y0[n], y0[n + 1], wmax,
+                   r_event):
             status = OK
             break
         # ---- attempt steps until one is accepted ---------------------------------------------
@@ -654,15 +787,16 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
         if not accepted:
             # record the last accepted state with the failure status, then stop; w and h (and
             # the active set) hold the rejected trial's, so restore the state's and recompute
-            model.start_attempt(hist.y0, film, phys)
-            model.surface_gap(grid, phys, hist.y0, film, w, h)
+            model.start_attempt(y0, film, phys)
+            model.surface_gap(grid, phys, y0, film, w, h)
             continue
+        factor = _next_step(grid, phys, control, hist, dt, err, film, work)
         _accept(grid, phys, hist, dt, film, work)
-        strain_new, diss_new = model.energies(grid, phys, hist.y0, w, h, q, film)
+        strain_new, diss_new = model.energies(grid, phys, y0, w, h, q, film)
         dissipated += 0.5 * (diss_rate + diss_new) * dt
         strain = strain_new
         diss_rate = diss_new
-        dt *= _step_factor(err)
+        dt *= factor
     kept = min(n_rows, p_hist.shape[0])
     return (status, work.counters, series[:n_rows], p_hist[:kept], w_hist[:kept],
             theta_hist[:kept])

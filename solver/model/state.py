@@ -107,7 +107,8 @@ class Film(NamedTuple):
 
 class Step(NamedTuple):
     """A step attempt's implicit coefficient ``bh`` (BDF coefficient times the step) and the
-    history of the cells' content, ``X`` and ``V`` (``a1 u_0 + a2 u_1``, ``stepper._bdf2``)."""
+    history of the cells' content, ``X`` and ``V`` (``sum_j a_j u_j`` over the accepted states,
+    integration/stepper.py: ``_coefficients``)."""
 
     bh: float
     c_hist: np.ndarray  # (N,) the cells' content and the boundary node's gap

@@ -18,6 +18,7 @@ needs the loop to do goes through the functions here, which read the physics arr
 - ``has_active_set``: whether the film has a complementarity constraint decided cell by cell
   (an active set); then a Newton iterate converges only with a settled set, a change refreshes
   the factorisation (``settled``), and the set is decided at the iterates ``decide`` marks;
+- ``smooth_in_time``: whether the solution is smooth in time, so that an order above 2 pays;
 - ``start_attempt``, ``step_residual``, ``step_jacobian``: a step attempt's start, its residual
   (with the active set decided and its rows replaced) and its Jacobian (recording the set it was
   built with); ``mark_factorised`` and ``changed_slots``: which slots a change of the set touches
@@ -127,6 +128,16 @@ def step_residual(grid, phys, step, y, film, decide, q, w, h, res):
         residual(grid, phys, step, y[n], y[n + 1], p, theta, h, q, res)
         contact_step.motion(grid.weight, phys, step.bh, film, res)
     cavity_step.constrain_rows(p, res, film, phys)
+
+
+@jit
+def smooth_in_time(phys):
+    """Whether the film's solution is smooth in time throughout, so that the loop may raise the
+    BDF order above 2 (integration/stepper.py): not with a cavitation floor (its active set
+    switches cell by cell) nor on rough surfaces (the asperities touch, and the solids switch to
+    unloading, at an instant: at St 2.5, eps 1e-2, roughness 1, order 5 gave v_r 0.118 against
+    the converged 0.090, BDF2 0.091)."""
+    return not has_active_set(phys) and not contact_step.on(phys)
 
 
 @jit
