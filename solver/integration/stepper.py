@@ -649,7 +649,8 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
 
 @jit
 def _lower_order(hist):
-    """After a rejected step above order 2: the next attempt one order lower."""
+    """After a halved step above order 2 (Newton failed, or a gap went non-positive): the next
+    attempt one order lower."""
     if hist.order[0] > 2:
         hist.order[0] -= 1
         hist.order[1] = 0
