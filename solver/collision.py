@@ -364,6 +364,7 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
         rejected_steps=int(counters[stepper.REJECTED]),
         newton_iterations=int(counters[stepper.NEWTON]),
         lu_factorizations=int(counters[stepper.LU]),
+        higher_order_steps=int(counters[stepper.HIGHER_ORDER]),
         tau_handover=head.t * tau_per_t, radius=grid.radius)
     if numerics.save_profiles:
         _save_profiles(result, t_c, x_c, p_hist, w_hist, theta_hist)

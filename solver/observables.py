@@ -248,6 +248,9 @@ OBSERVABLES = (
                diagnostic=True),
     Observable("lu_factorizations", "count", "LU factorisations of the coupled solve", "1",
                diagnostic=True),
+    Observable("higher_order_steps", "count",
+               "accepted time steps of the coupled solve at a BDF order above 2 (max_order)", "1",
+               diagnostic=True),
     Observable("wall_s", "float", "wall time of the scene", "s", "wall time [s]",
                diagnostic=True, start=0.0),
 )

@@ -60,6 +60,7 @@ def test_higher_orders_reach_the_same_solution_in_fewer_steps(stokes, eps):
 
     def run(order, rtol=None):
         c = collide(physics, rtol=rtol, max_order=order, save_profiles=False)
+        assert (c.higher_order_steps > 0) == (order > 2)  # the counter of the orders used
         return c.steps, np.array([c.v_r, c.ln_x_e_x1])
 
     _, ref = run(5, 1e-8)
@@ -81,6 +82,7 @@ def test_films_not_smooth_in_time_stay_at_order_two(pieces):
     physics = Physics(St=10.0, eps=1e-2, **pieces)
     a, b = (collide(physics, accuracy="fast", max_order=k, save_profiles=False) for k in (2, 5))
     assert (a.v_r, a.steps, a.newton_iterations) == (b.v_r, b.steps, b.newton_iterations)
+    assert b.higher_order_steps == 0
 
 
 def test_rough_collision_grid_convergence_is_second_order():

@@ -127,10 +127,11 @@ def test_norm_counts_small_pressures_as_absolute():
 
 def test_counters_are_named_in_the_order_the_loop_returns_them():
     assert [stepper.STEPS, stepper.REJECTED, stepper.NEWTON, stepper.LU, stepper.JACOBIANS,
-            stepper.LOWRANK] == list(range(len(stepper.COUNTERS)))
+            stepper.LOWRANK, stepper.HIGHER_ORDER] == list(range(len(stepper.COUNTERS)))
     from solver import Physics, collide
 
     c = collide(Physics(St=10.0, eps=1e-2), accuracy="fast", save_profiles=False)
     # every attempt runs Newton at least once and every accepted step is an attempt
     assert c.newton_iterations >= c.steps + c.rejected_steps > 0
     assert 0 < c.lu_factorizations <= c.newton_iterations
+    assert c.higher_order_steps == 0  # the preset's BDF2

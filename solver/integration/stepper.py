@@ -31,8 +31,9 @@ The loop in parts, each a function of its own (in the spirit of SciPy's BDF, ``_
 - the end: a terminal event passed in by the caller (events.py), evaluated after each accepted
   step.
 
-Counters: ``STEPS``, ``REJECTED``, ``NEWTON``, ``LU``, ``JACOBIANS`` index the counter array the
-loop returns (``COUNTERS`` names them in that order).
+Counters: ``STEPS``, ``REJECTED``, ``NEWTON``, ``LU``, ``JACOBIANS``, ``LOWRANK`` and
+``HIGHER_ORDER`` (accepted steps above order 2) index the counter array the loop returns
+(``COUNTERS`` names them in that order).
 """
 
 from typing import NamedTuple
@@ -55,8 +56,8 @@ NONFINITE = STATUS_CODES["nonfinite"]
 
 # the counters, in the order of the array integrate returns
 COUNTERS = ("steps", "rejected_steps", "newton_iterations", "lu_factorizations", "jacobians",
-            "lowrank_updates")
-STEPS, REJECTED, NEWTON, LU, JACOBIANS, LOWRANK = range(len(COUNTERS))
+            "lowrank_updates", "higher_order_steps")
+STEPS, REJECTED, NEWTON, LU, JACOBIANS, LOWRANK, HIGHER_ORDER = range(len(COUNTERS))
 
 # outcomes of _newton
 CONVERGED, DIVERGED, SINGULAR = 0, 1, 2
@@ -644,6 +645,8 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
             counters[REJECTED] += 1
             continue
         accepted = True
+        if k > 2:
+            counters[HIGHER_ORDER] += 1
     return status, accepted, dt, err
 
 
@@ -731,9 +734,9 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
     -------
     status : int
         ``OK``, ``MAX_STEPS``, ``STEP_UNDERFLOW`` or ``NONFINITE``.
-    counters : (6,) int64
+    counters : (7,) int64
         ``COUNTERS``: accepted steps, rejected steps, Newton iterations, LU factorisations,
-        Jacobians, low-rank updates.
+        Jacobians, low-rank updates, accepted steps above order 2.
     series : (rows, N_SERIES) float
         One row per accepted step (the first is the initial state); columns ``SERIES``.
     pressure, deformation : (rows, N) float
