@@ -32,7 +32,8 @@ class Numerics:
     max_steps: int  # step budget: a scene that needs more fails with status "max_steps"
     save_profiles: bool = True  # keep P(R), W(R) at every step (sweeps switch this off)
     # highest order of the BDF time stepping, 1-5 (integration/stepper.py); the presets' 2 is
-    # BDF2, above it the loop chooses each step's order (a film with a cavity stays at 2)
+    # BDF2, above it the loop chooses each step's order (a film not smooth in time, with a
+    # cavitation floor or rough surfaces, stays at 2: model/step.py, smooth_in_time)
     max_order: int = 2
 
     def as_dict(self) -> dict:
