@@ -10,7 +10,7 @@ below which it hands back on the way out).
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, fields, replace
 
 __all__ = ["Numerics", "PRESETS", "resolve"]
 
@@ -67,6 +67,8 @@ _BOUNDS = {
     "max_steps": (10, 10**8),
     "max_order": (0, 5),
 }
+# the settings that count something (n_inner, max_steps, max_order): whole numbers
+_WHOLE = {f.name for f in fields(Numerics) if f.type == "int"}
 
 
 def _check_number(name, value, lo, hi, *, open_lo=True):
@@ -100,7 +102,7 @@ def resolve(accuracy: str = "standard", **overrides) -> Numerics:
             raise ValueError(f"unknown numerical setting {name!r}; valid settings: {valid}")
         lo, hi = _BOUNDS[name]
         v = _check_number(name, value, lo, hi, open_lo=name not in ("stretch",))
-        if name in ("n_inner", "max_steps", "max_order"):
+        if name in _WHOLE:
             if v != int(v):
                 raise ValueError(f"{name} must be a whole number, got {value!r}")
             v = int(v)

@@ -67,7 +67,7 @@ PRESSURE_SCALE = 0.05  # fraction of max|P| below which the pressure error count
 NEWTON_KAPPA = 0.05  # Newton stops when its predicted remaining error is this fraction of tol
 MAX_NEWTON = 7
 MAX_ORDER = 5  # the highest BDF order the loop takes (Control.max_order chooses up to it)
-SLOTS = MAX_ORDER + 1  # accepted states held: the order-5 predictor's points
+SLOTS = MAX_ORDER + 1  # accepted states held at most: the order-5 predictor's points
 # The largest growth of the step per accepted step, by order: variable-step BDF2 stays
 # zero-stable below 1 + sqrt(2); the higher orders are zero-stable on grids whose steps change
 # smoothly (ratios 1 + O(1/N): BIT Numer. Math. 58 (2018), doi:10.1007/s10543-018-0716-y), so
@@ -111,10 +111,11 @@ class Control(NamedTuple):
     max_order: int
 
 
-# The accepted states the BDF step and its predictor read, newest first (row 0): solutions ``y``
-# (SLOTS, m), gaps ``h`` and the cells' content ``c`` (SLOTS, N) (model/step.py:
-# ``accepted_content``), their times ``t`` (SLOTS,) and how many are held, ``n`` (1,), at most
-# SLOTS; ``order`` (2,): the order the next step takes (as far as the history reaches) and the
+# The accepted states the BDF step and its predictor read, newest first (row 0), as many rows as
+# the highest order's predictor reads (``_history``: 3 for BDF2, ``max_order + 1`` above):
+# solutions ``y`` (rows, m), gaps ``h`` and the cells' content ``c`` (rows, N) (model/step.py:
+# ``accepted_content``), their times ``t`` (rows,) and how many are held, ``n`` (1,), at most
+# rows; ``order`` (2,): the order the next step takes (as far as the history reaches) and the
 # steps accepted since it was chosen. A record, not a NamedTuple: a NamedTuple's arrays were a
 # reference count each at each call of a function that takes it (docs/solver.md, "Reference
 # counting").
@@ -661,23 +662,25 @@ def _lower_order(hist):
 
 @jit
 def _history(grid, start, max_order):
-    """The history at the start: every slot the initial state and its rigid gap (never read
-    uninitialised: 0 * NaN garbage is NaN), the content written by ``integrate`` once the film's
-    state exists; the order 2, or ``max_order`` if lower."""
+    """The history at the start, ``max(3, max_order + 1)`` states (the quadratic predictor of
+    BDF2, the order-``max_order`` one above): every slot the initial state and its rigid gap
+    (never read uninitialised: 0 * NaN garbage is NaN), the content written by ``integrate``
+    once the film's state exists; the order 2, or ``max_order`` if lower."""
     s = grid.s
     n = s.size
-    y = np.empty((SLOTS, n + 2))
+    slots = max(3, max_order + 1)
+    y = np.empty((slots, n + 2))
     copy_into(y[0, :n], start.p)
     y[0, n] = start.x
     y[0, n + 1] = start.v
     _fill(y, y[0])
     w = np.empty(n)
-    h = np.empty((SLOTS, n))
+    h = np.empty((slots, n))
     model.start_gap(s, grid.influence, start.x, start.p, w, h[0])
     _fill(h, h[0])
     order = np.zeros(2, dtype=np.int64)
     order[0] = min(max_order, 2)
-    return History(y, h, np.full((SLOTS, n), np.nan), np.full(SLOTS, start.t),
+    return History(y, h, np.full((slots, n), np.nan), np.full(slots, start.t),
                    np.ones(1, dtype=np.int64), order)
 
 
@@ -693,7 +696,8 @@ def _shift(hist, dt, work):
     """The accepted step of size ``dt`` (``work.y``, ``work.h``) becomes the newest state; each
     older one moves down a row (the content's newest row is written by ``_accept``)."""
     y, h, c, t = hist.y, hist.h, hist.c, hist.t
-    for j in range(SLOTS - 1, 0, -1):
+    slots = t.size
+    for j in range(slots - 1, 0, -1):
         copy_into(y[j], y[j - 1])
         copy_into(h[j], h[j - 1])
         copy_into(c[j], c[j - 1])
@@ -701,7 +705,7 @@ def _shift(hist, dt, work):
     copy_into(y[0], work.y)
     copy_into(h[0], work.h)
     t[0] = t[0] + dt
-    hist.n[0] = min(hist.n[0] + 1, SLOTS)
+    hist.n[0] = min(hist.n[0] + 1, slots)
     work.counters[STEPS] += 1
 
 
