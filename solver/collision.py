@@ -83,6 +83,47 @@ def _parabolic_peak(t, f, i):
     return tv, fv
 
 
+def _step_interpolant(t, f, end, order):
+    """The interpolant of the series ``f`` (times ``t``) over the step that ended at row ``end``
+    when that step was above order 2: the polynomial interpolating its ``k + 1`` newest rows (the
+    BDF's dense output, order ``k``), in the step's own variable ``u = (t - t[end]) / (t[end] -
+    t[end - 1])`` (the step is ``-1 <= u <= 0``); None at orders 0-2."""
+    k = int(order[end])
+    if k <= 2 or end - k < 0:
+        return None
+    rows = np.arange(end - k, end + 1)
+    scale = t[end] - t[end - 1]
+    return np.polynomial.Polynomial.fit((t[rows] - t[end]) / scale, f[rows], k,
+                                        domain=[-1.0, 1.0], window=[-1.0, 1.0])
+
+
+def _roots_in_step(poly):
+    """The real roots of ``poly`` within its step (``-1 <= u <= 0``)."""
+    return [r.real for r in poly.roots() if abs(r.imag) <= 1e-12 and -1.0 <= r.real <= 0.0]
+
+
+def _peak(t, f, i, order, lowest):
+    """The extremum of the series ``f`` (times ``t``) at its discrete extremum ``i`` (a minimum
+    if ``lowest``, else a maximum), read as the loop integrated it (``order``: the series' BDF
+    order of the step that ended at each row). Where the steps either side of row ``i`` were of
+    order 2 or lower, the vertex of the parabola on rows ``i - 1``, ``i``, ``i + 1``
+    (``_parabolic_peak``); above, each of the two steps' own interpolants
+    (``_step_interpolant``), whose error follows the method's order where the parabola's goes
+    with the step's cube."""
+    if i <= 0 or i >= len(f) - 1 or max(order[i], order[i + 1]) <= 2:
+        return _parabolic_peak(t, f, i)
+    best_t, best_f = t[i], f[i]
+    for end in (i, i + 1):  # the steps from row end - 1 to row end
+        poly = _step_interpolant(t, f, end, order)
+        if poly is None:
+            continue
+        for u in _roots_in_step(poly.deriv()):
+            value = poly(u)
+            if (value < best_f) if lowest else (value > best_f):
+                best_t, best_f = t[end] + u * (t[end] - t[end - 1]), value
+    return best_t, best_f
+
+
 FAR_FIELD_REACH = 8.0  # the grid reaches this many film widths sqrt(2 X) beyond the axis
 
 
@@ -326,7 +367,7 @@ def _integrate(physics, numerics, head, shortcuts):
                       float(1.0 - v_switch**2)),
         stepper.Control(float(numerics.rtol), float(1e-3 * time_scale),
                         float(1e-12 * time_scale), int(numerics.max_steps),
-                        int(numerics.max_order)),
+                        int(numerics.max_order), float(numerics.high_order_rtol_factor)),
         shortcuts.end_event, stop_params, numerics.save_profiles)
 
 
@@ -447,44 +488,89 @@ def _wet_restitution(physics, shortcuts, cols, x_ref):
     return rigid.restitution(x_c[j], v_c[j], physics, x_ref)
 
 
+def _gap_minimum(tau, h_min, h_min_step, order, i, end):
+    """The smallest gap near row ``i``, the discrete minimum of ``H_min`` over the rows before
+    ``end``: at orders up to 2 the parabola's vertex on rows ``i - 1``, ``i``, ``i + 1``; above,
+    the smallest gap of the loop's interpolants over the steps either side of row ``i``
+    (``H_min_step``, integration/stepper.py: ``_extremum_in_step``)."""
+    if i <= 0 or i >= end - 1:
+        return h_min[i]
+    if max(order[i], order[i + 1]) <= 2:
+        return _parabolic_peak(tau[:end], h_min[:end], i)[1]
+    return min(h_min_step[i], h_min_step[i + 1])
+
+
+def _gap_observables(result, cols, tau):
+    """The closest approach over the coupled phase and over its approach, and the time ``v``
+    first reaches 0; returns the rows where ``v <= 0`` and, where ``v`` first reaches 0 inside
+    a step above order 2, the step's variable ``u`` there (``_step_interpolant``; else None)."""
+    v_c, order, h_min, h_min_step = cols["V"], cols["order"], cols["H_min"], cols["H_min_step"]
+    result.h_m_x1 = float(_gap_minimum(tau, h_min, h_min_step, order, int(np.argmin(h_min)),
+                                       len(h_min)))
+    below = np.nonzero(v_c <= 0.0)[0]
+    at_stop = None
+    if below.size:
+        # approach phase ends at the interpolated v = 0 between rows j-1 and j: on a straight
+        # line at orders up to 2, on the step's interpolant above; the smallest gap (over the
+        # cells, not smooth in time) there on a straight line between the rows
+        j = int(below[0])
+        frac = v_c[j - 1] / (v_c[j - 1] - v_c[j])
+        poly = _step_interpolant(tau, v_c, j, order)
+        if poly is not None and _roots_in_step(poly):
+            at_stop = min(_roots_in_step(poly))  # the first time v reaches 0
+            frac = 1.0 + at_stop
+        result.tau_v_zero = float(tau[j - 1] + (tau[j] - tau[j - 1]) * frac)
+        h_at_stop = h_min[j - 1] + (h_min[j] - h_min[j - 1]) * frac
+        h_app = _gap_minimum(tau, h_min, h_min_step, order, int(np.argmin(h_min[:j])), j)
+        result.h_m_approach_x1 = float(min(h_app, h_at_stop))
+    else:
+        result.tau_v_zero = math.inf  # rigid creep to rest: v reaches 0 only as t -> inf
+        result.h_m_approach_x1 = result.h_m_x1
+    return below, at_stop
+
+
+def _approach_peak_pressure(result, cols, tau, below, at_stop):
+    """The largest film pressure over the approach (until ``v`` first reaches 0: the pressure
+    spike where a trapped lens collapses later does not converge under refinement) and the
+    central gap when it is reached."""
+    order, p_max = cols["order"], cols["P_max"]
+    j_app = int(below[0]) + 1 if below.size else len(tau)
+    i = int(np.argmax(p_max[:j_app]))
+    if i == j_app - 1 and at_stop is not None:
+        # still rising when the approach ends, inside a step above order 2: read at v = 0 (not
+        # at the row past it), the largest pressure over the cells on a straight line between
+        # the rows, the central gap on the step's interpolant
+        result.p_max_approach = float(p_max[i - 1] + (p_max[i] - p_max[i - 1]) * (1.0 + at_stop))
+        result.h_axis_at_peak_pressure_x1 = float(
+            _step_interpolant(tau, cols["H0"], i, order)(at_stop))
+    elif 0 < i < j_app - 1 and max(order[i], order[i + 1]) > 2:
+        # above order 2, the loop's interpolants of the steps either side of row i (the largest
+        # over the cells is not smooth in time; integration/stepper.py: _extremum_in_step)
+        p_step = cols["P_max_step"]
+        end = i + 1 if p_step[i + 1] > p_step[i] else i
+        result.p_max_approach = float(p_step[end])
+        result.h_axis_at_peak_pressure_x1 = float(cols["H0_at_P_max_step"][end])
+    else:
+        t_pk, p_pk = _parabolic_peak(tau[:j_app], p_max[:j_app], i)
+        result.p_max_approach = float(p_pk)
+        result.h_axis_at_peak_pressure_x1 = float(np.interp(t_pk, tau, cols["H0"]))
+
+
 def _coupled_observables(result, cols, tau_per_t, ln_x_e, v_rel):
     """Observables from the coupled phase's series (the rigid parts are monotone: only their
     peaks, ``include_rigid_peaks``, and the creep to ``x_e`` can add to them)."""
-    t_c, x_c, v_c = cols["T"], cols["X"], cols["V"]
+    t_c, x_c, v_c, order = cols["T"], cols["X"], cols["V"], cols["order"]
     tau = t_c * tau_per_t
     result.v_r = 0.0
     if np.any(v_c < 0.0):
         i = int(np.argmin(v_c))
-        t_pk, v_pk = _parabolic_peak(tau, v_c, i)
+        t_pk, v_pk = _peak(tau, v_c, i, order, lowest=True)
         result.v_r = float(-v_pk)
         result.tau_max_rebound = float(t_pk)
-    h_min = cols["H_min"]
-    i = int(np.argmin(h_min))
-    result.h_m_x1 = float(_parabolic_peak(tau, h_min, i)[1])
-    below = np.nonzero(v_c <= 0.0)[0]
-    if below.size:
-        # approach phase ends at the interpolated v = 0 between rows j-1 and j
-        j = int(below[0])
-        frac = v_c[j - 1] / (v_c[j - 1] - v_c[j])
-        result.tau_v_zero = float(tau[j - 1] + (tau[j] - tau[j - 1]) * frac)
-        h_at_stop = h_min[j - 1] + (h_min[j] - h_min[j - 1]) * frac
-        ia = int(np.argmin(h_min[:j]))
-        h_app = _parabolic_peak(tau[:j], h_min[:j], ia)[1] if ia < j - 1 else h_min[j - 1]
-        result.h_m_approach_x1 = float(min(h_app, h_at_stop))
-    else:
-        result.tau_v_zero = math.inf  # rigid creep to rest: v reaches 0 only as t -> inf
-        ia = int(np.argmin(h_min))
-        result.h_m_approach_x1 = float(_parabolic_peak(tau, h_min, ia)[1])
-    # the liquid's largest viscosity over the approach (until v first reaches 0; the pressure
-    # spike where a trapped lens collapses later does not converge under refinement), and the
-    # central gap when the approach's film pressure peaks
-    j_app = int(below[0]) + 1 if below.size else len(tau)
-    i = int(np.argmax(cols["P_max"][:j_app]))
-    t_pk, p_pk = _parabolic_peak(tau[:j_app], cols["P_max"][:j_app], i)
-    result.p_max_approach = float(p_pk)
-    result.h_axis_at_peak_pressure_x1 = float(np.interp(t_pk, tau, cols["H0"]))
+    below, at_stop = _gap_observables(result, cols, tau)
+    _approach_peak_pressure(result, cols, tau, below, at_stop)
     i = int(np.argmin(x_c))
-    result.x_min_x1 = float(_parabolic_peak(tau, x_c, i)[1])
+    result.x_min_x1 = float(_peak(tau, x_c, i, order, lowest=True)[1])
     if v_rel > 0.0:  # still approaching when released: rigid creep down to x_e
         x_e = math.exp(ln_x_e)
         result.h_m_x1 = min(result.h_m_x1, x_e)
@@ -492,16 +578,18 @@ def _coupled_observables(result, cols, tau_per_t, ln_x_e, v_rel):
         if below.size == 0:
             result.h_m_approach_x1 = min(result.h_m_approach_x1, x_e)
     i = int(np.argmax(cols["F"]))
-    result.tau_peak_force, result.peak_force = map(float, _parabolic_peak(tau, cols["F"], i))
+    result.tau_peak_force, result.peak_force = map(
+        float, _peak(tau, cols["F"], i, order, lowest=False))
     i = int(np.argmax(cols["W0"]))
-    result.tau_max_deformation, result.w0_max_x1 = map(float, _parabolic_peak(tau, cols["W0"], i))
-    result.p_max = float(np.max(cols["P_max"]))
+    result.tau_max_deformation, result.w0_max_x1 = map(
+        float, _peak(tau, cols["W0"], i, order, lowest=False))
+    result.p_max = float(np.max(cols["P_max_step"]))  # P_max's rows, and the steps above order 2
     if not result.physics.isoviscous:
         # the spike where a glassy lens collapses later does not converge (it doubled with each
         # preset at St 30, eps 1e-4, beta 5): a pressure-dependent film reports the approach's
         result.p_max = result.p_max_approach
     result.p_min = min(0.0, float(np.min(cols["P_min"])))  # the far field tends to 0
-    depth = cols["H0"] - h_min
+    depth = cols["H0"] - cols["H_min"]
     result.dimple_depth_x1 = float(depth.max())
     deep = np.nonzero(depth > DIMPLE_DEPTH)[0]
     result.dimple = bool(deep.size > 0)

@@ -308,6 +308,16 @@ SERIES = (
     Column("dissipated", "viscous dissipation so far", "m v0^2/2"),
     Column("H0", "central gap H(0)", "x1", kept=False),
     Column("W_absmax", "largest |W| over the radius", "x1", kept=False),
+    Column("order", "BDF order of the step that ended at this row (0: the first row)", "1",
+           kept=False),
+    Column("H_min_step", "minimum gap over the cells and the step that ended at this row, on "
+           "the step's interpolating polynomial above order 2 (H_min at orders 0-2)", "x1",
+           kept=False),
+    Column("P_max_step", "largest film pressure over the cells and the step that ended at this "
+           "row, on the step's interpolating polynomial above order 2 (P_max at orders 0-2)", _P,
+           kept=False),
+    Column("H0_at_P_max_step", "central gap when P_max_step is reached (H0 at orders 0-2)", "x1",
+           kept=False),
     Column("P_max", "largest film pressure over the radius", _P),
     Column("P_min", "lowest film pressure over the radius", _P),
     Column("cavity_radius", "radius of the outermost cavitated node (0: no cavity)", "sqrt(a x1)"),

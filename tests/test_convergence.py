@@ -50,12 +50,10 @@ def test_time_tolerance_convergence():
 def test_higher_orders_reach_the_same_solution_in_fewer_steps(stokes, eps):
     """The variable-order BDF (``max_order`` 5, integration/stepper.py) and BDF2 converge in time
     to one solution on one grid, and at the standard tolerance order 5 takes at most half the
-    steps with a time error no larger than BDF2's (measured: 0.32x and 0.31x the steps; v_r
-    errors 6.6e-6 against 7.1e-5 and 2.5e-7 against 2.6e-5). Compared: the rebound speed and
-    the departure, which the integration gives; the closest approach and the peak force are
-    read from the series by a parabola through the extreme step and its neighbours, an error
-    of the step spacing's cube that does not follow the method's order (BDF2 at rtol 1e-7 and
-    order 5 at 1e-8 differ by 1.6e-5 and 3.4e-5 in h_m)."""
+    steps with a time error no larger than BDF2's (measured with the tolerance factor 1: 0.32x
+    and 0.31x the steps; v_r errors 6.6e-6 against 7.1e-5 and 2.5e-7 against 2.6e-5; the
+    presets' factor 4 takes fewer). Compared: the rebound speed and the departure, which the
+    integration gives."""
     physics = Physics(St=stokes, eps=eps)
 
     def run(order, rtol=None):
@@ -83,6 +81,21 @@ def test_films_not_smooth_in_time_stay_at_order_two(pieces):
     a, b = (collide(physics, accuracy="fast", max_order=k, save_profiles=False) for k in (2, 5))
     assert (a.v_r, a.steps, a.newton_iterations) == (b.v_r, b.steps, b.newton_iterations)
     assert b.higher_order_steps == 0
+    # and at rtol: the factor on the tolerance above order 2 does not touch them
+    c = collide(physics, accuracy="fast", high_order_rtol_factor=1.0, save_profiles=False)
+    assert (c.v_r, c.steps, c.newton_iterations) == (b.v_r, b.steps, b.newton_iterations)
+
+
+def test_the_tolerance_above_order_two_is_rtol_times_its_factor():
+    """A smooth film above order 2 steps at ``rtol * high_order_rtol_factor`` (the presets' 4):
+    the same collision as the factor 1 at 4 times the rtol, bit for bit, and another one than
+    the factor 1 at rtol."""
+    physics = Physics(St=10.0, eps=1e-2)
+    preset = collide(physics, save_profiles=False)
+    same = collide(physics, rtol=4 * 5e-5, high_order_rtol_factor=1.0, save_profiles=False)
+    tight = collide(physics, high_order_rtol_factor=1.0, save_profiles=False)
+    assert (preset.v_r, preset.steps) == (same.v_r, same.steps)
+    assert tight.steps > preset.steps
 
 
 def test_rough_collision_grid_convergence_is_second_order():

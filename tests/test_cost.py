@@ -1,17 +1,22 @@
 """Cost ceilings (scipy style): a performance regression fails a test without timing anything.
 
-Counts for St = 10, eps = 0.01 and St = 30, eps = 1e-8 were measured when the presets were
-chosen (benchmarks/solver.md); the ceilings allow 30 % drift for harmless changes."""
+Counts for St = 10, eps = 0.01 and St = 30, eps = 1e-8, measured with the presets of solver 1.12.0
+(orders up to 5; benchmarks/accuracy.md); the ceilings allow 30 % drift for harmless changes.
+Rejected steps have a ceiling of their own: at orders up to 5 a collision takes a fifth to a third
+of BDF2's steps and about as many rejections (14-16 here, 4-6 % of the attempts at standard and
+fine, 9 % at fast), so a share of the accepted steps (BDF2's was under 10 %) no longer says
+whether the step control regressed."""
 
 import pytest
 
 from solver import collide
 
-MEASURED = {  # (accuracy, St, eps): (accepted steps, Newton iterations, LU factorisations)
-    ("fast", 10.0, 1e-2): (439, 1303, 61),
-    ("standard", 10.0, 1e-2): (874, 2322, 65),
-    ("standard", 30.0, 1e-8): (1142, 3201, 83),
-    ("fine", 10.0, 1e-2): (1590, 4102, 67),
+MEASURED = {  # (accuracy, St, eps): (accepted steps, Newton iterations, LU factorisations,
+    #                                  rejected steps)
+    ("fast", 10.0, 1e-2): (155, 734, 61, 16),
+    ("standard", 10.0, 1e-2): (234, 1056, 71, 14),
+    ("standard", 30.0, 1e-8): (286, 1446, 93, 14),
+    ("fine", 10.0, 1e-2): (324, 1342, 78, 14),
 }
 
 
@@ -19,9 +24,9 @@ MEASURED = {  # (accuracy, St, eps): (accepted steps, Newton iterations, LU fact
 def test_cost_ceiling(key):
     accuracy, stokes, eps = key
     c = collide(stokes, eps, accuracy=accuracy, save_profiles=False)
-    steps, newton, lu = MEASURED[key]
+    steps, newton, lu, rejected = MEASURED[key]
     assert c.ok
     assert c.steps < 1.3 * steps
     assert c.newton_iterations < 1.3 * newton
     assert c.lu_factorizations < 1.3 * lu
-    assert c.rejected_steps < 0.1 * c.steps
+    assert c.rejected_steps < 1.3 * rejected

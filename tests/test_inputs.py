@@ -42,6 +42,11 @@ def test_bad_numerics():
                           (2.5, "max_order must be a whole number")):
         with pytest.raises(ValueError, match=needle):
             collide(5, 0.01, max_order=order)
+    for factor, needle in ((0.0, r"high_order_rtol_factor = 0.0 is outside its valid range"),
+                           (1e3, r"high_order_rtol_factor = 1000.0 is outside its valid range"),
+                           ("four", "high_order_rtol_factor must be a number")):
+        with pytest.raises(ValueError, match=needle):
+            collide(5, 0.01, high_order_rtol_factor=factor)
 
 
 def _ehd(*args):

@@ -110,10 +110,11 @@ def test_small_beta_and_c1_reproduce_the_classic_model():
 def test_compressible_film_conserves_mass_step_by_step():
     """Dowson-Higginson with Barus, the whole coupled phase: the liquid in the cells,
     ``sum area rho H``, obeys the BDF2 balance ``M_{k+1} - a1 M_k - a2 M_{k-1} = b dt q_L``
-    with ``q_L`` the flux through the last cell's outer face, at every step."""
+    with ``q_L`` the flux through the last cell's outer face, at every step (at BDF2: the
+    result's series does not say which order each step took above it)."""
     physics = Physics(St=10.0, eps=1e-2, beta=3.0, density_law="dowson-higginson")
     phys = physics.as_array()
-    c = collide(physics, rtol=1e-4)
+    c = collide(physics, rtol=1e-4, max_order=2)
     assert c.ok, c.message
     s = c.radius**2 / 2.0
     s_face = 0.5 * (s[1:] + s[:-1])
@@ -152,9 +153,11 @@ def test_compressible_film_conserves_mass_step_by_step():
                                 dict(density_law="dowson-higginson", dh_c1=0.6, dh_c2=1.7)])
 def test_energy_closure_falls_with_the_tolerance(kw):
     """Kinetic + strain + compression energy + dissipation is constant (docs/model.md, "Energy"):
-    the closure error falls with the step tolerance."""
-    errors = [collide(Physics(St=10.0, eps=1e-2, **kw), rtol=rtol, save_profiles=False)
-              for rtol in (1e-4, 1e-6)]
+    the closure error falls with the step tolerance, at BDF2 (its time error is most of the
+    closure at rtol 1e-4; above order 2 the grid's part is: at orders up to 5 the closure at
+    beta 5 was 4.0e-4 and 3.4e-4 at the two tolerances)."""
+    errors = [collide(Physics(St=10.0, eps=1e-2, **kw), rtol=rtol, max_order=2,
+                      save_profiles=False) for rtol in (1e-4, 1e-6)]
     assert all(c.ok for c in errors)
     e = [c.energy_error for c in errors]
     # as the classic film at the same tolerances (measured 1e-4..1e-3 at rtol 1e-4): 2e-3
@@ -175,9 +178,9 @@ def test_compression_energy_is_part_of_the_balance():
 
 
 # grid and time step refined together (cells x2, rtol /8: both errors ~4x smaller per level for
-# a second-order scheme), thresholds fixed
+# a second-order scheme, BDF2), thresholds fixed
 REFINE = [dict(n_inner=32 * 2**k, stretch=1.0 + 0.4 / 2**k, max_rel=0.4 / 2**k, rtol=3e-4 / 8**k,
-               switch=1e-3, release=3e-4) for k in range(3)]
+               switch=1e-3, release=3e-4, max_order=2) for k in range(3)]
 
 
 @pytest.mark.parametrize("kw", [dict(beta=2.0), dict(beta=5.0),
@@ -232,7 +235,8 @@ def test_with_a_floor_that_never_binds_it_is_the_piezoviscous_film():
     """Cavitation and piezoviscosity together: a floor far below any tension changes nothing
     (bit for bit), a real one acts on the rebound only."""
     kw = dict(St=10.0, eps=1e-2, beta=3.0)
-    alone = collide(Physics(**kw), save_profiles=False)
+    # at BDF2, the order a film with a floor stays at (model/step.py: smooth_in_time)
+    alone = collide(Physics(**kw), max_order=2, save_profiles=False)
     huge = collide(Physics(**kw, Pi=1e6, cavitation="jfo"), save_profiles=False)
     assert not huge.cavitated
     for name in ("v_r", "h_m_x1", "ln_x_e_x1", "viscosity_ratio_max_approach", "energy_error"):
@@ -273,11 +277,15 @@ def test_a_tabulated_law_reproduces_the_law_it_tabulates():
     phys = roelands.as_array()
     points = np.concatenate([[0.0], np.geomspace(0.005, 20.0, 63)])
     table = ", ".join(f"{float(p)!r}:{math.exp(log_viscosity(p, phys)[0])!r}" for p in points)
-    law = collide(roelands, save_profiles=False)
-    tab = collide(Physics(St=10.0, eps=1e-2, viscosity_table=table), save_profiles=False)
+    # time errors below the table's (at the standard preset, orders up to 5, each run's own time
+    # error in h_m, about 1.5e-4, differs between the two: 2.1e-4 apart against 5.3e-5 at rtol
+    # 1e-6 and 5.6e-5 at 1e-7)
+    law = collide(roelands, rtol=1e-6, save_profiles=False)
+    tab = collide(Physics(St=10.0, eps=1e-2, viscosity_table=table), rtol=1e-6,
+                  save_profiles=False)
     assert tab.viscosity_law == "table" and tab.ok
     for name in ("v_r", "h_m_x1", "ln_x_e_x1"):
-        # the table's interpolation error in ln mu, ~h^2/8 |g''|: measured 5e-6 to 5e-5
+        # the table's interpolation error in ln mu, ~h^2/8 |g''|: measured 3e-6 to 5e-5
         assert getattr(tab, name) == pytest.approx(getattr(law, name), rel=2e-4), name
     barus = collide(Physics(St=10.0, eps=1e-2, beta=3.0), save_profiles=False)
     two = collide(Physics(St=10.0, eps=1e-2, viscosity_table=f"0:1, 20:{math.exp(60.0)!r}"),

@@ -90,6 +90,63 @@ def test_bdf_of_order_k_is_exact_for_polynomials_of_degree_k(order):
         assert b == pytest.approx(1 / (d_new * dt), rel=1e-14)
 
 
+@pytest.mark.parametrize("k", [1, 2, 3, 4, 5])
+def test_basis_values_and_slopes_are_the_lagrange_polynomials(k):
+    """``_basis`` at a point, at a node and between nodes: the values reproduce every polynomial
+    of degree ``k`` through the ``k + 1`` newest times, and the slopes its derivative."""
+    values, slopes = np.empty(stepper.SLOTS), np.empty(stepper.SLOTS)
+    f = lambda t: (t - 0.21) ** k + 0.5 * t  # noqa: E731
+    df = lambda t: k * (t - 0.21) ** (k - 1) + 0.5  # noqa: E731
+    for x in (TIMES[0], TIMES[1], 0.5 * (TIMES[0] + TIMES[1]), TIMES[0] + 0.07):
+        stepper._basis(TIMES, k, x, values, slopes)
+        # 1e-12: weights of size up to ~30 times O(1) values, a few roundings each
+        assert values[:k + 1] @ f(TIMES[:k + 1]) == pytest.approx(f(x), abs=1e-12)
+        assert slopes[:k + 1] @ f(TIMES[:k + 1]) == pytest.approx(df(x), abs=1e-10)
+
+
+@pytest.mark.parametrize("k", [3, 4, 5])
+def test_extremum_in_step_finds_each_columns_interior_extremum(k):
+    """``_extremum_in_step``: over columns whose values are polynomials of degree ``k`` in time,
+    the smallest interior minimum of the last step (``TIMES[1]`` to ``TIMES[0]``) and its time,
+    to the bisection's resolution; a column monotone over the step has none; the largest value
+    with ``sign`` -1."""
+    t_lo, t_hi = TIMES[1], TIMES[0]
+    centres = (t_lo + 0.3 * (t_hi - t_lo), t_lo + 0.8 * (t_hi - t_lo), t_hi + 0.5)
+    depths = (0.2, 0.1, -5.0)  # the third column falls all through the step: no interior minimum
+
+    def column(t, c, d):
+        return (t - c) ** 2 * (1.0 + (t - c) ** (k - 2)) + d if k > 2 else (t - c) ** 2 + d
+
+    rows = np.array([[column(t, c, d) for c, d in zip(centres, depths)] for t in TIMES])
+    basis = np.zeros((4, stepper.SLOTS))
+    value, when = stepper._extremum_in_step(TIMES, rows, 3, k, 1.0, basis)
+    # the columns are (t - c)^2 (1 + (t - c)^(k-2)) + d: a minimum d at c; the second column's
+    # 0.1 is the smaller interior one (the third's -5 lies beyond the step)
+    assert value == pytest.approx(0.1, abs=1e-12)
+    assert when == pytest.approx(centres[1], abs=1e-9)  # 2^-50 of the step, and the root's
+    value, _ = stepper._extremum_in_step(TIMES, -rows, 3, k, -1.0, basis)
+    assert value == pytest.approx(-0.1, abs=1e-12)
+    value, _ = stepper._extremum_in_step(TIMES, rows[:, 2:], 1, k, 1.0, basis)
+    assert value == np.inf
+
+
+@pytest.mark.parametrize("k", [3, 4, 5])
+def test_dissipated_in_step_integrates_its_polynomial_exactly(k):
+    """``_dissipated_in_step``: the integral over the last step of the polynomial through the
+    ``k + 1`` newest dissipation rates, exact for degree ``k`` (Gauss-Legendre's three points
+    are exact to degree 5)."""
+    n = 2
+    rate = lambda t: 1.0 + (t - 0.1) ** k  # noqa: E731
+    antiderivative = lambda t: t + (t - 0.1) ** (k + 1) / (k + 1)  # noqa: E731
+    slots = stepper.SLOTS
+    hist = stepper.History(np.zeros((slots, n + 2)), np.zeros((slots, n)), np.zeros((slots, n)),
+                           TIMES.copy(), rate(TIMES), np.array([slots]),
+                           np.array([k, 0], dtype=np.int64))
+    got = stepper._dissipated_in_step(hist, k, np.zeros((4, slots)))
+    # 1e-13: a few roundings of O(1) values over a step of 0.1
+    assert got == pytest.approx(antiderivative(TIMES[0]) - antiderivative(TIMES[1]), abs=1e-13)
+
+
 def test_step_factor_bounds_growth_and_keeps_the_lu():
     """Growth at most 2x (BDF2 zero-stability needs < 2.41x), shrink at most 5x, and a proposed
     growth under 1.2x keeps the step (and so the factorised matrix); above order 2 the growth
@@ -130,8 +187,13 @@ def test_counters_are_named_in_the_order_the_loop_returns_them():
             stepper.LOWRANK, stepper.HIGHER_ORDER] == list(range(len(stepper.COUNTERS)))
     from solver import Physics, collide
 
-    c = collide(Physics(St=10.0, eps=1e-2), accuracy="fast", save_profiles=False)
-    # every attempt runs Newton at least once and every accepted step is an attempt
-    assert c.newton_iterations >= c.steps + c.rejected_steps > 0
-    assert 0 < c.lu_factorizations <= c.newton_iterations
-    assert c.higher_order_steps == 0  # the preset's BDF2
+    for order in (2, 5):
+        c = collide(Physics(St=10.0, eps=1e-2), accuracy="fast", max_order=order,
+                    save_profiles=False)
+        # every attempt runs Newton at least once and every accepted step is an attempt
+        assert c.newton_iterations >= c.steps + c.rejected_steps > 0
+        assert 0 < c.lu_factorizations <= c.newton_iterations
+        if order == 2:  # BDF2
+            assert c.higher_order_steps == 0
+        else:  # the first steps are at orders 1 and 2, before the order may rise
+            assert 0 < c.higher_order_steps < c.steps

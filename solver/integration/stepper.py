@@ -36,6 +36,7 @@ Counters: ``STEPS``, ``REJECTED``, ``NEWTON``, ``LU``, ``JACOBIANS``, ``LOWRANK`
 (``COUNTERS`` names them in that order).
 """
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -84,6 +85,12 @@ _W0, _H_MIN, _R_H_MIN = SERIES_INDEX["W0"], SERIES_INDEX["H_min"], SERIES_INDEX[
 _E_K, _E_S, _DISS = SERIES_INDEX["E_k"], SERIES_INDEX["E_s"], SERIES_INDEX["dissipated"]
 _H0, _W_ABSMAX = SERIES_INDEX["H0"], SERIES_INDEX["W_absmax"]
 _P_MAX, _P_MIN = SERIES_INDEX["P_max"], SERIES_INDEX["P_min"]
+_ORDER, _H_MIN_STEP = SERIES_INDEX["order"], SERIES_INDEX["H_min_step"]
+_P_MAX_STEP, _H0_AT_P_MAX_STEP = SERIES_INDEX["P_max_step"], SERIES_INDEX["H0_at_P_max_step"]
+# Gauss-Legendre's three points on [-1, 1] and their weights: exact for polynomials of degree 5,
+# the highest order's interpolant (``_dissipated_in_step``)
+GAUSS3 = ((-math.sqrt(0.6), 5.0 / 9.0), (0.0, 8.0 / 9.0), (math.sqrt(0.6), 5.0 / 9.0))
+BISECTIONS = 50  # halvings of a step's interval to locate a cell's extremum in it (2^-50)
 
 
 # ---- the records: what the caller hands in, and what the loop allocates once -------------------
@@ -102,24 +109,39 @@ class Start(NamedTuple):
 
 class Control(NamedTuple):
     """The step control: relative tolerance, first and smallest step, most accepted steps, the
-    highest BDF order (1 to ``MAX_ORDER``; 2: the presets' BDF2)."""
+    highest BDF order (1 to ``MAX_ORDER``; 2: BDF2), and the factor on the tolerance where the
+    order may rise above 2 (``_film_control``)."""
 
     rtol: float
     dt_init: float
     dt_min: float
     max_steps: int
     max_order: int
+    high_order_rtol_factor: float
+
+
+@jit
+def _film_control(control, phys):
+    """The control the film's integration takes: where the order may rise above 2 (``max_order >
+    2`` and a film smooth in time, model/step.py: ``smooth_in_time``) its tolerance is ``rtol``
+    times ``high_order_rtol_factor`` (solver/settings.py: the presets' factors keep every error
+    of benchmarks/accuracy.md at or below BDF2's at ``rtol``); a film that stays at BDF2 keeps
+    ``rtol``."""
+    if control.max_order > 2 and model.smooth_in_time(phys):
+        return Control(control.rtol * control.high_order_rtol_factor, control.dt_init,
+                       control.dt_min, control.max_steps, control.max_order, 1.0)
+    return control
 
 
 # The accepted states the BDF step and its predictor read, newest first (row 0), as many rows as
 # the highest order's predictor reads (``_history``: 3 for BDF2, ``max_order + 1`` above):
 # solutions ``y`` (rows, m), gaps ``h`` and the cells' content ``c`` (rows, N) (model/step.py:
-# ``accepted_content``), their times ``t`` (rows,) and how many are held, ``n`` (1,), at most
-# rows; ``order`` (2,): the order the next step takes (as far as the history reaches) and the
-# steps accepted since it was chosen. A record, not a NamedTuple: a NamedTuple's arrays were a
+# ``accepted_content``), their times ``t`` and the dissipation rates ``r`` (rows,) and how many
+# are held, ``n`` (1,), at most rows; ``order`` (2,): the order the next step takes (as far as
+# the history reaches) and the steps accepted since it was chosen. A record, not a NamedTuple: a NamedTuple's arrays were a
 # reference count each at each call of a function that takes it (docs/solver.md, "Reference
 # counting").
-History = array_record("History", ("y", "h", "c", "t", "n", "order"),
+History = array_record("History", ("y", "h", "c", "t", "r", "n", "order"),
                        "The accepted states the step reads (integration/stepper.py).", __name__)
 
 
@@ -130,9 +152,11 @@ History = array_record("History", ("y", "h", "c", "t", "n", "order"),
 # ``scale`` (N,): the gap's change, the film pressure's change (a rough film's) or K times an
 # error, the pressure's error scale (model/step.py: step_error); ``dres_dh`` (N, 3): the
 # Jacobian's gap partials (film.jacobian); ``a`` (SLOTS,): the step's BDF coefficients
-# (``_coefficients``); ``counters``: ``COUNTERS``.
+# (``_coefficients``); ``basis`` (4, SLOTS): the Lagrange basis of the newest states, its values
+# and slopes at a point, its slopes at the step's start and end (``_extremum_in_step``,
+# ``_dissipated_in_step``); ``counters``: ``COUNTERS``.
 Work = array_record("Work", ("y", "y_pred", "res", "w", "h", "q", "c_hist", "dh", "kdp",
-                               "scale", "dres_dh", "a", "counters"),
+                               "scale", "dres_dh", "a", "basis", "counters"),
                       "The time loop's work arrays (integration/stepper.py).", __name__)
 
 # The Newton matrix: ``jac`` (factorised in place) and its pivots ``piv``, ``base`` its copy
@@ -287,7 +311,8 @@ def _work(n):
     m = n + 2
     return Work(np.empty(m), np.empty(m), np.empty(m), np.empty(n), np.empty(n),
                 np.empty(n - 1), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
-                np.empty((n, 3)), np.zeros(SLOTS), np.zeros(len(COUNTERS), dtype=np.int64))
+                np.empty((n, 3)), np.zeros(SLOTS), np.zeros((4, SLOTS)),
+                np.zeros(len(COUNTERS), dtype=np.int64))
 
 
 @jit
@@ -532,6 +557,112 @@ def _record(row, t, grid, phys, y, w, h, strain, dissipated, film):
 
 
 @jit
+def _basis(t, k, x, values, slopes):
+    """The Lagrange basis through the ``k + 1`` newest times ``t[:k + 1]`` at ``x``: its values
+    into ``values[:k + 1]`` and its slopes into ``slopes[:k + 1]`` (each slope a sum of products,
+    also at the nodes themselves)."""
+    for j in range(k + 1):
+        lj = 1.0
+        dj = 0.0
+        for m in range(k + 1):
+            if m == j:
+                continue
+            lj *= (x - t[m]) / (t[j] - t[m])
+            term = 1.0 / (t[j] - t[m])
+            for i in range(k + 1):
+                if i != j and i != m:
+                    term *= (x - t[i]) / (t[j] - t[i])
+            dj += term
+        values[j] = lj
+        slopes[j] = dj
+
+
+@jit
+def _combine(weights, k, rows, col):
+    """``sum_j weights[j] rows[j, col]`` over the ``k + 1`` newest rows."""
+    out = 0.0
+    for j in range(k + 1):
+        out += weights[j] * rows[j, col]
+    return out
+
+
+@jit
+def _extremum_in_step(t, rows, cells, k, sign, basis):
+    """The extremum of ``rows[:, :cells]`` (the newest states first, times ``t``) over its
+    columns and over the last step (``t[1]`` to ``t[0]``), on the step's own interpolant: the
+    polynomial through the ``k + 1`` newest states (the BDF's dense output, order ``k``). The
+    smallest value where ``sign`` is 1, the largest where it is -1. A column that falls at the
+    step's start and rises at its end (times ``sign``) has its extremum inside, located by
+    bisection on the slope. Returns the extremum (inf times ``sign`` if no column has one inside
+    the step) and its time. Such a series, an extremum over the cells, is not smooth in time
+    where the cell that holds it changes (the dimple's rim moves), so a parabola through three
+    rows of it misreads it by the step's cube: at order 5 on the fast preset, ``h_m`` jumped by
+    0.7 % between neighbouring St 5 % apart, and the central gap at the peak pressure read 2 %
+    off."""
+    values, slopes, at_start, at_end = basis[0], basis[1], basis[2], basis[3]
+    _basis(t, k, t[1], values, at_start)
+    _basis(t, k, t[0], values, at_end)
+    best, t_best = np.inf, t[0]
+    for i in range(cells):
+        if not (sign * _combine(at_start, k, rows, i) < 0.0 < sign * _combine(at_end, k, rows, i)):
+            continue
+        lo, hi = t[1], t[0]
+        for _ in range(BISECTIONS):
+            mid = 0.5 * (lo + hi)
+            _basis(t, k, mid, values, slopes)
+            if sign * _combine(slopes, k, rows, i) < 0.0:
+                lo = mid
+            else:
+                hi = mid
+        t_i = 0.5 * (lo + hi)
+        _basis(t, k, t_i, values, slopes)
+        value = sign * _combine(values, k, rows, i)
+        if value < best:
+            best, t_best = value, t_i
+    return sign * best, t_best
+
+
+@jit
+def _dissipated_in_step(hist, k, basis):
+    """The energy dissipated over the last step above order 2: the integral of the polynomial
+    through the ``k + 1`` newest dissipation rates (``hist.r``), by Gauss-Legendre's three
+    points (exact to degree 5), so the energy balance is closed to the step's order; at orders 1
+    and 2 the loop keeps the trapezoidal rule."""
+    t, r = hist.t, hist.r
+    half = 0.5 * (t[0] - t[1])
+    mid = 0.5 * (t[0] + t[1])
+    total = 0.0
+    for x, weight in GAUSS3:
+        _basis(t, k, mid + x * half, basis[0], basis[1])
+        rate = 0.0
+        for j in range(k + 1):
+            rate += basis[0, j] * r[j]
+        total += weight * rate
+    return total * half
+
+
+@jit
+def _record_step(row, hist, k, basis):
+    """The series row's step columns: the order ``k`` of the step that ended at it (0: the first
+    row); above order 2, the smallest gap and the largest film pressure over the cells and that
+    step, and the central gap when the pressure peaks (``_extremum_in_step``; a film that rises
+    above order 2 is smooth, so its pressures are the solution's own slots, model/step.py:
+    ``smooth_in_time``); at orders 0-2, the row's own ``H_min``, ``P_max`` and ``H0``."""
+    row[_ORDER] = k
+    h_min, p_max, h0_at_p_max = row[_H_MIN], row[_P_MAX], row[_H0]
+    if k > 2:
+        cells = hist.h.shape[1]
+        h_min = min(h_min, _extremum_in_step(hist.t, hist.h, cells, k, 1.0, basis)[0])
+        p_step, t_p = _extremum_in_step(hist.t, hist.y, cells, k, -1.0, basis)
+        if p_step > p_max:
+            _basis(hist.t, k, t_p, basis[0], basis[1])
+            p_max, h0_at_p_max = p_step, _combine(basis[0], k, hist.h, 0)
+    row[_H_MIN_STEP] = h_min
+    row[_P_MAX_STEP] = p_max
+    row[_H0_AT_P_MAX_STEP] = h0_at_p_max
+
+
+@jit
 def _step_factor(err, order):
     """The next step's size over this one's after an accepted step of error ``err`` at
     ``order`` (its error ``~ dt^(order+1)``; orders 1 and 2 as BDF2's), at most ``GROWTH``."""
@@ -545,15 +676,12 @@ def _step_factor(err, order):
 
 @jit
 def _next_order(grid, phys, control, hist, dt, err, film, work):
-    """After an accepted step (``work.y``) of order ``k = hist.order[0]`` with error ``err``,
-    once ``k + 1`` steps were taken at it: the local errors of orders ``k - 1`` and ``k + 1``
-    (``_local_error`` with their predictors; ``k + 1`` only where the history holds ``k + 2``
-    states and up to ``control.max_order``), and the order among the three whose error allows
-    the largest step. Returns that order and its error. A film whose solution is not smooth in
-    time (model/step.py, ``smooth_in_time``) stays at order 2, the presets' BDF2."""
+    """After an accepted step (``work.y``) of order ``k = hist.order[0]`` with error ``err``:
+    the local errors of orders ``k - 1`` and ``k + 1`` (``_local_error`` with their predictors;
+    ``k + 1`` only where the history holds ``k + 2`` states and up to ``control.max_order``),
+    and the order among the three whose error allows the largest step. Returns that order and
+    its error."""
     k = hist.order[0]
-    if hist.order[1] < k + 1 or not model.smooth_in_time(phys):
-        return k, err
     k_max = control.max_order
     best, best_err = k, err
     rate = err ** (-1.0 / (k + 1.0)) if err > 0.0 else np.inf
@@ -570,15 +698,18 @@ def _next_order(grid, phys, control, hist, dt, err, film, work):
 
 @jit
 def _next_step(grid, phys, control, hist, dt, err, film, work):
-    """After an accepted step of error ``err``: the next step's order (``_next_order``, above
-    order 2) into ``hist.order``, and its size over this one's (``_step_factor``)."""
+    """After an accepted step of error ``err``: the next step's order into ``hist.order``, and
+    its size over this one's (``_step_factor``). Above order 2, once ``k + 1`` steps were taken
+    at the order ``k``, ``_next_order`` chooses it again, and the choice (the same order or
+    another) holds for ``k + 1`` steps, as SciPy's BDF does: checking after every step cost
+    about one Newton iteration a step (two predictors and two error norms, each with an N x N
+    product), 0.77-0.79x the CPU time of a collision at order 5 with the same steps. A film
+    whose solution is not smooth in time (model/step.py, ``smooth_in_time``) stays at order 2."""
     k = hist.order[0]
-    if control.max_order > 2:
-        k_next, err = _next_order(grid, phys, control, hist, dt, err, film, work)
-        if k_next != k:
-            hist.order[0] = k_next
-            hist.order[1] = -1
-            k = k_next
+    if control.max_order > 2 and hist.order[1] >= k + 1 and model.smooth_in_time(phys):
+        k, err = _next_order(grid, phys, control, hist, dt, err, film, work)
+        hist.order[0] = k
+        hist.order[1] = -1
     hist.order[1] += 1
     return _step_factor(err, k)
 
@@ -681,7 +812,7 @@ def _history(grid, start, max_order):
     order = np.zeros(2, dtype=np.int64)
     order[0] = min(max_order, 2)
     return History(y, h, np.full((slots, n), np.nan), np.full(slots, start.t),
-                   np.ones(1, dtype=np.int64), order)
+                   np.full(slots, np.nan), np.ones(1, dtype=np.int64), order)
 
 
 @jit
@@ -694,14 +825,16 @@ def _fill(rows, row):
 @jit
 def _shift(hist, dt, work):
     """The accepted step of size ``dt`` (``work.y``, ``work.h``) becomes the newest state; each
-    older one moves down a row (the content's newest row is written by ``_accept``)."""
-    y, h, c, t = hist.y, hist.h, hist.c, hist.t
+    older one moves down a row (the content's newest row is written by ``_accept``, the
+    dissipation rate's by ``integrate``)."""
+    y, h, c, t, r = hist.y, hist.h, hist.c, hist.t, hist.r
     slots = t.size
     for j in range(slots - 1, 0, -1):
         copy_into(y[j], y[j - 1])
         copy_into(h[j], h[j - 1])
         copy_into(c[j], c[j - 1])
         t[j] = t[j - 1]
+        r[j] = r[j - 1]
     copy_into(y[0], work.y)
     copy_into(h[0], work.h)
     t[0] = t[0] + dt
@@ -729,6 +862,27 @@ def _series(rows, n, save_profiles):
 
 
 @jit
+def _initial_film(grid, phys, hist, work):
+    """The film at the start, ``hist``'s newest state: its face fluxes (``work.q``), its state
+    (model/step.py: ``new_film``), its gap with a contact load, if any (``work.w``, ``work.h``),
+    and the gap, content and dissipation rate in every row of the history. Returns the film, its
+    strain energy and its dissipation rate."""
+    n = grid.s.size
+    y0, w, h, q = hist.y[0], work.w, work.h, work.q
+    copy_into(h, hist.h[0])
+    model.face_fluxes(grid, y0[:n], h, phys, q)
+    film = model.new_film(q)
+    model.surface_gap(grid, phys, y0, film, w, h)
+    _fill(hist.h, h)
+    model.accepted_content(y0, h, film, phys, hist.c[0])
+    _fill(hist.c, hist.c[0])
+    strain, diss_rate = model.energies(grid, phys, y0, w, h, q, film)
+    for j in range(hist.r.size):
+        hist.r[j] = diss_rate
+    return film, strain, diss_rate
+
+
+@jit
 def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles):
     """Integrate on the grid ``grid`` (grid.py: ``Nodes``) from ``start`` (``Start``) with the
     step control ``control`` (``Control``) until the terminal event ``stop_kind`` with
@@ -750,24 +904,18 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
         ``save_profiles``, else (0, N-1).
     """
     n = grid.s.size
+    control = _film_control(control, phys)
     hist = _history(grid, start, control.max_order)
     work = _work(n)
     fac = _factorisation(n + 2)
     w, h, q = work.w, work.h, work.q
     y0 = hist.y[0]  # the newest accepted state: _shift writes each new one into this row
-    copy_into(h, hist.h[0])
     rows = 256
     series, p_hist, w_hist, theta_hist = _series(rows, n, save_profiles)
-    # initial row
-    model.face_fluxes(grid, y0[:n], h, phys, q)
-    film = model.new_film(q)
-    model.surface_gap(grid, phys, y0, film, w, h)  # with a contact load, if any
-    _fill(hist.h, h)
-    model.accepted_content(y0, h, film, phys, hist.c[0])
-    _fill(hist.c, hist.c[0])
-    strain, diss_rate = model.energies(grid, phys, y0, w, h, q, film)
+    film, strain, diss_rate = _initial_film(grid, phys, hist, work)
     dissipated = start.dissipated
     n_rows = 0
+    k_step = 0  # the order of the step that ended at the newest state (0: none yet)
     dt = control.dt_init
     status = RUNNING
     while True:
@@ -779,6 +927,7 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
                                               _grow(theta_hist, rows))
         wmax, r_event = _record(series[n_rows], hist.t[0], grid, phys, y0, w, h, strain,
                                 dissipated, film)
+        _record_step(series[n_rows], hist, k_step, work.basis)
         if save_profiles:
             copy_into(p_hist[n_rows], model.film_pressure(y0, film, phys))
             copy_into(w_hist[n_rows], w)
@@ -798,10 +947,15 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
             model.start_attempt(y0, film, phys)
             model.surface_gap(grid, phys, y0, film, w, h)
             continue
+        k_step = min(hist.order[0], hist.n[0])
         factor = _next_step(grid, phys, control, hist, dt, err, film, work)
         _accept(grid, phys, hist, dt, film, work)
         strain_new, diss_new = model.energies(grid, phys, y0, w, h, q, film)
-        dissipated += 0.5 * (diss_rate + diss_new) * dt
+        hist.r[0] = diss_new
+        if k_step > 2:
+            dissipated += _dissipated_in_step(hist, k_step, work.basis)
+        else:
+            dissipated += 0.5 * (diss_rate + diss_new) * dt
         strain = strain_new
         diss_rate = diss_new
         dt *= factor
