@@ -511,16 +511,17 @@ def _gap_observables(result, cols, tau):
     at_stop = None
     if below.size:
         # approach phase ends at the interpolated v = 0 between rows j-1 and j: on a straight
-        # line at orders up to 2, on the step's interpolant above; the smallest gap (over the
-        # cells, not smooth in time) there on a straight line between the rows
+        # line at orders up to 2; above, on the step's interpolant, with the smallest gap over
+        # the cells there as the loop read it (integration/stepper.py: _record_step)
         j = int(below[0])
         frac = v_c[j - 1] / (v_c[j - 1] - v_c[j])
+        h_at_stop = h_min[j - 1] + (h_min[j] - h_min[j - 1]) * frac
         poly = _step_interpolant(tau, v_c, j, order)
         if poly is not None and _roots_in_step(poly):
             at_stop = min(_roots_in_step(poly))  # the first time v reaches 0
             frac = 1.0 + at_stop
+            h_at_stop = cols["H_min_at_v0"][j]
         result.tau_v_zero = float(tau[j - 1] + (tau[j] - tau[j - 1]) * frac)
-        h_at_stop = h_min[j - 1] + (h_min[j] - h_min[j - 1]) * frac
         h_app = _gap_minimum(tau, h_min, h_min_step, order, int(np.argmin(h_min[:j])), j)
         result.h_m_approach_x1 = float(min(h_app, h_at_stop))
     else:
@@ -538,11 +539,9 @@ def _approach_peak_pressure(result, cols, tau, below, at_stop):
     i = int(np.argmax(p_max[:j_app]))
     if i == j_app - 1 and at_stop is not None:
         # still rising when the approach ends, inside a step above order 2: read at v = 0 (not
-        # at the row past it), the largest pressure over the cells on a straight line between
-        # the rows, the central gap on the step's interpolant
-        result.p_max_approach = float(p_max[i - 1] + (p_max[i] - p_max[i - 1]) * (1.0 + at_stop))
-        result.h_axis_at_peak_pressure_x1 = float(
-            _step_interpolant(tau, cols["H0"], i, order)(at_stop))
+        # at the row past it), as the loop read it (integration/stepper.py: _record_step)
+        result.p_max_approach = float(cols["P_max_at_v0"][i])
+        result.h_axis_at_peak_pressure_x1 = float(cols["H0_at_v0"][i])
     elif 0 < i < j_app - 1 and max(order[i], order[i + 1]) > 2:
         # above order 2, the loop's interpolants of the steps either side of row i (the largest
         # over the cells is not smooth in time; integration/stepper.py: _extremum_in_step)
