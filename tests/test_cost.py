@@ -3,9 +3,8 @@
 Counts for St = 10, eps = 0.01 and St = 30, eps = 1e-8, measured with the presets of solver 1.12.0
 (orders up to 5; benchmarks/accuracy.md); the ceilings allow 30 % drift for harmless changes.
 Rejected steps have a ceiling of their own: at orders up to 5 a collision takes a fifth to a third
-of BDF2's steps and about as many rejections (14-16 here, 4-6 % of the attempts at standard and
-fine, 9 % at fast), so a share of the accepted steps (BDF2's was under 10 %) no longer says
-whether the step control regressed."""
+of BDF2's steps and about as many rejections (13-21 here, 5-8 % of the attempts), so a share of
+the accepted steps (BDF2's was under 10 %) no longer says whether the step control regressed."""
 
 import pytest
 
@@ -13,10 +12,10 @@ from solver import collide
 
 MEASURED = {  # (accuracy, St, eps): (accepted steps, Newton iterations, LU factorisations,
     #                                  rejected steps)
-    ("fast", 10.0, 1e-2): (155, 734, 61, 16),
-    ("standard", 10.0, 1e-2): (234, 1056, 71, 14),
-    ("standard", 30.0, 1e-8): (286, 1446, 93, 14),
-    ("fine", 10.0, 1e-2): (324, 1342, 78, 14),
+    ("fast", 10.0, 1e-2): (156, 548, 63, 13),
+    ("standard", 10.0, 1e-2): (232, 740, 76, 15),
+    ("standard", 30.0, 1e-8): (286, 980, 106, 21),
+    ("fine", 10.0, 1e-2): (324, 953, 90, 16),
 }
 
 
