@@ -70,9 +70,10 @@ MAX_NEWTON = 7
 # Above order 2, a step whose Newton took this many iterations on a matrix factorised at an
 # earlier step has the next attempt factorise afresh: its steps are 3-5x longer than BDF2's, so
 # a reused matrix is further from the solution (4.5 iterations a step against BDF2's 2.7).
-# Measured on the classic film (standard preset, 18 scenes, alternated, 5 rounds): 0.93x the
-# CPU time (scene medians 0.86-1.02), 30 % fewer iterations for 8 % more factorisations. At
-# orders 1-2 the loop keeps the matrix while b dt stays within 30 % (BDF2's results unchanged).
+# Measured on the classic film (alternated, 5 rounds): 0.93x the CPU time at the standard preset
+# (18 scenes, scene medians 0.86-1.02; 30 % fewer iterations for 8 % more factorisations), 0.95x
+# at the fine one (5 scenes, 0.92-1.03). At orders 1-2 the loop keeps the matrix while b dt
+# stays within 30 % (BDF2's results unchanged).
 SLOW_NEWTON = 4
 MAX_ORDER = 5  # the highest BDF order the loop takes (Control.max_order chooses up to it)
 SLOTS = MAX_ORDER + 1  # accepted states held at most: the order-5 predictor's points
