@@ -96,13 +96,15 @@ def render(rows, meta, doc) -> str:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--accuracy", default="standard")
+    p.add_argument("--accuracy", default="standard", choices=("fast", "standard", "fine"))
     p.add_argument("--order", type=int, default=5, help="the highest order compared (3-5)")
     p.add_argument("--factor", type=float, default=None,
                    help="the tolerance above order 2 over rtol (default: the preset's)")
     p.add_argument("--rounds", type=int, default=5)
     p.add_argument("--out", default=str(REPO / "benchmarks" / "order.md"))
     args = p.parse_args(argv)
+    if not Path(args.out).parent.is_dir():  # fail before the runs, not after them
+        p.error(f"--out {args.out}: its folder does not exist")
     from solver.settings import PRESETS
 
     factor = PRESETS[args.accuracy].high_order_rtol_factor if args.factor is None else args.factor

@@ -151,7 +151,7 @@ def report(ref, versus, physics, repeats, doc, accuracy="standard") -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--ref", default="bfedd7c", help="reference commit (default: bfedd7c)")
-    parser.add_argument("--accuracy", default="standard",
+    parser.add_argument("--accuracy", default="standard", choices=("fast", "standard", "fine"),
                         help="the preset of the classic film against the reference (default: "
                              "standard; the physics against the classic film: always standard)")
     parser.add_argument("--out", default=str(HERE / "versus.md"),
@@ -159,6 +159,8 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true",
                         help="two scenes, the fewest rounds that can say 'moved', into /tmp")
     args = parser.parse_args()
+    if not Path(args.out).parent.is_dir():  # fail before the runs, not after them
+        parser.error(f"--out {args.out}: its folder does not exist")
     scenes = [(st, eps) for eps in EPS for st in STOKES]
     repeats, out = REPEATS, Path(args.out)
     physics_scenes = PHYSICS_SCENES

@@ -500,44 +500,44 @@ def _gap_minimum(tau, h_min, h_min_step, order, i, end):
     return min(h_min_step[i], h_min_step[i + 1])
 
 
-def _gap_observables(result, cols, tau):
+def _gap_observables(result, cols, tau, tau_per_t):
     """The closest approach over the coupled phase and over its approach, and the time ``v``
-    first reaches 0; returns the rows where ``v <= 0`` and, where ``v`` first reaches 0 inside
-    a step above order 2, the step's variable ``u`` there (``_step_interpolant``; else None)."""
+    first reaches 0; returns the rows where ``v <= 0`` and whether ``v`` first reaches 0 inside
+    a step above order 2 (where the loop read the values there: ``T_at_v0``)."""
     v_c, order, h_min, h_min_step = cols["V"], cols["order"], cols["H_min"], cols["H_min_step"]
     result.h_m_x1 = float(_gap_minimum(tau, h_min, h_min_step, order, int(np.argmin(h_min)),
                                        len(h_min)))
     below = np.nonzero(v_c <= 0.0)[0]
-    at_stop = None
+    stop_in_step = False
     if below.size:
         # approach phase ends at the interpolated v = 0 between rows j-1 and j: on a straight
         # line at orders up to 2; above, on the step's interpolant, with the smallest gap over
-        # the cells there as the loop read it (integration/stepper.py: _record_step)
+        # the cells there, as the loop read them (integration/stepper.py: _record_step)
         j = int(below[0])
-        frac = v_c[j - 1] / (v_c[j - 1] - v_c[j])
-        h_at_stop = h_min[j - 1] + (h_min[j] - h_min[j - 1]) * frac
-        poly = _step_interpolant(tau, v_c, j, order)
-        if poly is not None and _roots_in_step(poly):
-            at_stop = min(_roots_in_step(poly))  # the first time v reaches 0
-            frac = 1.0 + at_stop
+        stop_in_step = bool(np.isfinite(cols["T_at_v0"][j]))
+        if stop_in_step:
+            result.tau_v_zero = float(cols["T_at_v0"][j] * tau_per_t)
             h_at_stop = cols["H_min_at_v0"][j]
-        result.tau_v_zero = float(tau[j - 1] + (tau[j] - tau[j - 1]) * frac)
+        else:
+            frac = v_c[j - 1] / (v_c[j - 1] - v_c[j])
+            result.tau_v_zero = float(tau[j - 1] + (tau[j] - tau[j - 1]) * frac)
+            h_at_stop = h_min[j - 1] + (h_min[j] - h_min[j - 1]) * frac
         h_app = _gap_minimum(tau, h_min, h_min_step, order, int(np.argmin(h_min[:j])), j)
         result.h_m_approach_x1 = float(min(h_app, h_at_stop))
     else:
         result.tau_v_zero = math.inf  # rigid creep to rest: v reaches 0 only as t -> inf
         result.h_m_approach_x1 = result.h_m_x1
-    return below, at_stop
+    return below, stop_in_step
 
 
-def _approach_peak_pressure(result, cols, tau, below, at_stop):
+def _approach_peak_pressure(result, cols, tau, below, stop_in_step):
     """The largest film pressure over the approach (until ``v`` first reaches 0: the pressure
     spike where a trapped lens collapses later does not converge under refinement) and the
     central gap when it is reached."""
     order, p_max = cols["order"], cols["P_max"]
     j_app = int(below[0]) + 1 if below.size else len(tau)
     i = int(np.argmax(p_max[:j_app]))
-    if i == j_app - 1 and at_stop is not None:
+    if i == j_app - 1 and stop_in_step:
         # still rising when the approach ends, inside a step above order 2: read at v = 0 (not
         # at the row past it), as the loop read it (integration/stepper.py: _record_step)
         result.p_max_approach = float(cols["P_max_at_v0"][i])
@@ -566,8 +566,8 @@ def _coupled_observables(result, cols, tau_per_t, ln_x_e, v_rel):
         t_pk, v_pk = _peak(tau, v_c, i, order, lowest=True)
         result.v_r = float(-v_pk)
         result.tau_max_rebound = float(t_pk)
-    below, at_stop = _gap_observables(result, cols, tau)
-    _approach_peak_pressure(result, cols, tau, below, at_stop)
+    below, stop_in_step = _gap_observables(result, cols, tau, tau_per_t)
+    _approach_peak_pressure(result, cols, tau, below, stop_in_step)
     i = int(np.argmin(x_c))
     result.x_min_x1 = float(_peak(tau, x_c, i, order, lowest=True)[1])
     if v_rel > 0.0:  # still approaching when released: rigid creep down to x_e

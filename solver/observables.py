@@ -318,9 +318,9 @@ SERIES = (
            kept=False),
     Column("H0_at_P_max_step", "central gap when P_max_step is reached (H0 at orders 0-2)", "x1",
            kept=False),
-    Column("H_min_at_v0", "minimum gap where V falls through 0 inside the step that ended at this "
-           "row, on the step's interpolating polynomial above order 2 (else H_min)", "x1",
-           kept=False),
+    Column("T_at_v0", "time where V falls through 0 inside the step that ended at this row, on "
+           "the step's interpolating polynomial above order 2 (else NaN)", "x1/v0", kept=False),
+    Column("H_min_at_v0", "minimum gap there (else H_min)", "x1", kept=False),
     Column("P_max_at_v0", "largest film pressure there (else P_max)", _P, kept=False),
     Column("H0_at_v0", "central gap there (else H0)", "x1", kept=False),
     Column("P_max", "largest film pressure over the radius", _P),

@@ -96,7 +96,7 @@ _P_MAX, _P_MIN = SERIES_INDEX["P_max"], SERIES_INDEX["P_min"]
 _ORDER, _H_MIN_STEP = SERIES_INDEX["order"], SERIES_INDEX["H_min_step"]
 _P_MAX_STEP, _H0_AT_P_MAX_STEP = SERIES_INDEX["P_max_step"], SERIES_INDEX["H0_at_P_max_step"]
 _H_MIN_AT_V0, _P_MAX_AT_V0 = SERIES_INDEX["H_min_at_v0"], SERIES_INDEX["P_max_at_v0"]
-_H0_AT_V0 = SERIES_INDEX["H0_at_v0"]
+_H0_AT_V0, _T_AT_V0 = SERIES_INDEX["H0_at_v0"], SERIES_INDEX["T_at_v0"]
 # Gauss-Legendre's three points on [-1, 1] and their weights: exact for polynomials of degree 5,
 # the highest order's interpolant (``_dissipated_in_step``)
 GAUSS3 = ((-math.sqrt(0.6), 5.0 / 9.0), (0.0, 8.0 / 9.0), (math.sqrt(0.6), 5.0 / 9.0))
@@ -674,13 +674,14 @@ def _record_step(row, hist, k, basis):
     """The series row's step columns: the order ``k`` of the step that ended at it (0: the first
     row); above order 2, the smallest gap and the largest film pressure over the cells and that
     step, and the central gap when the pressure peaks (``_extremum_in_step``), and where the
-    approach speed ``V`` falls through 0 inside the step, the smallest gap, the largest pressure
-    and the central gap there (``_stop_in_step``). A film that rises above order 2 is smooth,
+    approach speed ``V`` falls through 0 inside the step, that time and the smallest gap, the
+    largest pressure and the central gap there (``_stop_in_step``; the time NaN where it does
+    not). A film that rises above order 2 is smooth,
     so its pressures are the solution's own slots (model/step.py: ``smooth_in_time``). At orders
     0-2, the row's own ``H_min``, ``P_max`` and ``H0``."""
     row[_ORDER] = k
     h_min, p_max, h0_at_p_max = row[_H_MIN], row[_P_MAX], row[_H0]
-    h_v0, p_v0, h0_v0 = h_min, p_max, h0_at_p_max
+    h_v0, p_v0, h0_v0, t_v0 = h_min, p_max, h0_at_p_max, np.nan
     if k > 2:
         cells = hist.h.shape[1]
         h_min = min(h_min, _extremum_in_step(hist.t, hist.h, cells, k, 1.0, basis)[0])
@@ -689,7 +690,7 @@ def _record_step(row, hist, k, basis):
             _basis(hist.t, k, t_p, basis[0], basis[1])
             p_max, h0_at_p_max = p_step, _combine(basis[0], k, hist.h, 0)
         if hist.y[1, cells + 1] > 0.0 >= hist.y[0, cells + 1]:
-            _stop_in_step(hist.t, hist.y, cells + 1, k, basis)
+            t_v0 = _stop_in_step(hist.t, hist.y, cells + 1, k, basis)
             h_v0, p_v0 = np.inf, -np.inf
             for i in range(cells):
                 h_v0 = min(h_v0, _combine(basis[0], k, hist.h, i))
@@ -701,6 +702,7 @@ def _record_step(row, hist, k, basis):
     row[_H_MIN_AT_V0] = h_v0
     row[_P_MAX_AT_V0] = p_v0
     row[_H0_AT_V0] = h0_v0
+    row[_T_AT_V0] = t_v0
 
 
 @jit
