@@ -23,6 +23,9 @@
 - ``hook``: ``jit`` with numba's ``inline="always"``, for the film contract's small answers on
   the loop's path: inlined, they cost their callers no reference counts (docs/solver.md,
   "Reference counting"), and the cold compile fell with them (0.91x, 3 alternated rounds).
+- ``leaf``: ``jit`` compiled without numba's reference counting, for the functions called once
+  per face or cell that read arrays and return numbers (the liquid's laws, the face flux):
+  inlined instead, their bindings of ``phys`` were still counted in every call.
 """
 
 import hashlib
@@ -110,6 +113,17 @@ _FLAGS = dict(cache=CACHE_DIR is not None, nogil=True, fastmath=FASTMATH, error_
 
 def jit(func):
     return numba.njit(**_FLAGS)(func)
+
+
+def leaf(func):
+    """``jit`` without numba's reference counting, for the functions a loop calls once per face or
+    cell that read arrays (the physics array ``phys``, the grid's record) and return only numbers:
+    nothing they receive can be freed while they run (their caller holds it), and they create
+    no array (numba refuses to compile an allocation without its runtime). With the counts, a
+    pressure-dependent liquid's face flux took 5-10 of them per face, 38 % of its collision's
+    CPU time (docs/solver.md, "Reference counting"). Never for a function that returns an array
+    or a view: its caller would release a reference it was never given."""
+    return numba.njit(**_FLAGS, _nrt=False)(func)
 
 
 def hook(func):

@@ -30,7 +30,7 @@ physics array ``phys`` (solver/physics.py, ``Physics.as_array``) carries the dim
 
 import numpy as np
 
-from .._jit import hook, jit
+from .._jit import hook, jit, leaf
 from ..integration.linalg import matvec
 from ..physics import CAVITATION, CAVITATION_MODELS, DENSITY, PI, SLIP, ST
 from .liquid import (CONSTANT, compression_energy, density, isoviscous, kirchhoff_difference,
@@ -63,7 +63,7 @@ def flux_law(s_lo, s_hi, s_f, h_lo, h_hi, dp):
     return q, c, dq_dh_lo, dq_dh_hi
 
 
-@jit
+@leaf
 def face_flux(s_lo, s_hi, s_f, p_lo, p_hi, h_lo, h_hi, phys):
     """Flux ``q_f`` through the face at ``s_f`` between nodes ``lo`` and ``hi`` (``flux_law``),
     and its partial derivatives. The pressure difference that drives it is ``Int rho_bar/mu_bar
@@ -83,7 +83,7 @@ def face_flux(s_lo, s_hi, s_f, p_lo, p_hi, h_lo, h_hi, phys):
             dq_dh_hi * g + q * dg_dh_hi)
 
 
-@jit
+@leaf
 def face_dissipation(s_lo, s_hi, s_f, p_lo, p_hi, h_lo, h_hi, q, phys):
     """``Int J dP/ds ds`` over the face interval for the face's mass flux ``q`` (``J = q/rho_bar``
     the volume flux): with ``q ~ s`` and ``H`` linear in ``s`` as in ``flux_law`` it is
@@ -94,7 +94,7 @@ def face_dissipation(s_lo, s_hi, s_f, p_lo, p_hi, h_lo, h_hi, q, phys):
     return dissipation_law(s_lo, s_hi, s_f, h_lo, h_hi, q, volume_difference(p_lo, p_hi, phys))
 
 
-@jit
+@leaf
 def dissipation_law(s_lo, s_hi, s_f, h_lo, h_hi, q, dp):
     """``face_dissipation`` for the pressure work ``dp = Int dP/rho_bar`` per unit volume: ``q dp
     s_bar / s_f``, the one place the formula is written."""
@@ -147,7 +147,7 @@ def cell_constraint(p, phys):
     return p + phys[PI], 1.0
 
 
-@jit
+@leaf
 def cell_content(theta, h, p, phys):
     """Liquid content of a cell per unit area, ``rho_bar theta H`` (``theta`` the fraction of the
     gap the liquid fills: 1 in a full cell, and in every cell of the classic and Reynolds films;
@@ -290,18 +290,18 @@ def face_fluxes(grid, p, h, phys, q_out):
     face made the classic residual slower, measured in docs/solver.md: 19 us against 0.6 us);
     slip (model/slip.py) and the pressure-dependent liquids take ``general_fluxes``. Inlined
     into its callers (``hook``), so the choice costs them no reference counts."""
+    s, s_face = grid.s, grid.s_face
     if plain_flux(phys):
-        s, s_face = grid.s, grid.s_face
         for f in range(s.size - 1):
             q_out[f] = flux_law(s[f], s[f + 1], s_face[f], h[f], h[f + 1], p[f + 1] - p[f])[0]
     else:
-        general_fluxes(grid, p, h, phys, q_out)
+        general_fluxes(s, s_face, p, h, phys, q_out)
 
 
-@jit
-def general_fluxes(grid, p, h, phys, q_out):
-    """``face_fluxes`` through ``face_flux`` at every face: any liquid law, slip."""
-    s, s_face = grid.s, grid.s_face
+@leaf
+def general_fluxes(s, s_face, p, h, phys, q_out):
+    """``face_fluxes`` through ``face_flux`` at every face (nodes ``s``, faces ``s_face``): any
+    liquid law, slip. A ``leaf``, so it takes the grid's arrays rather than its record."""
     for f in range(s.size - 1):
         q_out[f] = face_flux(s[f], s[f + 1], s_face[f], p[f], p[f + 1], h[f], h[f + 1], phys)[0]
 

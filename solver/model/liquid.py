@@ -32,7 +32,7 @@ import math
 
 import numpy as np
 
-from .._jit import jit
+from .._jit import leaf
 from ..physics import (BETA, DENSITY, DENSITY_LAWS, DH_C1, DH_C2, ROELANDS_PR, ROELANDS_Z, TABLE,
                        TENSION, TENSION_CHOICES, VISCOSITY, VISCOSITY_LAWS)
 
@@ -56,13 +56,13 @@ TENSION_WIDTH = 0.01
 THINNING_LIMIT = 300.0
 
 
-@jit
+@leaf
 def isoviscous(phys):
     """True when neither viscosity nor density depends on pressure (the classic film)."""
     return phys[VISCOSITY] == CONSTANT and phys[DENSITY] == CONSTANT
 
 
-@jit
+@leaf
 def log_viscosity(p, phys):
     """``ln mu_bar`` at the pressure ``p`` and its derivative in ``p``."""
     law = phys[VISCOSITY]
@@ -82,7 +82,7 @@ def log_viscosity(p, phys):
     return beta * p_r / z * (base**z - 1.0), slope
 
 
-@jit
+@leaf
 def _tabulated(p, phys):
     """``ln mu_bar`` of the table and its slope: linear between the points, extended beyond the
     ends with the end segments' slopes (in tension too when the law is read there)."""
@@ -95,7 +95,7 @@ def _tabulated(p, phys):
     return phys[TABLE + 1 + k + j] + slope * (p - p0), slope
 
 
-@jit
+@leaf
 def _next_kink(x, b, phys):
     """The first pressure above ``x`` and below ``b`` where ``ln(mu/rho)`` has a kink: 0 (the
     viscosity law applies to compression only, and the density changes its law there) and a
@@ -112,7 +112,7 @@ def _next_kink(x, b, phys):
     return nxt
 
 
-@jit
+@leaf
 def density(p, phys):
     """``rho_bar`` at the pressure ``p`` and its derivative in ``p``: Dowson-Higginson in
     compression; in tension its compressibility ``c1`` at 0 fades over ``TENSION_WIDTH``,
@@ -129,7 +129,7 @@ def density(p, phys):
     return 1.0 + c1 * p / den, c1 / (den * den)
 
 
-@jit
+@leaf
 def _mobility_log(p, phys):
     """``g = ln mu_bar - ln rho_bar`` (``rho_bar/mu_bar = exp(-g)``) and ``dg/dp``; held at
     ``-THINNING_LIMIT`` below it (only a viscosity law read in tension gets there)."""
@@ -143,7 +143,7 @@ def _mobility_log(p, phys):
     return g, dg
 
 
-@jit
+@leaf
 def _fitted(a, b, phys):
     """``Int_a^b exp(-g) dP`` with ``g`` linear between ``a`` and ``b`` (on one side of 0), and its
     derivatives in ``a`` and ``b``.
@@ -174,7 +174,7 @@ def _fitted(a, b, phys):
     return span * mean, -mean + span * dmean_da * dga, mean + span * dmean_db * dgb
 
 
-@jit
+@leaf
 def kirchhoff_difference(p_lo, p_hi, phys):
     """``Int_{p_lo}^{p_hi} rho_bar / mu_bar dP``, the pressure difference that drives the flux
     between two nodes, and its derivatives in ``p_lo`` and ``p_hi``: ``p_hi - p_lo`` exactly for
@@ -201,7 +201,7 @@ def kirchhoff_difference(p_lo, p_hi, phys):
     return -total, -d_b, -d_a
 
 
-@jit
+@leaf
 def _specific_volume_integral(p, phys):
     """``Int_0^p dP / rho_bar``: ``p`` where the density is constant; for Dowson-Higginson
     (``rho_bar = (1 + b p)/(1 + c2 p)``, ``b = c1 + c2``) ``(c2/b) p + (c1/b^2) ln(1 + b p)``;
@@ -217,7 +217,7 @@ def _specific_volume_integral(p, phys):
     return phys[DH_C2] / b * p + c1 / (b * b) * math.log1p(b * p)
 
 
-@jit
+@leaf
 def volume_difference(p_lo, p_hi, phys):
     """``Int_{p_lo}^{p_hi} dP / rho_bar``: the work per unit *volume* of liquid that crosses a
     face, which makes the face's dissipation from its mass flux (``p_hi - p_lo`` at constant
@@ -227,7 +227,7 @@ def volume_difference(p_lo, p_hi, phys):
     return _specific_volume_integral(p_hi, phys) - _specific_volume_integral(p_lo, phys)
 
 
-@jit
+@leaf
 def compression_energy(p, phys):
     """Energy stored per unit mass of liquid (in ``p*/rho0``) compressed to ``p``:
     ``e = Int_0^p P rho_bar' / rho_bar^2 dP = Int_0^p dP/rho_bar - p/rho_bar`` (by parts;
@@ -243,7 +243,7 @@ def compression_energy(p, phys):
     return c1 / (b * b) * (math.log1p(y) - y / (1.0 + y))
 
 
-@jit
+@leaf
 def viscosity_ratio(p, phys):
     """``mu/mu0`` at the pressure ``p`` (inf beyond the double range)."""
     g = log_viscosity(p, phys)[0]

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._jit import jit
+from .._jit import jit, leaf
 from ..physics import SLIP
 
 __all__ = ["flux_factor", "mobility_gap", "force_factor", "potential", "velocity",
@@ -43,7 +43,7 @@ FAR = 4.0  # X/c (or c/H) beyond which a closed form loses digits and its series
 
 
 # ---- the film: the one change to the equations ------------------------------------------------
-@jit
+@leaf
 def flux_factor(h_lo, h_hi, phys):
     """How much more a face carries with slip, ``1 + (c/2)(1/H_lo + 1/H_hi)`` (``c = 6 l``),
     and its derivatives in ``H_lo`` and ``H_hi``; ``(1, 0, 0)`` without slip.
