@@ -135,14 +135,9 @@ def test_dissipated_in_step_integrates_its_polynomial_exactly(k):
     """``_dissipated_in_step``: the integral over the last step of the polynomial through the
     ``k + 1`` newest dissipation rates, exact for degree ``k`` (Gauss-Legendre's three points
     are exact to degree 5)."""
-    n = 2
     rate = lambda t: 1.0 + (t - 0.1) ** k  # noqa: E731
     antiderivative = lambda t: t + (t - 0.1) ** (k + 1) / (k + 1)  # noqa: E731
-    slots = stepper.SLOTS
-    hist = stepper.History(np.zeros((slots, n + 2)), np.zeros((slots, n)), np.zeros((slots, n)),
-                           TIMES.copy(), rate(TIMES), np.array([slots]),
-                           np.array([k, 0], dtype=np.int64))
-    got = stepper._dissipated_in_step(hist, k, np.zeros((4, slots)))
+    got = stepper._dissipated_in_step(TIMES.copy(), rate(TIMES), k, np.zeros((4, stepper.SLOTS)))
     # 1e-13: a few roundings of O(1) values over a step of 0.1
     assert got == pytest.approx(antiderivative(TIMES[0]) - antiderivative(TIMES[1]), abs=1e-13)
 

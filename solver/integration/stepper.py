@@ -41,7 +41,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._jit import copy_into, hook, jit
+from .._jit import copy_into, hook, jit, leaf
 from ..model import step as model
 from ..model.state import Step, array_record
 from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
@@ -566,7 +566,7 @@ def _record(row, t, grid, phys, y, w, h, strain, dissipated, film):
     return model.relaxing_deflection(w, wmax, film, phys), r_event
 
 
-@jit
+@leaf
 def _basis(t, k, x, values, slopes):
     """The Lagrange basis through the ``k + 1`` newest times ``t[:k + 1]`` at ``x``: its values
     into ``values[:k + 1]`` and its slopes into ``slopes[:k + 1]`` (each slope a sum of products,
@@ -587,7 +587,7 @@ def _basis(t, k, x, values, slopes):
         slopes[j] = dj
 
 
-@jit
+@leaf
 def _combine(weights, k, rows, col):
     """``sum_j weights[j] rows[j, col]`` over the ``k + 1`` newest rows."""
     out = 0.0
@@ -596,7 +596,7 @@ def _combine(weights, k, rows, col):
     return out
 
 
-@jit
+@leaf
 def _extremum_in_step(t, rows, cells, k, sign, basis):
     """The extremum of ``rows[:, :cells]`` (the newest states first, times ``t``) over its
     columns and over the last step (``t[1]`` to ``t[0]``), on the step's own interpolant: the
@@ -632,13 +632,12 @@ def _extremum_in_step(t, rows, cells, k, sign, basis):
     return sign * best, t_best
 
 
-@jit
-def _dissipated_in_step(hist, k, basis):
+@leaf
+def _dissipated_in_step(t, r, k, basis):
     """The energy dissipated over the last step above order 2: the integral of the polynomial
-    through the ``k + 1`` newest dissipation rates (``hist.r``), by Gauss-Legendre's three
-    points (exact to degree 5), so the energy balance is closed to the step's order; at orders 1
-    and 2 the loop keeps the trapezoidal rule."""
-    t, r = hist.t, hist.r
+    through the ``k + 1`` newest dissipation rates ``r`` (at the times ``t``, the history's), by
+    Gauss-Legendre's three points (exact to degree 5), so the energy balance is closed to the
+    step's order; at orders 1 and 2 the loop keeps the trapezoidal rule."""
     half = 0.5 * (t[0] - t[1])
     mid = 0.5 * (t[0] + t[1])
     total = 0.0
@@ -651,7 +650,7 @@ def _dissipated_in_step(hist, k, basis):
     return total * half
 
 
-@jit
+@leaf
 def _stop_in_step(t, y, col, k, basis):
     """The time inside the last step where column ``col`` of the states ``y`` (positive at the
     step's start, not at its end) falls through 0 on the step's interpolant, by bisection; the
@@ -869,12 +868,12 @@ def _fill(rows, row):
         copy_into(rows[j], row)
 
 
-@jit
-def _shift(hist, dt, work):
-    """The accepted step of size ``dt`` (``work.y``, ``work.h``) becomes the newest state; each
-    older one moves down a row (the content's newest row is written by ``_accept``, the
-    dissipation rate's by ``integrate``)."""
-    y, h, c, t, r = hist.y, hist.h, hist.c, hist.t, hist.r
+@leaf
+def _shift(y, h, c, t, r, n, dt, y_new, h_new):
+    """The accepted step of size ``dt`` (``y_new``, ``h_new``) becomes the newest state of the
+    history's arrays (``History``); each older one moves down a row (the content's newest row is
+    written by ``_accept``, the dissipation rate's by ``integrate``). A ``leaf``: with the
+    history's record it counted a reference for each row it copied, 26 per Newton iteration."""
     slots = t.size
     for j in range(slots - 1, 0, -1):
         copy_into(y[j], y[j - 1])
@@ -882,11 +881,10 @@ def _shift(hist, dt, work):
         copy_into(c[j], c[j - 1])
         t[j] = t[j - 1]
         r[j] = r[j - 1]
-    copy_into(y[0], work.y)
-    copy_into(h[0], work.h)
+    copy_into(y[0], y_new)
+    copy_into(h[0], h_new)
     t[0] = t[0] + dt
-    hist.n[0] = min(hist.n[0] + 1, slots)
-    work.counters[STEPS] += 1
+    n[0] = min(n[0] + 1, slots)
 
 
 @jit
@@ -894,7 +892,8 @@ def _accept(grid, phys, hist, dt, film, work):
     """The accepted step of size ``dt`` becomes the newest state (``_shift``): its face fluxes
     into ``work.q``, the film's state after it (model/step.py: ``accept``) and its cells'
     content in the history."""
-    _shift(hist, dt, work)
+    _shift(hist.y, hist.h, hist.c, hist.t, hist.r, hist.n, dt, work.y, work.h)
+    work.counters[STEPS] += 1
     y0, h0 = hist.y[0], hist.h[0]
     model.face_fluxes(grid, model.film_pressure(y0, film, phys), work.h, phys, work.q)
     model.accept(grid, y0, work.w, h0, hist.h[1], work.q, dt, film, phys)
@@ -1000,7 +999,7 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
         strain_new, diss_new = model.energies(grid, phys, y0, w, h, q, film)
         hist.r[0] = diss_new
         if k_step > 2:
-            dissipated += _dissipated_in_step(hist, k_step, work.basis)
+            dissipated += _dissipated_in_step(hist.t, hist.r, k_step, work.basis)
         else:
             dissipated += 0.5 * (diss_rate + diss_new) * dt
         strain = strain_new
