@@ -83,44 +83,32 @@ def _parabolic_peak(t, f, i):
     return tv, fv
 
 
-def _step_interpolant(t, f, end, order):
-    """The interpolant of the series ``f`` (times ``t``) over the step that ended at row ``end``
-    when that step was above order 2: the polynomial interpolating its ``k + 1`` newest rows (the
-    BDF's dense output, order ``k``), in the step's own variable ``u = (t - t[end]) / (t[end] -
-    t[end - 1])`` (the step is ``-1 <= u <= 0``); None at orders 0-2."""
-    k = int(order[end])
-    if k <= 2 or end - k < 0:
-        return None
-    rows = np.arange(end - k, end + 1)
-    scale = t[end] - t[end - 1]
-    return np.polynomial.Polynomial.fit((t[rows] - t[end]) / scale, f[rows], k,
-                                        domain=[-1.0, 1.0], window=[-1.0, 1.0])
-
-
-def _roots_in_step(poly):
-    """The real roots of ``poly`` within its step (``-1 <= u <= 0``)."""
-    return [r.real for r in poly.roots() if abs(r.imag) <= 1e-12 and -1.0 <= r.real <= 0.0]
-
-
 def _peak(t, f, i, order, lowest):
     """The extremum of the series ``f`` (times ``t``) at its discrete extremum ``i`` (a minimum
     if ``lowest``, else a maximum), read as the loop integrated it (``order``: the series' BDF
     order of the step that ended at each row). Where the steps either side of row ``i`` were of
     order 2 or lower, the vertex of the parabola on rows ``i - 1``, ``i``, ``i + 1``
-    (``_parabolic_peak``); above, each of the two steps' own interpolants
-    (``_step_interpolant``), whose error follows the method's order where the parabola's goes
-    with the step's cube."""
+    (``_parabolic_peak``); above, on each of the two steps' own interpolants, the polynomial
+    interpolating the step's ``k + 1`` newest rows (the BDF's dense output, order ``k``), whose
+    error follows the method's order where the parabola's goes with the step's cube. The loop's
+    own reading of an extremum inside a step (integration/stepper.py: ``_extremum_in_step``)
+    finds it, compiled: with numpy's polynomial fit and roots, a classic collision took 1/0.95
+    its CPU time at the standard preset (docs/solver.md)."""
     if i <= 0 or i >= len(f) - 1 or max(order[i], order[i + 1]) <= 2:
         return _parabolic_peak(t, f, i)
     best_t, best_f = t[i], f[i]
+    sign = 1.0 if lowest else -1.0
+    basis = np.empty((4, stepper.SLOTS))
     for end in (i, i + 1):  # the steps from row end - 1 to row end
-        poly = _step_interpolant(t, f, end, order)
-        if poly is None:
+        k = int(order[end])
+        if k <= 2 or end - k < 0:
             continue
-        for u in _roots_in_step(poly.deriv()):
-            value = poly(u)
-            if (value < best_f) if lowest else (value > best_f):
-                best_t, best_f = t[end] + u * (t[end] - t[end - 1]), value
+        newest_first = slice(end, end - k - 1 if end > k else None, -1)
+        value, when = stepper._extremum_in_step(
+            np.ascontiguousarray(t[newest_first]),
+            np.ascontiguousarray(f[newest_first]).reshape(k + 1, 1), 1, k, sign, basis)
+        if (value < best_f) if lowest else (value > best_f):
+            best_t, best_f = when, value
     return best_t, best_f
 
 
