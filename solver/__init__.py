@@ -6,6 +6,9 @@ Pure numerics (numpy, scipy.special, numba); no I/O. Public API::
     c = collide(Physics(St=5.0, eps=0.01), accuracy="standard")   # or collide(5.0, 0.01)
     c.v_r, c.h_m_x1, c.x_e_x1, c.to_json(), c.to_xarray()
 
+Run it with one BLAS thread (``OPENBLAS_NUM_THREADS=1`` before numpy is imported; ``ehd`` and
+``import pipeline`` set it): threaded BLAS is slower for its matrices (docs/solver.md).
+
 The model is written down in docs/model.md; the observables, status codes and series columns are
 declared once in ``solver.observables``.
 """
