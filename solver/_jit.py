@@ -117,9 +117,10 @@ def jit(func):
 
 def leaf(func):
     """``jit`` without numba's reference counting, for the functions a loop calls once per face or
-    cell that read arrays (the physics array ``phys``, the grid's record) and return only numbers:
-    nothing they receive can be freed while they run (their caller holds it), and they create
-    no array (numba refuses to compile an allocation without its runtime). With the counts, a
+    cell that read arrays (the physics array ``phys``, the grid's arrays) and return only
+    numbers: nothing they receive can be freed while they run (their caller holds it), and they
+    create no array (numba refuses to compile an allocation, or a record's field read, without
+    its runtime: a leaf takes a record's arrays, not the record). With the counts, a
     pressure-dependent liquid's face flux took 5-10 of them per face, 38 % of its collision's
     CPU time (docs/solver.md, "Reference counting"). Never for a function that returns an array
     or a view: its caller would release a reference it was never given."""
