@@ -109,6 +109,31 @@ def cpu() -> str:
     return f"{model} ({' '.join(present) or 'none of ' + ' '.join(_CPU_FLAGS)})"
 
 
+CLASSIC_SCENE = {"St": 10.0, "eps": 1e-4}  # issue 30's profile: the classic film, St 10, eps 1e-4
+
+
+def scene_fields(items: Sequence[str]) -> dict:
+    """``Physics`` fields from ``name=value`` words (a profiling script's ``--scene``), numbers
+    where they read as one, over ``CLASSIC_SCENE``."""
+    fields = dict(CLASSIC_SCENE)
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name:
+            raise ValueError(f"--scene {item!r}: write each field as name=value, e.g. beta=1")
+        try:
+            fields[name] = float(value)
+        except ValueError:
+            fields[name] = value
+    return fields
+
+
+def describe_scene(fields: dict) -> str:
+    """``St 10, eps 0.0001, the classic film``, or with the fields beyond St and eps."""
+    rest = ", ".join(f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}"
+                     for k, v in fields.items() if k not in ("St", "eps"))
+    return (f"St {fields['St']:g}, eps {fields['eps']:g}, " + (rest or "the classic film"))
+
+
 def load_now() -> list[float]:
     return [round(x, 2) for x in os.getloadavg()]
 

@@ -126,31 +126,6 @@ def tally(functions: Path, counts: Path):
     return dict(per), newton
 
 
-CLASSIC = {"St": 10.0, "eps": 1e-4}  # the issue's profile, and the scene of the default files
-
-
-def scene_fields(items: list[str]) -> dict:
-    """``Physics`` fields from ``name=value`` words: numbers where they read as one."""
-    fields = {}
-    for item in items:
-        name, sep, value = item.partition("=")
-        if not sep or not name:
-            raise ValueError(f"--scene {item!r}: write each field as name=value, e.g. beta=1")
-        try:
-            fields[name] = float(value)
-        except ValueError:
-            fields[name] = value
-    return fields
-
-
-def describe_scene(fields: dict) -> str:
-    """``St 10, eps 0.0001, the classic film`` or the fields beyond St and eps."""
-    rest = ", ".join(f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}"
-                     for k, v in fields.items() if k not in ("St", "eps"))
-    return (f"St {fields.get('St', 10.0):g}, eps {fields.get('eps', 1e-4):g}, "
-            + (rest or "the classic film"))
-
-
 def report(per: dict, newton: int, top: int, meta: str, scene: str) -> str:
     total = sum(a + b for a, b in per.values())
     rows = sorted(per.items(), key=lambda kv: -sum(kv[1]))[:top]
@@ -178,12 +153,12 @@ def main(argv=None) -> int:
     if args.top < 1:
         p.error(f"--top {args.top}: list at least one function")
     try:
-        fields = {**CLASSIC, **scene_fields(args.scene)}
+        fields = harness.scene_fields(args.scene)
     except ValueError as exc:
         p.error(str(exc))
     report_path = args.out
     if report_path is None:
-        if fields != CLASSIC:
+        if fields != harness.CLASSIC_SCENE:
             p.error("--scene other than the default needs --out (benchmarks/refcount_callers.md "
                     "holds the classic scene)")
         report_path = HERE / "refcount_callers.md"
@@ -218,7 +193,7 @@ def main(argv=None) -> int:
                                "counts": {k: {"increments": a, "decrements": b}
                                           for k, (a, b) in per.items()}}, load_start)
     harness.save_report(str(report_path), report(per, newton, args.top, harness.describe(data),
-                                         describe_scene(fields)))
+                                         harness.describe_scene(fields)))
     return 0
 
 
