@@ -37,7 +37,8 @@ import harness  # noqa: E402
 
 CHILD = textwrap.dedent("""
     import os, sys
-    import json
+    import json, signal
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C is the parent's: it kills this child
     from solver import Physics, collide
     physics = Physics(**json.loads(sys.argv[2]))
     collide(physics, save_profiles=False)  # the cache loaded, the scene warm
@@ -139,24 +140,9 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--seconds", type=float, default=8.0, help="sampling per round (default 8)")
     p.add_argument("--rounds", type=int, default=3, help="rounds (default 3)")
-    p.add_argument("--scene", nargs="+", default=[], metavar="NAME=VALUE",
-                   help="Physics fields of the scene (default St=10 eps=1e-4, the classic film)")
-    p.add_argument("--out", type=Path, default=None,
-                   help="the report (the JSON beside it; default benchmarks/refcount.md, the "
-                        "default scene only)")
+    harness.add_scene_options(p, HERE / "refcount.md")
     args = p.parse_args(argv)
-    try:
-        fields = harness.scene_fields(args.scene)
-    except ValueError as exc:
-        p.error(str(exc))
-    report_path = args.out
-    if report_path is None:
-        if fields != harness.CLASSIC_SCENE:
-            p.error("--scene other than the default needs --out (benchmarks/refcount.md holds "
-                    "the classic scene)")
-        report_path = HERE / "refcount.md"
-    if not report_path.parent.is_dir():
-        p.error(f"--out {report_path}: no folder {report_path.parent}")
+    fields, report_path = harness.scene_options(p, args, HERE / "refcount.md")
     if shutil.which("perf") is None:
         print("bench_refcount: needs Linux perf (apt-get install linux-perf)", file=sys.stderr)
         return 2
@@ -172,4 +158,8 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except KeyboardInterrupt:  # one_round's child is killed on the way out
+        print("bench_refcount: interrupted; nothing written", file=sys.stderr)
+        sys.exit(130)

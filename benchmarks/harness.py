@@ -127,6 +127,35 @@ def scene_fields(items: Sequence[str]) -> dict:
     return fields
 
 
+def add_scene_options(parser, default_report: Path) -> None:
+    """A profiling script's ``--scene NAME=VALUE ...`` and ``--out FILE`` (``scene_options``)."""
+    parser.add_argument("--scene", nargs="+", default=[], metavar="NAME=VALUE",
+                        help="Physics fields of the scene (default St=10 eps=1e-4, the classic "
+                             "film)")
+    parser.add_argument("--out", type=Path, default=None,
+                        help=f"the report (the JSON beside it; default "
+                             f"benchmarks/{default_report.name}, the default scene only)")
+
+
+def scene_options(parser, args, default_report: Path) -> tuple[dict, Path]:
+    """The scene's fields and the report's path from ``add_scene_options``' options; one line
+    through ``parser.error`` for a malformed field, another scene without ``--out`` (the default
+    report holds the classic scene) or an ``--out`` whose folder does not exist."""
+    try:
+        fields = scene_fields(args.scene)
+    except ValueError as exc:
+        parser.error(str(exc))
+    report_path = args.out
+    if report_path is None:
+        if fields != CLASSIC_SCENE:
+            parser.error(f"--scene other than the default needs --out "
+                         f"(benchmarks/{default_report.name} holds the classic scene)")
+        report_path = default_report
+    if not report_path.parent.is_dir():
+        parser.error(f"--out {report_path}: no folder {report_path.parent}")
+    return fields, report_path
+
+
 def describe_scene(fields: dict) -> str:
     """``St 10, eps 0.0001, the classic film``, or with the fields beyond St and eps."""
     rest = ", ".join(f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}"

@@ -144,26 +144,11 @@ def report(per: dict, newton: int, top: int, meta: str, scene: str) -> str:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--top", type=int, default=40, help="functions listed (default 40)")
-    p.add_argument("--scene", nargs="+", default=[], metavar="NAME=VALUE",
-                   help="Physics fields of the scene (default St=10 eps=1e-4, the classic film)")
-    p.add_argument("--out", type=Path, default=None,
-                   help="the report (the JSON beside it; default benchmarks/refcount_callers.md, "
-                        "the default scene only)")
+    harness.add_scene_options(p, HERE / "refcount_callers.md")
     args = p.parse_args(argv)
     if args.top < 1:
         p.error(f"--top {args.top}: list at least one function")
-    try:
-        fields = harness.scene_fields(args.scene)
-    except ValueError as exc:
-        p.error(str(exc))
-    report_path = args.out
-    if report_path is None:
-        if fields != harness.CLASSIC_SCENE:
-            p.error("--scene other than the default needs --out (benchmarks/refcount_callers.md "
-                    "holds the classic scene)")
-        report_path = HERE / "refcount_callers.md"
-    if not report_path.parent.is_dir():
-        p.error(f"--out {report_path}: no folder {report_path.parent}")
+    fields, report_path = harness.scene_options(p, args, HERE / "refcount_callers.md")
     if shutil.which("gdb") is None:
         print("refcount_callers: needs gdb (apt-get install gdb)", file=sys.stderr)
         return 2

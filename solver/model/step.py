@@ -219,7 +219,7 @@ def step_error(y, y_pred, err_fac, h, film, phys, perr, dh, scale):
 def _kirchhoff_errors(y_pred, y, err_fac, phys, perr, scale):
     """``step_error``'s pressure errors ``perr`` and their scales ``scale`` in the Kirchhoff
     pressure, cell by cell (a ``leaf``: inlined into the loop, each cell's call counted
-    references, 1050 per Newton iteration of a Barus film)."""
+    references, 1055 per Newton iteration of a Barus film)."""
     for i in range(perr.size):
         perr[i] = err_fac * kirchhoff_difference(y_pred[i], y[i], phys)[0]
         scale[i] = kirchhoff_difference(0.0, y[i], phys)[0]
