@@ -105,10 +105,10 @@ def test_basis_values_and_slopes_are_the_lagrange_polynomials(k):
 
 
 @pytest.mark.parametrize("k", [1, 2, 3, 4, 5])
-def test_newton_slope_is_the_interpolants_derivative(k):
-    """``_divided_differences`` and ``_newton_slope``, the slope ``_extremum_in_step`` bisects on:
-    the derivative of the polynomial of degree ``k`` through the ``k + 1`` newest times, the same
-    as ``_basis``' slopes give, at the step's ends and inside it."""
+def test_newton_form_is_the_interpolant_and_its_derivative(k):
+    """``_divided_differences`` and ``_newton_form``, the value and slope ``_extremum_in_step``
+    reads: the polynomial of degree ``k`` through the ``k + 1`` newest times and its derivative,
+    the same as ``_basis`` gives, at the step's ends and inside it."""
     f = lambda t: (t - 0.21) ** k + 0.5 * t  # noqa: E731
     df = lambda t: k * (t - 0.21) ** (k - 1) + 0.5  # noqa: E731
     rows = np.array([[f(t), -3.0 * f(t)] for t in TIMES])
@@ -117,9 +117,11 @@ def test_newton_slope_is_the_interpolants_derivative(k):
         stepper._basis(TIMES, k, x, values, slopes)
         for col, scale in ((0, 1.0), (1, -3.0)):
             stepper._divided_differences(TIMES, k, rows, col, coef)
-            slope = stepper._newton_slope(TIMES, k, coef, x)
-            # 1e-10, as the Lagrange slopes' test above: differences of O(1) values over time
-            # differences of 0.1-1, a few roundings each
+            value, slope = stepper._newton_form(TIMES, k, coef, x)
+            # 1e-12 and 1e-10, as the Lagrange basis' test above: differences of O(1) values
+            # over time differences of 0.1-1, a few roundings each
+            assert value == pytest.approx(scale * f(x), abs=1e-12)
+            assert value == pytest.approx(values[:k + 1] @ rows[:k + 1, col], abs=1e-12)
             assert slope == pytest.approx(scale * df(x), abs=1e-10)
             assert slope == pytest.approx(slopes[:k + 1] @ rows[:k + 1, col], abs=1e-10)
 

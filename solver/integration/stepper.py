@@ -600,7 +600,7 @@ def _combine(weights, k, rows, col):
 def _divided_differences(t, k, rows, col, coef):
     """The Newton form of the polynomial through ``(t[j], rows[j, col])``, ``j = 0..k``: its
     coefficients (divided differences) into ``coef[:k + 1]``, so that it reads ``coef[0] +
-    coef[1] (x - t[0]) + coef[2] (x - t[0]) (x - t[1]) + ...`` (``_newton_slope``)."""
+    coef[1] (x - t[0]) + coef[2] (x - t[0]) (x - t[1]) + ...`` (``_newton_form``)."""
     for j in range(k + 1):
         coef[j] = rows[j, col]
     for level in range(1, k + 1):
@@ -609,16 +609,16 @@ def _divided_differences(t, k, rows, col, coef):
 
 
 @leaf
-def _newton_slope(t, k, coef, x):
-    """The slope at ``x`` of ``_divided_differences``' polynomial, by Horner's scheme on its
-    Newton form with its derivative alongside: ``O(k)`` operations, against ``_basis``'s
-    ``O(k^3)``."""
+def _newton_form(t, k, coef, x):
+    """The value and the slope at ``x`` of ``_divided_differences``' polynomial, by Horner's
+    scheme on its Newton form with the derivative alongside: ``O(k)`` operations, against
+    ``_basis``'s ``O(k^3)``."""
     value = coef[k]
     slope = 0.0
     for j in range(k - 1, -1, -1):
         slope = slope * (x - t[j]) + value
         value = value * (x - t[j]) + coef[j]
-    return slope
+    return value, slope
 
 
 @leaf
@@ -628,7 +628,7 @@ def _extremum_in_step(t, rows, cells, k, sign, basis):
     polynomial through the ``k + 1`` newest states (the BDF's dense output, order ``k``). The
     smallest value where ``sign`` is 1, the largest where it is -1. A column that falls at the
     step's start and rises at its end (times ``sign``) has its extremum inside, located by
-    bisection on the slope (the column's polynomial in Newton form, ``_newton_slope``: through
+    bisection on the slope (the column's polynomial in Newton form, ``_newton_form``: through
     ``_basis`` at every halving, this search took 21 % of a classic collision's CPU time at the
     standard preset). Returns the extremum (inf times ``sign`` if no column has one inside the
     step) and its time. Such a series, an extremum over the cells, is not smooth in time
@@ -636,8 +636,7 @@ def _extremum_in_step(t, rows, cells, k, sign, basis):
     rows of it misreads it by the step's cube: at order 5 on the fast preset, ``h_m`` jumped by
     0.7 % between neighbouring St 5 % apart, and the central gap at the peak pressure read 2 %
     off."""
-    values, slopes, at_start, at_end = basis[0], basis[1], basis[2], basis[3]
-    coef = basis[1]  # a column's Newton coefficients, until _basis writes its slopes there
+    values, coef, at_start, at_end = basis[0], basis[1], basis[2], basis[3]
     _basis(t, k, t[1], values, at_start)
     _basis(t, k, t[0], values, at_end)
     best, t_best = np.inf, t[0]
@@ -648,13 +647,12 @@ def _extremum_in_step(t, rows, cells, k, sign, basis):
         lo, hi = t[1], t[0]
         for _ in range(BISECTIONS):
             mid = 0.5 * (lo + hi)
-            if sign * _newton_slope(t, k, coef, mid) < 0.0:
+            if sign * _newton_form(t, k, coef, mid)[1] < 0.0:
                 lo = mid
             else:
                 hi = mid
         t_i = 0.5 * (lo + hi)
-        _basis(t, k, t_i, values, slopes)
-        value = sign * _combine(values, k, rows, i)
+        value = sign * _newton_form(t, k, coef, t_i)[0]
         if value < best:
             best, t_best = value, t_i
     return sign * best, t_best
