@@ -4,6 +4,7 @@ interpreter (issue 30: the reference counting and allocation under 5 % of a coll
 
     .venv/bin/python benchmarks/bench_refcount.py [--seconds 8] [--rounds 3]
     .venv/bin/python benchmarks/bench_refcount.py --scene beta=1 --out /tmp/barus.md
+    .venv/bin/python benchmarks/bench_refcount.py --functions --rounds 1 --out /tmp/profile.md
 
 A child process solves the same classic collision (St 10, eps 1e-4, standard, the issue's
 profile) in a loop from the warm cache; ``perf record`` samples it for ``--seconds`` per round,
@@ -13,7 +14,11 @@ samples in ``NRT_incref``/``NRT_decref`` get their names. Needs Linux ``perf`` w
 one's own processes (``kernel.perf_event_paranoid <= 2``); writes benchmarks/refcount.json and
 refcount.md (the classic scene), or ``--out`` and the .json beside it for another scene
 (``--scene``: ``Physics`` fields as ``name=value`` over St 10, eps 1e-4). The shares are of the
-child's samples, each round's, then their median and range.
+child's samples, each round's, then their median and range. ``--functions`` adds each
+function's share: the child then compiles the solver afresh in an empty cache folder and names
+every compiled function in the map too (a cold compile per round); that is how the in-step
+extremum's bisection was found to take a fifth of a classic collision (docs/solver.md, Versions,
+1.12.2).
 """
 
 from __future__ import annotations
@@ -43,13 +48,21 @@ CHILD = textwrap.dedent("""
     physics = Physics(**json.loads(sys.argv[2]))
     collide(physics, save_profiles=False)  # the cache loaded, the scene warm
     from numba.core.runtime import nrt
-    library = nrt.rtsys.library
-    found = sorted((library.get_pointer_to_function(f.name), f.name)
-                   for f in library._final_module.functions if not f.is_declaration)
-    found = [(a, name) for a, name in found if a]
-    with open(f"/tmp/perf-{os.getpid()}.map", "w") as out:  # each up to the next one
+    libraries = [nrt.rtsys.library]
+    if sys.argv[3] == "functions":  # every compiled function too (compiled afresh: named)
+        import gc
+        from numba.core.registry import CPUDispatcher
+        libraries += [r.library for d in gc.get_objects() if isinstance(d, CPUDispatcher)
+                      for r in d.overloads.values()]
+    found = set()
+    for library in libraries:
+        for f in library._final_module.functions:
+            if not f.is_declaration:
+                found.add((library.get_pointer_to_function(f.name), f.name))
+    found = sorted((a, name) for a, name in found if a)
+    with open(f"/tmp/perf-{os.getpid()}.map", "w") as out:  # each up to the next one, <= 4 MiB
         for (a, name), (b, _) in zip(found, found[1:] + [(found[-1][0] + 64, "")]):
-            out.write(f"{a:x} {b - a:x} {name}\\n")
+            out.write(f"{a:x} {min(b - a, 1 << 22):x} {name}\\n")
     print("ready", flush=True)
     n = 0
     while not os.path.exists(sys.argv[1]):
@@ -72,7 +85,10 @@ KINDS = (
     ("compiled model code", lambda sym, dso: dso.startswith(("[JIT]", "[unknown]", "perf-",
                                                             "//anon")) or sym.startswith("0x")),
 )
-LINE = re.compile(r"^\s*([\d.]+)%\s+(.+?)\s+\[\.\]\s+(.+?)\s*$")
+# share, shared object, symbol (its first word: perf pads the column to the longest symbol, and
+# numba's mangled names run to thousands of characters)
+LINE = re.compile(r"^\s*([\d.]+)%\s+(.+?)\s+\[\.\]\s+(\S+)")
+TOP_FUNCTIONS = 30  # rows of the by-function table
 
 
 def shares(report: str) -> dict:
@@ -82,22 +98,54 @@ def shares(report: str) -> dict:
         m = LINE.match(line)
         if not m:
             continue
-        # the symbol, without the IPC columns perf may print after it
-        pct, dso, sym = float(m.group(1)), m.group(2), m.group(3).split()[0]
+        pct, dso, sym = float(m.group(1)), m.group(2), m.group(3)
         kind = next((k for k, test in KINDS if test(sym, dso)), "other")
         out[kind] += pct
     return out
 
 
-def one_round(seconds: float, folder: Path, fields: dict) -> dict:
+def function_name(symbol: str) -> str:
+    """A compiled function's dotted name from numba's mangled symbol (``_ZN6solver11integration7
+    stepper6_basisB4v226...`` is ``solver.integration.stepper._basis``: the length-prefixed parts
+    after ``_ZN``, up to the ABI tags and argument types); any other symbol as it is."""
+    if not symbol.startswith("_ZN"):
+        return symbol
+    parts, i = [], 3
+    while i < len(symbol) and symbol[i].isdigit():
+        j = i
+        while j < len(symbol) and symbol[j].isdigit():
+            j += 1
+        size = int(symbol[i:j])
+        parts.append(symbol[j:j + size])
+        i = j + size
+    return ".".join(parts) or symbol
+
+
+def by_function(report: str, floor: float = 0.2) -> dict:
+    """The shares [%] of each function in a ``perf report`` listing (its specialisations
+    summed), those of at least ``floor``."""
+    out: dict[str, float] = {}
+    for line in report.splitlines():
+        m = LINE.match(line)
+        if m:
+            name = function_name(m.group(3))
+            out[name] = out.get(name, 0.0) + float(m.group(1))
+    return {name: pct for name, pct in out.items() if pct >= floor}
+
+
+def one_round(seconds: float, folder: Path, fields: dict, functions: bool = False) -> dict:
     """One child solving the scene ``fields`` sampled for ``seconds``: its shares and its
-    collisions' count."""
+    collisions' count; with ``functions``, also each function's share (``by_function``), from a
+    child that compiles the solver afresh in an empty cache folder (a function loaded from the
+    cache has no symbols to name it by), which takes a cold compile, about a minute."""
     stop, data = folder / "stop", folder / "perf.data"
     stop.unlink(missing_ok=True)
-    child = subprocess.Popen([sys.executable, "-c", CHILD, str(stop), json.dumps(fields)],
-                             stdout=subprocess.PIPE,
-                             text=True, cwd=harness.REPO,
-                             env={**os.environ, "PYTHONPATH": str(harness.REPO)})
+    env = {**os.environ, "PYTHONPATH": str(harness.REPO)}
+    if functions:
+        env["EHD_CACHE_DIR"] = tempfile.mkdtemp(dir=folder)
+    child = subprocess.Popen([sys.executable, "-c", CHILD, str(stop), json.dumps(fields),
+                              "functions" if functions else "runtime"],
+                             stdout=subprocess.PIPE, text=True, cwd=harness.REPO, env=env)
     try:
         if child.stdout.readline().strip() != "ready":
             raise RuntimeError("the child did not start")
@@ -114,7 +162,10 @@ def one_round(seconds: float, folder: Path, fields: dict) -> dict:
         if child.poll() is None:
             child.kill()
         Path(f"/tmp/perf-{child.pid}.map").unlink(missing_ok=True)
-    return {"shares": shares(report), "collisions": collisions}
+    out = {"shares": shares(report), "collisions": collisions}
+    if functions:
+        out["functions"] = by_function(report)
+    return out
 
 
 def report(data: dict) -> str:
@@ -129,6 +180,18 @@ def report(data: dict) -> str:
         values = [r["shares"][kind] for r in data["rounds"]]
         lines.append(f"| {kind} | {statistics.median(values):.1f} % | "
                      f"{min(values):.1f}-{max(values):.1f} % |")
+    if "functions" in data["rounds"][0]:
+        lines += ["", "By function (`--functions`: the solver compiled afresh, so that each compiled "
+                  "function has its name; a function LLVM inlined counts for its caller; BLAS's "
+                  "and the interpreter's by their symbols; at least 0.2 % in a round):", "",
+                  "| function | share, median | rounds |", "|---|---|---|"]
+        names = {n for r in data["rounds"] for n in r["functions"]}
+        medians = {n: statistics.median(r["functions"].get(n, 0.0) for r in data["rounds"])
+                   for n in names}
+        for name in sorted(names, key=lambda n: -medians[n])[:TOP_FUNCTIONS]:
+            values = [r["functions"].get(name, 0.0) for r in data["rounds"]]
+            lines.append(f"| `{name}` | {medians[name]:.1f} % | "
+                         f"{min(values):.1f}-{max(values):.1f} % |")
     target = [r["shares"]["reference counting"] + r["shares"]["allocation"] for r in data["rounds"]]
     lines += ["", f"Reference counting and allocation together: {statistics.median(target):.1f} % "
               f"(rounds {min(target):.1f}-{max(target):.1f} %); issue 30's target is under 5 %. "
@@ -140,6 +203,8 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--seconds", type=float, default=8.0, help="sampling per round (default 8)")
     p.add_argument("--rounds", type=int, default=3, help="rounds (default 3)")
+    p.add_argument("--functions", action="store_true",
+                   help="also each compiled function's share (a cold compile per round)")
     harness.add_scene_options(p, HERE / "refcount.md")
     args = p.parse_args(argv)
     fields, report_path = harness.scene_options(p, args, HERE / "refcount.md")
@@ -148,7 +213,8 @@ def main(argv=None) -> int:
         return 2
     load_start = harness.load_now()
     with tempfile.TemporaryDirectory() as tmp:
-        rounds = [one_round(args.seconds, Path(tmp), fields) for _ in range(args.rounds)]
+        rounds = [one_round(args.seconds, Path(tmp), fields, args.functions)
+                  for _ in range(args.rounds)]
     data = harness.write_json(report_path.with_suffix(".json"),
                               {"scene": fields, "seconds": args.seconds, "rounds": rounds},
                               load_start)

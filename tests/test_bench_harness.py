@@ -179,3 +179,22 @@ def test_a_report_from_a_loaded_machine_says_its_times_are_not_results(harness):
     assert "shared" not in harness.describe(doc)
     assert "load not recorded" in harness.describe(harness.historical_provenance(
         BENCH / "accuracy.json"))
+
+
+def test_profile_names_numba_functions_and_sums_their_specialisations():
+    """bench_refcount.py --functions: a numba symbol reads as its module and function, every
+    other symbol as it is, and the shares of one function's specialisations add up."""
+    bench = _load("bench_refcount")
+    basis = ("_ZN6solver11integration7stepper6_basisB4v226B96c8tJTIeFIjxB2IKSgI4CrvQCk0Z4yRYcWsC"
+             "AgXrKFt1X1ep5xVXqOgrqyfl5JUWJySUgdmJaHpgqSi5Qr9UExRM8hYGt0AQAE5ArrayIdLi1E1C7mutable7")
+    assert bench.function_name(basis) == "solver.integration.stepper._basis"
+    assert bench.function_name("dgemm_kernel_SKYLAKEX") == "dgemm_kernel_SKYLAKEX"
+    report = "\n".join([
+        f"    18.56%  libpython.so  [.] {basis}",
+        f"     1.00%  [JIT] tid 7  [.] {basis.replace('B4v226', 'B4v227')}",
+        "    11.48%  libscipy_openblas.so  [.] dgemm_kernel_SKYLAKEX",
+        "     0.10%  libc.so  [.] memcpy",
+    ])
+    shares = bench.by_function(report)
+    assert shares == {"solver.integration.stepper._basis": pytest.approx(19.56),
+                      "dgemm_kernel_SKYLAKEX": 11.48}  # memcpy is below the 0.2 % floor
