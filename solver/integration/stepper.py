@@ -163,8 +163,9 @@ History = array_record("History", ("y", "h", "c", "t", "r", "n", "order"),
 # error, the pressure's error scale (model/step.py: step_error); ``dres_dh`` (N, 3): the
 # Jacobian's gap partials (film.jacobian); ``a`` (SLOTS,): the step's BDF coefficients
 # (``_coefficients``); ``basis`` (4, SLOTS): the Lagrange basis of the newest states, its values
-# and slopes at a point, its slopes at the step's start and end (``_extremum_in_step``,
-# ``_dissipated_in_step``); ``counters``: ``COUNTERS``.
+# and slopes at a point, its slopes at the step's start and end (``_extremum_in_step``, which
+# keeps a cell's Newton coefficients in the slopes' row, ``_dissipated_in_step``); ``counters``:
+# ``COUNTERS``.
 Work = array_record("Work", ("y", "y_pred", "res", "w", "h", "q", "c_hist", "dh", "kdp",
                                "scale", "dres_dh", "a", "basis", "counters"),
                       "The time loop's work arrays (integration/stepper.py).", __name__)
