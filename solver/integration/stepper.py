@@ -988,10 +988,8 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
     film, strain, diss_rate = _initial_film(grid, phys, hist, work)
     dissipated = start.dissipated
     n_rows = 0
-    # the order of the step that ended at the newest state (0: none yet); an int64, not the
-    # literal 0: numba compiles a called function for each literal type it is first given, and
-    # _record_step, with the in-step searches under it, was compiled twice
-    k_step = np.int64(0)
+    # the order of the step that ended at the newest state (0: none yet), an int64 from the start
+    k_step = np.int64(0)  # (as the literal 0, a second compile: docs/solver.md, "Compiled code")
     dt = control.dt_init
     status = RUNNING
     while True:
