@@ -91,16 +91,20 @@ LINE = re.compile(r"^\s*([\d.]+)%\s+(.+?)\s+\[\.\]\s+(\S+)")
 TOP_FUNCTIONS = 30  # rows of the by-function table
 
 
+def _samples(report: str):
+    """``(share [%], shared object, symbol)`` of each line of a ``perf report --sort dso,symbol``
+    listing."""
+    for line in report.splitlines():
+        m = LINE.match(line)
+        if m:
+            yield float(m.group(1)), m.group(2), m.group(3)
+
+
 def shares(report: str) -> dict:
     """The shares [%] of each kind in a ``perf report --sort dso,symbol`` listing."""
     out = {kind: 0.0 for kind, _ in KINDS} | {"other": 0.0}
-    for line in report.splitlines():
-        m = LINE.match(line)
-        if not m:
-            continue
-        pct, dso, sym = float(m.group(1)), m.group(2), m.group(3)
-        kind = next((k for k, test in KINDS if test(sym, dso)), "other")
-        out[kind] += pct
+    for pct, dso, sym in _samples(report):
+        out[next((k for k, test in KINDS if test(sym, dso)), "other")] += pct
     return out
 
 
@@ -125,11 +129,9 @@ def by_function(report: str, floor: float = 0.2) -> dict:
     """The shares [%] of each function in a ``perf report`` listing (its specialisations
     summed), those of at least ``floor``."""
     out: dict[str, float] = {}
-    for line in report.splitlines():
-        m = LINE.match(line)
-        if m:
-            name = function_name(m.group(3))
-            out[name] = out.get(name, 0.0) + float(m.group(1))
+    for pct, _, sym in _samples(report):
+        name = function_name(sym)
+        out[name] = out.get(name, 0.0) + pct
     return {name: pct for name, pct in out.items() if pct >= floor}
 
 
