@@ -139,12 +139,19 @@ def add_scene_options(parser, default_report: Path) -> None:
 
 def scene_options(parser, args, default_report: Path) -> tuple[dict, Path]:
     """The scene's fields and the report's path from ``add_scene_options``' options; one line
-    through ``parser.error`` for a malformed field, another scene without ``--out`` (the default
+    through ``parser.error`` for a malformed field, one ``Physics`` refuses (checked here, not
+    in the child process that solves the scene), another scene without ``--out`` (the default
     report holds the classic scene) or an ``--out`` whose folder does not exist."""
+    from solver import Physics
+
     try:
         fields = scene_fields(args.scene)
     except ValueError as exc:
         parser.error(str(exc))
+    try:
+        Physics(**fields)
+    except (TypeError, ValueError) as exc:
+        parser.error(f"--scene: {exc}")
     report_path = args.out
     if report_path is None:
         if fields != CLASSIC_SCENE:

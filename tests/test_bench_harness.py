@@ -198,3 +198,20 @@ def test_profile_names_numba_functions_and_sums_their_specialisations():
     shares = bench.by_function(report)
     assert shares == {"solver.integration.stepper._basis": pytest.approx(19.56),
                       "dgemm_kernel_SKYLAKEX": 11.48}  # memcpy is below the 0.2 % floor
+
+
+@pytest.mark.parametrize("scene", [["nonsense=1"], ["beta=-3"], ["beta"]])
+def test_a_profiling_scripts_bad_scene_is_one_line_exit_2(harness, scene, tmp_path, capsys):
+    """``--scene`` of bench_refcount.py and refcount_callers.py: a field that is malformed or
+    that ``Physics`` refuses is one usage line and exit 2 in the parent, not a child that dies
+    with a traceback."""
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="bench")
+    harness.add_scene_options(parser, tmp_path / "report.md")
+    args = parser.parse_args(["--scene", *scene, "--out", str(tmp_path / "x.md")])
+    with pytest.raises(SystemExit) as exit_:
+        harness.scene_options(parser, args, tmp_path / "report.md")
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("bench: error: --scene") and "Traceback" not in "\n".join(err)
