@@ -14,8 +14,9 @@ import pytest
 from scipy import integrate
 
 from solver import Physics
-from solver.model.liquid import (compression_energy, density, kirchhoff_difference,
-                                 log_viscosity, viscosity_ratio, volume_difference)
+from solver.model.liquid import (compression_energy, density, kink_departure,
+                                 kirchhoff_difference, log_viscosity, viscosity_ratio,
+                                 volume_difference)
 
 
 def _phys(**kw):
@@ -156,6 +157,34 @@ def test_table_is_exact_where_its_log_is_linear_and_barus_as_a_table_is_barus():
     for a, b in ((0.2, 1.0), (-1.0, 2.0), (3.0, 3.1)):
         assert kirchhoff_difference(a, b, as_table)[0] == pytest.approx(
             kirchhoff_difference(a, b, barus)[0], rel=1e-13)
+
+
+def test_kink_departure_is_the_slope_jump_times_the_range():
+    """``kink_departure``: the jump of ``d ln(mu/rho)/dP`` at a kink inside the range times the
+    range, in closed form for each law's kink (the slopes are read a 1e-9 of the range to either
+    side: each law's slope changes by less than 1e-8 relative there, hence rel=1e-7)."""
+    barus = _phys(beta=2.0)
+    assert kink_departure(-0.02, 0.03, barus) == pytest.approx(2.0 * 0.05, rel=1e-7)
+    assert kink_departure(0.01, 0.03, barus) == 0.0  # no kink inside
+    assert kink_departure(-0.03, 0.0, barus) == 0.0  # 0 at the end is not inside
+    # the law read in tension too is smooth at 0: no departure (to the slopes' rounding)
+    assert kink_departure(-0.02, 0.03, _phys(beta=2.0, viscosity_in_tension="law")) < 1e-15
+    # Roelands' slope at 0 is beta (test_roelands_slope_at_zero_is_beta)
+    assert kink_departure(-0.1, 0.1, _phys(beta=2.0, viscosity_law="roelands")) == \
+        pytest.approx(2.0 * 0.2, rel=1e-7)
+    # Dowson-Higginson's density and its slope are continuous at 0: what is left is the slope's
+    # own change between the two points 2e-10 apart where it is read, at most the tension side's
+    # curvature c1 / TENSION_WIDTH = 30 (x 2 for margin): 2 * 30 * 4e-10 * 0.2 = 4.8e-9, far below
+    # any preset's rtol (fine: 1e-5)
+    dh = _phys(density_law="dowson-higginson")
+    assert kink_departure(-0.1, 0.1, dh) < 2 * 30.0 * (2e-9 * 0.2) * 0.2
+    # a table: the largest slope jump among its points inside the range
+    table = _phys(viscosity_table="0:1, 0.5:3, 1.5:400, 3:2000")
+    s0, s1, s2 = (math.log(3.0) / 0.5, math.log(400.0 / 3.0) / 1.0,
+                  math.log(2000.0 / 400.0) / 1.5)
+    assert kink_departure(0.2, 1.0, table) == pytest.approx(abs(s1 - s0) * 0.8, rel=1e-7)
+    assert kink_departure(-0.1, 2.0, table) == pytest.approx(
+        max(s0, abs(s1 - s0), abs(s2 - s1)) * 2.1, rel=1e-7)
 
 
 @pytest.mark.parametrize("text, words", [

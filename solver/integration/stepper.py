@@ -507,11 +507,11 @@ def _newton_update(grid, phys, rtol, p_abs, film, fac, work):
 
 
 @jit
-def _local_error(grid, phys, err_fac, rtol, film, work):
+def _local_error(grid, phys, err_fac, states, rtol, film, work):
     """The step's local error in units of the tolerance (``_norm`` of ``err_fac (y - y_pred)``,
-    the pressures' part as the film model measures it: model/step.py, ``step_error``); 0 for the
-    first step, which has no history to compare with. ``res``, ``kdp``, ``dh`` and ``scale`` of
-    ``work`` are work space."""
+    the pressures' part as the film model measures it: model/step.py, ``step_error``; ``states``
+    the accepted states the predictor went through); 0 for the first step, which has no history
+    to compare with. ``res``, ``kdp``, ``dh`` and ``scale`` of ``work`` are work space."""
     if err_fac == 0.0:
         return 0.0
     y, y_pred, h, res, kdp, dh = work.y, work.y_pred, work.h, work.res, work.kdp, work.dh
@@ -522,8 +522,8 @@ def _local_error(grid, phys, err_fac, rtol, film, work):
     matvec(grid.influence, res[:n], kdp)
     for i in range(n):
         dh[i] = res[n] + kdp[i]
-    p_scale = work.scale if model.step_error(y, y_pred, err_fac, h, film, phys, res[:n], dh,
-                                             work.scale) else y[:n]
+    p_scale = work.scale if model.step_error(y, y_pred, states, err_fac, rtol, h, film, phys,
+                                             res[:n], dh, work.scale) else y[:n]
     return _norm(res[:n], res[n], res[n + 1], dh, p_scale, y[n], y[n + 1], h, 1.0,
                  model.pressure_scale(film)) / rtol
 
@@ -758,7 +758,7 @@ def _next_order(grid, phys, control, hist, dt, err, film, work):
         if q < 1 or q > k_max or hist.n[0] < q + 1:
             continue
         fac = _predict(dt, hist.t, q, hist.y, work.y_pred)
-        e = _local_error(grid, phys, fac, control.rtol, film, work)
+        e = _local_error(grid, phys, fac, hist.y[: q + 1], control.rtol, film, work)
         r = e ** (-1.0 / (q + 1.0)) if e > 0.0 else np.inf
         if r > rate:
             best, best_err, rate = q, e, r
@@ -818,7 +818,8 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
         _history_term(a, k, hist.c, work.c_hist)
         x_hist = _history_value(a, k, y, n)
         v_hist = _history_value(a, k, y, n + 1)
-        err_fac = _predict(dt, t, min(n_hist - 1, k), y, work.y_pred)
+        d = min(n_hist - 1, k)
+        err_fac = _predict(dt, t, d, y, work.y_pred)
         copy_into(work.y, work.y_pred)
         model.start_attempt(work.y, film, phys)
         step = Step(b * dt, work.c_hist, x_hist, v_hist)
@@ -841,7 +842,7 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
             counters[REJECTED] += 1
             _lower_order(hist)
             continue
-        err = _local_error(grid, phys, err_fac, control.rtol, film, work)
+        err = _local_error(grid, phys, err_fac, y[: d + 1], control.rtol, film, work)
         if not np.isfinite(err):
             status = NONFINITE
             break

@@ -113,6 +113,24 @@ def _next_kink(x, b, phys):
 
 
 @leaf
+def kink_departure(p_lo, p_hi, phys):
+    """How far the kinks of the laws strictly between ``p_lo`` and ``p_hi`` (``_next_kink``;
+    ``p_lo <= p_hi``) take ``ln(mu/rho)`` from a smooth curve over that range: the largest jump of
+    its slope at one of them times ``p_hi - p_lo`` (0 where there is none). Barus at ``P = 0``
+    with the ambient viscosity in tension: ``beta (p_hi - p_lo)``. The slopes are read a
+    ``1e-9`` of the range to either side (each law is smooth there, and linear for Barus and a
+    table)."""
+    width = 1e-9 * (p_hi - p_lo)
+    largest = 0.0
+    x = _next_kink(p_lo, p_hi, phys)
+    while x < p_hi:
+        jump = abs(_mobility_log(x + width, phys)[1] - _mobility_log(x - width, phys)[1])
+        largest = max(largest, jump)
+        x = _next_kink(x, p_hi, phys)
+    return largest * (p_hi - p_lo)
+
+
+@leaf
 def density(p, phys):
     """``rho_bar`` at the pressure ``p`` and its derivative in ``p``: Dowson-Higginson in
     compression; in tension its compressibility ``c1`` at 0 fades over ``TENSION_WIDTH``,
