@@ -107,11 +107,13 @@ def update_norm(norm, film, phys, rtol):
 
 
 @hook
-def error_in_time(film, phys, perr, dh):
+def error_in_time(film, phys, degree, perr, dh):
     """The floor's part of ``step.step_error``: while a cavity is open (or a JFO cell refilled in
     this step) the pressure is not smooth in time, and its errors leave the norm (``perr`` to 0);
-    where a JFO cavity refilled, the gap's too (``dh`` to 0). Returns whether the pressure is not
-    smooth in time."""
+    where a JFO cavity refilled, the gap's too (``dh`` to 0), and where a cell cavitated or
+    refilled over the predictor's states (of polynomial ``degree``) and this one, the gap's of
+    that cell and its neighbours (``_edge_gaps``). Returns whether the pressure is not smooth in
+    time."""
     if not on(phys):
         return False
     n = perr.size
@@ -122,7 +124,25 @@ def error_in_time(film, phys, perr, dh):
     if _refilled(film.cavity, phys):
         for i in range(n):
             dh[i] = 0.0
+    _edge_gaps(film.cavity, degree, dh)
     return not_smooth
+
+
+@jit
+def _edge_gaps(cavity, degree, dh):
+    """``dh`` to 0 at each cell that cavitated or refilled in this step or within the predictor's
+    states (fewer than ``degree`` accepted steps ago), and at its two neighbours. There the cell's
+    pressure meets or leaves the floor with a jump in its slope, and the gap, its elastic
+    deflection, follows with a jump in its own slope: no predictor extrapolates across it. With
+    those gaps in the norm each cell the cavity's edge crossed cost about three rejected steps
+    (JFO, St 10, eps 1e-4, Pi 1e-3, standard: 184 rejections in 558 steps; 120 in 487 without);
+    the other cells' gaps, ``X`` and ``V`` control the step."""
+    active, active0, since = cavity.active, cavity.active0, cavity.since_switch
+    n = dh.size
+    for i in range(active.size):
+        if active[i] != active0[i] or since[i] < degree:
+            for c in range(max(0, i - 1), min(n, i + 2)):
+                dh[c] = 0.0
 
 
 @jit
@@ -203,5 +223,6 @@ def accept(grid, h0, h1, q, dt, film, phys):
     for i in range(active.size):
         if active[i] and not active0[i]:
             cavity.h_onset[i] = h1[i]
+        cavity.since_switch[i] = 0 if active[i] != active0[i] else cavity.since_switch[i] + 1
     copy_into(active0, active)
     copy_into(cavity.q_prev, q)

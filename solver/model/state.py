@@ -74,10 +74,14 @@ def _getter(field: str):
 #   the face fluxes of the last accepted state;
 # ``worked``, ``p_abs``, ``p_seen``, ``r_edge`` (1,): the work against the floor so far, the
 #   absolute part of the pressure error scale (``new_film``), the largest pressure seen, the
-#   accepted state's cavity radius.
+#   accepted state's cavity radius;
+# ``since_switch`` (int): the accepted steps since each cell last cavitated or refilled (0: in
+#   the last one; ``NEVER_SWITCHED`` at the start).
+NEVER_SWITCHED = 2**40  # beyond any history: a cell that never switched
+
 Cavity = array_record("Cavity", (
     "active", "active_lu", "active0", "active_base", "active_was", "theta", "theta0", "dtheta",
-    "h_onset", "q_prev", "worked", "p_abs", "p_seen", "r_edge"),
+    "h_onset", "q_prev", "worked", "p_abs", "p_seen", "r_edge", "since_switch"),
     "A floor's state (model/state.py).")
 
 # The fields of ``Contact``, rough surfaces' state, one entry per node unless said otherwise:
@@ -152,7 +156,8 @@ def new_film(q):
     cavity = Cavity(np.zeros(cells_n, dtype=np.bool_), np.zeros(cells_n, dtype=np.bool_),
                     np.zeros(cells_n, dtype=np.bool_), np.zeros(cells_n, dtype=np.bool_),
                     np.zeros(cells_n, dtype=np.bool_), theta, theta.copy(), np.zeros(cells_n), np.zeros(cells_n),
-                    q.copy(), _one(0.0), _one(1e-12), _one(0.0), _one(0.0))
+                    q.copy(), _one(0.0), _one(1e-12), _one(0.0), _one(0.0),
+                    np.full(cells_n, NEVER_SWITCHED, dtype=np.int64))
     contact = Contact(np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
                       np.zeros(n), np.zeros(n), _one(1.0), _one(0.0),
                       _one(0.0), np.zeros(n, dtype=np.bool_), np.zeros(n),

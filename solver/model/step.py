@@ -213,7 +213,7 @@ def step_error(y, y_pred, states, err_fac, rtol, h, film, phys, perr, dh, scale)
 
     Returns True when ``scale`` holds the Kirchhoff pressures, False when the errors are measured
     against the slots themselves (``scale`` untouched)."""
-    not_smooth = cavity_step.error_in_time(film, phys, perr, dh)
+    not_smooth = cavity_step.error_in_time(film, phys, states.shape[0] - 1, perr, dh)
     kirchhoff = not isoviscous(phys) and not not_smooth and not contact_step.on(phys)
     if kirchhoff:
         _kirchhoff_errors(y_pred, y, err_fac, phys, perr, scale)
