@@ -5,8 +5,9 @@ product with the elastic matrix.
 LAPACK's ``dgetrf``/``dgetrs`` and BLAS ``dgemv`` from SciPy's Cython bindings, called from compiled code (no GIL):
 5-6x faster than a plain compiled triple loop at N ~ 130 on this machine. They are bound by
 symbol name (``llvmlite.binding.add_symbol`` + ``ExternalFunction``), not as ctypes pointers,
-so the calling functions stay cacheable. The arrays are C-ordered, so LAPACK factors the
-transpose, and the solve uses ``trans = 'T'``.
+so the calling functions stay cacheable. The arrays are C-ordered, which LAPACK reads as their
+transpose: ``lu_factor`` transposes the matrix in place before factorising it, so that the solve
+uses ``trans = 'N'``.
 """
 
 import llvmlite.binding as llvm
@@ -77,9 +78,9 @@ def _int32_at(typingctx, address):
     return types.int32(types.voidptr), codegen
 
 
-# BLAS and LAPACK read a C-ordered matrix as its transpose: trans = "T" (84; ord() compiles
-# numba's unicode code)
-_TRANSPOSE = 84
+# BLAS and LAPACK read a C-ordered matrix as its transpose: trans = "T" (84), or "N" (78) for a
+# matrix stored transposed (ord() compiles numba's unicode code)
+_TRANSPOSE, _NO_TRANSPOSE = 84, 78
 
 
 @jit
@@ -95,8 +96,17 @@ def matvec(a, x, out):
 
 @jit
 def lu_factor(a, piv):
-    """Factor ``a`` (n, n, C order) in place; ``piv`` (n,) int32. False if singular."""
-    n = _int32_cell(a.shape[0])
+    """Factor ``a`` (n, n, C order) in place; ``piv`` (n,) int32. False if singular. ``a`` is
+    transposed in place first, so that LAPACK, which reads C order as the transpose, factors
+    ``a`` itself: ``lu_solve`` then solves with ``trans = 'N'``, whose triangular solves run
+    down columns (BLAS axpy), where ``'T'`` takes a dot product per row (``dot_compute``, 13 %
+    of a classic collision's CPU time; benchmarks/profile.md). The transpose costs about
+    4.5 us at N ~ 125 against 80-110 us for the factorisation."""
+    m = a.shape[0]
+    for i in range(m):
+        for j in range(i + 1, m):
+            a[i, j], a[j, i] = a[j, i], a[i, j]
+    n = _int32_cell(m)
     info = _int32_cell(0)
     _dgetrf(n, n, _data(a), n, _data(piv), info)
     return _int32_at(info) == 0
@@ -104,11 +114,11 @@ def lu_factor(a, piv):
 
 @jit
 def lu_solve(lu, piv, b):
-    """Solve ``A x = b`` in place in ``b`` given ``lu_factor``'s output for ``A`` (LAPACK holds
-    the factors of ``A^T``: C order read as Fortran order)."""
+    """Solve ``A x = b`` in place in ``b`` given ``lu_factor``'s output for ``A`` (the factors of
+    ``A`` in Fortran order)."""
     n = _int32_cell(lu.shape[0])
     info = _int32_cell(0)
-    _dgetrs(_char_cell(_TRANSPOSE), n, _int32_cell(1), _data(lu), n, _data(piv), _data(b), n,
+    _dgetrs(_char_cell(_NO_TRANSPOSE), n, _int32_cell(1), _data(lu), n, _data(piv), _data(b), n,
             info)
     return b
 
