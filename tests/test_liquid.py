@@ -173,7 +173,7 @@ def test_kink_departure_is_the_slope_jump_times_the_range():
     assert kink_departure(-0.1, 0.1, _phys(beta=2.0, viscosity_law="roelands")) == \
         pytest.approx(2.0 * 0.2, rel=1e-7)
     # Dowson-Higginson's density and its slope are continuous at 0: what is left is the slope's
-    # own change between the two points 2e-10 apart where it is read, at most the tension side's
+    # own change between the two points 4e-10 apart where it is read, at most the tension side's
     # curvature c1 / TENSION_WIDTH = 30 (x 2 for margin): 2 * 30 * 4e-10 * 0.2 = 4.8e-9, far below
     # any preset's rtol (fine: 1e-5)
     dh = _phys(density_law="dowson-higginson")

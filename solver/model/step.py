@@ -191,7 +191,8 @@ def step_error(y, y_pred, states, err_fac, rtol, h, film, phys, perr, dh, scale)
 
     - While a cavity is open the pressure is not smooth in time wherever its edge crosses a node
       (the cells there and their neighbours), and a cavity that closes in this step makes it
-      jump: the gap, X and V errors control the step (measured: every rejection came from these
+      jump: the gap, X and V errors control the step (the gap's but at the cells the edge
+      crossed within the predictor's states, and their neighbours: cavity_step._edge_gaps) (measured: every rejection came from these
       kinks; counting the jump of the last cell of an axis cavity as an error underflowed the
       step).
     - JFO: where a cavity closes the pressure jumps (the void's closing rate is finite up to the
@@ -231,7 +232,7 @@ def _kirchhoff_errors(y_pred, y, err_fac, phys, perr, scale):
         scale[i] = kirchhoff_difference(0.0, y[i], phys)[0]
 
 
-@jit
+@leaf
 def _kinks_in_time(states, y, rtol, phys, perr):
     """``step_error``'s pressure errors ``perr`` to 0 at each cell whose pressure, over the
     ``states`` and ``y``, crossed a kink of the liquid's laws that departs from a smooth law by
