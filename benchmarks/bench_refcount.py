@@ -189,11 +189,11 @@ def report(data: dict) -> str:
                   "function has its name; a function LLVM inlined counts for its caller; BLAS's "
                   "and the interpreter's by their symbols; at least 0.2 % in a round):", "",
                   "| function | share, median | rounds |", "|---|---|---|"]
-        names = {n for r in data["rounds"] for n in r["functions"]}
-        medians = {n: statistics.median(r["functions"].get(n, 0.0) for r in data["rounds"])
-                   for n in names}
-        for name in sorted(names, key=lambda n: (-medians[n], n))[:TOP_FUNCTIONS]:
-            values = [r["functions"].get(name, 0.0) for r in data["rounds"]]
+        per_round = {n: [r["functions"].get(n, 0.0) for r in data["rounds"]]
+                     for r0 in data["rounds"] for n in r0["functions"]}
+        medians = {n: statistics.median(values) for n, values in per_round.items()}
+        for name in sorted(per_round, key=lambda n: (-medians[n], n))[:TOP_FUNCTIONS]:
+            values = per_round[name]
             lines.append(f"| `{name}` | {medians[name]:.1f} % | "
                          f"{min(values):.1f}-{max(values):.1f} % |")
     target = [r["shares"]["reference counting"] + r["shares"]["allocation"] for r in data["rounds"]]

@@ -191,10 +191,11 @@ def step_error(y, y_pred, states, err_fac, rtol, h, film, phys, perr, dh, scale)
 
     - While a cavity is open the pressure is not smooth in time wherever its edge crosses a node
       (the cells there and their neighbours), and a cavity that closes in this step makes it
-      jump: the gap, X and V errors control the step (the gap's but at the cells the edge
-      crossed within the predictor's states, and their neighbours: cavity_step._edge_gaps) (measured: every rejection came from these
+      jump: the gap, X and V errors control the step (measured: every rejection came from these
       kinks; counting the jump of the last cell of an axis cavity as an error underflowed the
-      step).
+      step). The gap is not smooth either at a cell the edge crossed within the predictor's
+      states: its errors there, and at its neighbours, leave the norm too
+      (cavity_step._edge_gaps).
     - JFO: where a cavity closes the pressure jumps (the void's closing rate is finite up to the
       instant it vanishes), and the gap with it through ``W = K P``: no step size makes the
       extrapolation of the gap across it accurate. X and V stay continuous; they control this
