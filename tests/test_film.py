@@ -14,7 +14,7 @@ import pytest
 
 from solver import Physics
 from solver.collision import scene_grid
-from solver.integration.linalg import lu_factor, lu_solve, matvec
+from solver.integration.linalg import lu_factor, lu_solve, lu_solve_rows, matvec
 from solver.model import cavity_step, step
 from solver.model.film import gap
 from solver.model.state import Film, Step
@@ -188,6 +188,9 @@ def test_compiled_linear_algebra_matches_numpy():
         sol = lu_solve(lu, piv, b.copy())
         # diagonally dominant: condition number O(1), so the solve is accurate to ~n ulps
         np.testing.assert_allclose(sol, np.linalg.solve(a, b), rtol=1e-11, atol=1e-13)
+        rows = rng.standard_normal((5, n))  # several right-hand sides, one per row, in one call
+        sols = lu_solve_rows(lu, piv, rows.copy())
+        np.testing.assert_allclose(sols, np.linalg.solve(a, rows.T).T, rtol=1e-11, atol=1e-13)
     singular = np.zeros((4, 4))
     assert not lu_factor(singular, np.empty(4, dtype=np.int32))
 

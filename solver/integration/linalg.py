@@ -116,11 +116,26 @@ def lu_factor(a, piv):
 def lu_solve(lu, piv, b):
     """Solve ``A x = b`` in place in ``b`` given ``lu_factor``'s output for ``A`` (the factors of
     ``A`` in Fortran order)."""
+    _getrs(lu, piv, b, 1)
+    return b
+
+
+@jit
+def lu_solve_rows(lu, piv, b):
+    """Solve ``A x = b_r`` in place for each row ``b_r`` of ``b`` (C order, (r, N)): one LAPACK
+    call (a triangular solve with r right-hand sides, BLAS level 3) instead of r."""
+    _getrs(lu, piv, b, b.shape[0])
+    return b
+
+
+@jit
+def _getrs(lu, piv, b, nrhs):
+    """LAPACK's dgetrs with trans = 'N' on ``nrhs`` right-hand sides of N entries each, stored
+    one after the other in ``b`` (a C-ordered (nrhs, N) array is the Fortran-ordered (N, nrhs))."""
     n = _int32_cell(lu.shape[0])
     info = _int32_cell(0)
-    _dgetrs(_char_cell(_NO_TRANSPOSE), n, _int32_cell(1), _data(lu), n, _data(piv), _data(b), n,
-            info)
-    return b
+    _dgetrs(_char_cell(_NO_TRANSPOSE), n, _int32_cell(nrhs), _data(lu), n, _data(piv), _data(b),
+            n, info)
 
 
 # The largest number of slots whose rows and columns a low-rank update replaces (rank 2 each);
@@ -154,7 +169,7 @@ def lowrank_prepare(lu, piv, base, fresh, slots, k, u, v, z, cap, cpiv):
             u[k + a, slots[b]] = 0.0
     for a in range(r):
         copy_into(z[a], u[a])
-        lu_solve(lu, piv, z[a])
+    lu_solve_rows(lu, piv, z[:r])
     c = cap[: r * r].reshape((r, r))
     for a in range(r):
         for b in range(r):
