@@ -372,35 +372,3 @@ def test_the_cavity_edge_costs_few_rejected_steps(model, steps, rejected):
     assert c.ok
     assert c.steps < 1.3 * steps
     assert c.rejected_steps < 1.3 * rejected
-
-
-def test_a_refill_front_is_predicted_to_advance_as_far_as_in_the_last_step():
-    """``cavity_step._refill_ahead``: where cells refilled in the last accepted step, the attempt
-    starts with as many cavity cells beyond each of them full (``theta = 1``, slot at the
-    floor), on either side, times the step's ratio to the last one, rounded down; cavity cells
-    farther away, and a step after no refill, keep the accepted set."""
-    from solver.model.cavity_step import _refill_ahead
-    from solver.model.state import NEVER_SWITCHED, new_film
-
-    phys = Physics(St=10.0, eps=1e-4, Pi=1e-3, cavitation="jfo").as_array()
-    film = new_film(np.zeros(12))  # 12 cells
-    cav = film.cavity
-    cav.active0[:] = [True] * 8 + [False] * 4  # the cavity: cells 0-7
-    cav.since_switch[:] = NEVER_SWITCHED
-    cav.since_switch[8:10] = 0  # cells 8 and 9 refilled in the last step: the front moved 2
-    cav.active[:] = cav.active0
-    cav.theta[:] = 0.5
-    y = np.full(14, 7.0)
-    _refill_ahead(y, cav, phys, 1.0)  # a step as long as the last one
-    assert cav.active.tolist() == [True] * 6 + [False] * 6  # cells 6 and 7 start full
-    assert cav.theta[6:8].tolist() == [1.0, 1.0] and cav.theta[:6].tolist() == [0.5] * 6
-    assert y[6:8].tolist() == [-1e-3, -1e-3] and y[:6].tolist() == [7.0] * 6
-    cav.active[:] = cav.active0
-    _refill_ahead(y, cav, phys, 0.75)  # a shorter step: the front moves 1.5 cells, 1 predicted
-    assert cav.active.tolist() == [True] * 7 + [False] * 5
-    cav.active[:] = cav.active0
-    _refill_ahead(y, cav, phys, 0.45)  # less than a cell: nothing predicted
-    assert cav.active.tolist() == cav.active0.tolist()
-    cav.since_switch[:] = 5  # no cell switched in the last step: the accepted set stays
-    _refill_ahead(y, cav, phys, 1.0)
-    assert cav.active.tolist() == cav.active0.tolist()

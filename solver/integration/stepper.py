@@ -406,10 +406,9 @@ def _newton(grid, phys, step, rtol, film, fac, work):
     (module docstring), reusing the LU while ``bh`` stays within 30 % of the ``bh`` it was
     factorised at. The gap update of an iterate is the next iterate's gap minus this one's, so
     each iteration costs one K-product (in gap) and one LU solve. With an active set, the set is
-    decided at every iterate (a primal-dual active-set Newton): a change goes on with the matrix
-    updated in the slots that changed (``_update_for_set``; a fresh factorisation when too many
-    did) and starts Newton's convergence test again; an iterate converges only with its set
-    settled (docs/solver.md, "Cavitation": deciding at converged iterates only cost more).
+    decided at the first iterate and held while Newton converges; a converged iterate whose set
+    would change goes on with the new set and the matrix updated in the slots that changed
+    (``_update_for_set``; a fresh factorisation when too many did).
 
     Returns
     -------
@@ -441,7 +440,7 @@ def _newton(grid, phys, step, rtol, film, fac, work):
         it += 1
         if not _admissible(h):
             break
-        model.step_residual(grid, phys, step, y, film, active_set, work.q, w, h,
+        model.step_residual(grid, phys, step, y, film, it == 1 or pending, work.q, w, h,
                             work.res)
         if active_set:
             same = model.settled(film)
@@ -822,7 +821,7 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
         d = min(n_hist - 1, k)
         err_fac = _predict(dt, t, d, y, work.y_pred)
         copy_into(work.y, work.y_pred)
-        model.start_attempt(work.y, film, phys, _step_ratio(dt, t, n_hist))
+        model.start_attempt(work.y, film, phys)
         step = Step(b * dt, work.c_hist, x_hist, v_hist)
         newton_before = counters[NEWTON]
         outcome, fresh = _newton(grid, phys, step, control.rtol, film, fac, work)
@@ -855,14 +854,6 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
         if k > 2:
             counters[HIGHER_ORDER] += 1
     return status, accepted, dt, err
-
-
-@jit
-def _step_ratio(dt, t, n_hist):
-    """The step ``dt`` over the last accepted one (0 before there is one)."""
-    if n_hist < 2:
-        return 0.0
-    return dt / (t[0] - t[1])
 
 
 @jit
@@ -1028,7 +1019,7 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
         if not accepted:
             # record the last accepted state with the failure status, then stop; w and h (and
             # the active set) hold the rejected trial's, so restore the state's and recompute
-            model.start_attempt(y0, film, phys, 0.0)
+            model.start_attempt(y0, film, phys)
             model.surface_gap(grid, phys, y0, film, w, h)
             continue
         k_step = min(hist.order[0], hist.n[0])

@@ -42,10 +42,9 @@ def held_cells(cavity, phys, out):
 
 
 @hook
-def start_attempt(y, film, phys, step_ratio):
+def start_attempt(y, film, phys):
     """A step attempt of a JFO film starts from the accepted cavity, its cells' slots at the
-    floor, less the cells it predicts to refill in a step ``step_ratio`` times the last accepted
-    one (``_refill_ahead``; 0: none); the Reynolds film keeps the iterate's set."""
+    floor; the Reynolds film keeps the iterate's set."""
     if not held(phys):
         return
     cavity = film.cavity
@@ -56,41 +55,6 @@ def start_attempt(y, film, phys, step_ratio):
         theta[i] = theta0[i]
         if active[i]:
             y[i] = -phys[PI]
-    _refill_ahead(y, cavity, phys, step_ratio)
-
-
-@jit
-def _refill_ahead(y, cavity, phys, step_ratio):
-    """Where a JFO cavity refilled in the last accepted step, the attempt starts with the cells
-    beyond each refilled one full (``theta = 1``, slot ``P = -Pi``), as many as refilled in that
-    step times ``step_ratio`` (this step over that one), rounded down: the refill front's
-    advance, predicted; a halved step after a failed attempt predicts less, down to nothing. A cell refills only once the liquid reaches it
-    through a full neighbour, so Newton's active set moves the front one cell per decision, a
-    fresh Jacobian and a low-rank update each (JFO, St 10, eps 1e-4, Pi 1e-3, standard: 2436
-    Newton iterations, 575 Jacobians and 177 factorisations without the prediction, 2230, 387
-    and 144 with it). A wrong guess costs one change of the set: the cell's pressure below the floor
-    cavitates it again at the next decision. Without the step ratio, a step halved again and
-    again kept the guess and fell below its minimum (JFO, St 100, eps 1e-2, Pi 1)."""
-    active, theta, since = cavity.active, cavity.theta, cavity.since_switch
-    active0 = cavity.active0
-    n = active.size
-    m = 0
-    for i in range(n):
-        if since[i] == 0 and not active0[i]:
-            m += 1
-    m = int(m * step_ratio)
-    if m == 0:
-        return
-    for i in range(n):
-        if since[i] == 0 and not active0[i]:
-            for d in (-1, 1):
-                j = i + d
-                while 0 <= j < n and abs(j - i) <= m and active0[j]:
-                    if active[j]:
-                        active[j] = False
-                        theta[j] = 1.0
-                        y[j] = -phys[PI]
-                    j += d
 
 
 @jit
