@@ -32,8 +32,8 @@ class Numerics:
     max_steps: int  # step budget: a scene that needs more fails with status "max_steps"
     save_profiles: bool = True  # keep P(R), W(R) at every step (sweeps switch this off)
     # highest order of the BDF time stepping, 1-5 (integration/stepper.py); 2 is BDF2, above it
-    # the loop chooses each step's order (a film not smooth in time, with a cavitation floor or
-    # rough surfaces, stays at 2: model/step.py, smooth_in_time)
+    # the loop chooses each step's order (a film on rough surfaces stays at 2, a cavitating one
+    # from its first cavity on: model/step.py, smooth_in_time and smooth_from_now)
     max_order: int = 2
     # the time tolerance where the order may rise above 2 (max_order > 2, a film smooth in
     # time) is rtol times this; a film that stays at BDF2 keeps rtol

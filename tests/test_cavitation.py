@@ -113,9 +113,9 @@ def test_onset_is_exactly_where_the_axis_tension_reaches_the_floor():
 
 
 def test_no_floor_limit_is_the_classic_model():
-    # at BDF2: a film with a floor stays at order 2 (model/step.py: smooth_in_time), the classic
-    # one rises above it at the presets' max_order (5)
-    classic = collide(Physics(St=10.0, eps=0.01), max_order=2)
+    # a film with a floor takes the classic film's orders until a cavity opens (model/step.py:
+    # smooth_from_now): one that never opens, all of them
+    classic = collide(Physics(St=10.0, eps=0.01))
     huge = collide(Physics(St=10.0, eps=0.01, Pi=1e6, cavitation="reynolds"))  # |P| <= ~3.4
     assert huge.cavitation == "reynolds" and not huge.cavitated
     # the floor never binds, so every step decision is the classic one: identical numbers
@@ -295,7 +295,7 @@ def test_jfo_energy_closure_falls_with_the_tolerance():
 
 
 def test_jfo_no_floor_limit_is_the_classic_model():
-    classic = collide(Physics(St=10.0, eps=0.01), max_order=2)  # as the floor's film, BDF2
+    classic = collide(Physics(St=10.0, eps=0.01))  # its orders: the floor never opens a cavity
     huge = collide(Physics(St=10.0, eps=0.01, Pi=1e6, cavitation="jfo"))
     assert huge.cavitation == "jfo" and not huge.cavitated
     # the floor never binds: theta = 1 everywhere and every step decision is the classic one

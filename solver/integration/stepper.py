@@ -136,10 +136,11 @@ def _film_control(control, phys):
     2`` and a film smooth in time, model/step.py: ``smooth_in_time``) its tolerance is ``rtol``
     times ``high_order_rtol_factor`` (solver/settings.py: the presets' factors keep every error
     of benchmarks/accuracy.md at or below BDF2's at ``rtol``); a film that stays at BDF2 keeps
-    ``rtol``."""
+    ``rtol``. The factor stays in the control (``_control_from_now`` divides by it)."""
     if control.max_order > 2 and model.smooth_in_time(phys):
         return Control(control.rtol * control.high_order_rtol_factor, control.dt_init,
-                       control.dt_min, control.max_steps, control.max_order, 1.0)
+                       control.dt_min, control.max_steps, control.max_order,
+                       control.high_order_rtol_factor)
     return control
 
 
@@ -774,7 +775,8 @@ def _next_step(grid, phys, control, hist, dt, err, film, work):
     about one Newton iteration a step (two predictors and two error norms, each with an N x N
     product): 0.77-0.79x the CPU time of a collision at order 5 with the same steps (standard
     preset, 4 scenes St 2.5-100, one run of each after the other, not alternated). A film
-    whose solution is not smooth in time (model/step.py, ``smooth_in_time``) stays at order 2."""
+    whose solution is not smooth in time (model/step.py, ``smooth_in_time``) stays at order 2
+    (and from where ``smooth_from_now`` says it is no longer: ``_control_from_now``)."""
     k = hist.order[0]
     if control.max_order > 2 and hist.order[1] >= k + 1 and model.smooth_in_time(phys):
         k, err = _next_order(grid, phys, control, hist, dt, err, film, work)
@@ -854,6 +856,21 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
         if k > 2:
             counters[HIGHER_ORDER] += 1
     return status, accepted, dt, err
+
+
+@jit
+def _control_from_now(control, hist, factor, film, phys):
+    """After an accepted step: where a film smooth in time so far stops being so
+    (model/step.py: ``smooth_from_now``), BDF2 at the tolerance asked for (``_film_control``'s
+    ``rtol`` over its factor) from the next step on, which does not grow (its tolerance
+    tightens by that factor). Returns the control and the next step's factor."""
+    if control.max_order > 2 and model.smooth_in_time(phys) \
+            and not model.smooth_from_now(film, phys):
+        hist.order[0] = min(hist.order[0], 2)
+        return (Control(control.rtol / control.high_order_rtol_factor, control.dt_init,
+                        control.dt_min, control.max_steps, min(control.max_order, 2), 1.0),
+                min(factor, 1.0))
+    return control, factor
 
 
 @jit
@@ -1025,14 +1042,14 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
         k_step = min(hist.order[0], hist.n[0])
         factor = _next_step(grid, phys, control, hist, dt, err, film, work)
         _accept(grid, phys, hist, dt, film, work)
+        control, factor = _control_from_now(control, hist, factor, film, phys)
         strain_new, diss_new = model.energies(grid, phys, y0, w, h, q, film)
         hist.r[0] = diss_new
         if k_step > 2:
             dissipated += _dissipated_in_step(hist.t, hist.r, k_step, work.basis)
         else:
             dissipated += 0.5 * (diss_rate + diss_new) * dt
-        strain = strain_new
-        diss_rate = diss_new
+        strain, diss_rate = strain_new, diss_new
         dt *= factor
     kept = min(n_rows, p_hist.shape[0])
     return (status, work.counters, series[:n_rows], p_hist[:kept], w_hist[:kept],

@@ -146,6 +146,16 @@ def _edge_gaps(cavity, degree, dh):
 
 
 @jit
+def opened(film):
+    """Whether the accepted state has a cavity."""
+    active0 = film.cavity.active0
+    for i in range(active0.size):
+        if active0[i]:
+            return True
+    return False
+
+
+@jit
 def _refilled(cavity, phys):
     """Whether a JFO cavity's cell refilled in this step (its pressure jumps: ``step_error``)."""
     refilled = False
