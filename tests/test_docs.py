@@ -416,7 +416,7 @@ def test_quoted_benchmark_numbers_are_the_result_files(what, pattern, source):
 # files that held neither) ---------------------------------------------------------------------
 # The form: ``FILE: NUMBERS`` where FILE is a benchmark result or a doc (``benchmarks/NAME.md``,
 # ``benchmarks/NAME.json``, ``docs/NAME.md``) and NUMBERS runs to the next ``)``, ``;`` or sentence
-# end, e.g. "(benchmarks/accuracy.md: 0.005)", "(benchmarks/versus.md: 1.69, 2.08)". Every number
+# end, e.g. "(benchmarks/accuracy.md: 0.005)" or with several numbers "1.69, 2.08". Every number
 # in it must be in FILE, to the digits quoted (a percentage also as a fraction).
 CITED = re.compile(r"\b((?:benchmarks|docs)/\w+\.(?:md|json)): ([^);]{1,120}?)(?=[);]|\.\s|\.$|$)")
 DIGITS = re.compile(r"(?<![\w.])\d+(?:\.\d+)?(?:[eE][-+]?\d+)?(?![\w.]*\d)")
