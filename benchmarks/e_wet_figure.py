@@ -1,5 +1,7 @@
-"""The wet restitution against experiments: wet_restitution.png and the agreement table
-wet_restitution.md, from benchmarks/e_wet_curves.json (benchmarks/e_wet_curves.py).
+"""The wet restitution against the experiments' correlation (a fit through scattered
+measurements, not data: the measured runs are benchmarks/experiments.md's): wet_restitution.png
+and the agreement table wet_restitution.md, from benchmarks/e_wet_curves.json
+(benchmarks/e_wet_curves.py).
 
     python benchmarks/e_wet_figure.py [--out DIR]    # default results/e_wet_figure/ (untracked)
     python benchmarks/e_wet_figure.py --update       # rewrite benchmarks/wet_restitution.*
@@ -81,7 +83,7 @@ def main(argv=None):
         # each eps in its colour of the sweep figures (Figs. 12-14, ehd figures)
         draw_experiments(ax, st, labels, colors=eps_colors([float(k) for k in curves]))
         ax.set_title(f"Wet restitution: model (solver {data['solver_version']}, "
-                     f"{data['accuracy']}) against experiments")
+                     f"{data['accuracy']}) against the experiments' correlation")
         fig.savefig(out / "wet_restitution.png", dpi=150, metadata={"Software": None})
     lines = ["| eps | model St_c (e_wet > 0 from) | max abs(e_wet - exp(-35/St_L)), St 30-1000 | "
              "same, St 100-1000 | e_wet at St = 1000 |", "|---|---|---|---|---|"]
@@ -94,8 +96,10 @@ def main(argv=None):
         lines.append(f"| {k} | {threshold(st, e):.1f} | {cells[0]} | {cells[1]} | {e[-1]:.3f} |")
     text = "\n".join(lines) + "\n\n" + fits_table(st, curves)
     (out / "wet_restitution.md").write_text(
-        "# Wet restitution against experiments\n\n"
-        "Model: `e_wet` at x0, standard accuracy (benchmarks/e_wet_curves.py). Experiments: "
+        "# Wet restitution against the experiments' correlation\n\n"
+        "Model: `e_wet` at x0, standard accuracy (benchmarks/e_wet_curves.py). The experiments' "
+        "correlation (Legendre et al. 2006: a fit through scattered measurements, not data; the "
+        "model against measured runs is benchmarks/experiments.md): "
         "`e/e_dry = exp(-35/St_L)`, `St_L = St (1 + rho_f/(2 rho_p))` for rho_f/rho_p = "
         f"{DENSITY_RATIOS[0]:g}-{DENSITY_RATIOS[1]:g} (range of the two numbers in a cell); "
         "no rebound below St ~ 10.\n\n" + text)
