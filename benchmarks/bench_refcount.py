@@ -189,8 +189,8 @@ def report(data: dict) -> str:
                   "function has its name; a function LLVM inlined counts for its caller; BLAS's "
                   "and the interpreter's by their symbols; at least 0.2 % in a round):", "",
                   "| function | share, median | rounds |", "|---|---|---|"]
-        per_round = {n: [r["functions"].get(n, 0.0) for r in data["rounds"]]
-                     for r0 in data["rounds"] for n in r0["functions"]}
+        names = {n for r in data["rounds"] for n in r["functions"]}
+        per_round = {n: [r["functions"].get(n, 0.0) for r in data["rounds"]] for n in names}
         medians = {n: statistics.median(values) for n, values in per_round.items()}
         for name in sorted(per_round, key=lambda n: (-medians[n], n))[:TOP_FUNCTIONS]:
             values = per_round[name]

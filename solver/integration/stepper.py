@@ -135,13 +135,16 @@ def _film_control(control, phys):
     """The control the film's integration takes: where the order may rise above 2 (``max_order >
     2`` and a film smooth in time, model/step.py: ``smooth_in_time``) its tolerance is ``rtol``
     times ``high_order_rtol_factor`` (solver/settings.py: the presets' factors keep every error
-    of benchmarks/accuracy.md at or below BDF2's at ``rtol``); a film that stays at BDF2 keeps
-    ``rtol``. The factor stays in the control (``_control_from_now`` divides by it)."""
-    if control.max_order > 2 and model.smooth_in_time(phys):
+    of benchmarks/accuracy.md at or below BDF2's at ``rtol``), and the factor stays in the
+    control (``_control_from_now`` divides by it); a film that is not smooth in time gets BDF2
+    at ``rtol`` (``max_order`` 2: the loop asks the control alone which orders it may take)."""
+    if control.max_order <= 2:
+        return control
+    if model.smooth_in_time(phys):
         return Control(control.rtol * control.high_order_rtol_factor, control.dt_init,
                        control.dt_min, control.max_steps, control.max_order,
                        control.high_order_rtol_factor)
-    return control
+    return Control(control.rtol, control.dt_init, control.dt_min, control.max_steps, 2, 1.0)
 
 
 # The accepted states the BDF step and its predictor read, newest first (row 0), as many rows as
@@ -775,10 +778,10 @@ def _next_step(grid, phys, control, hist, dt, err, film, work):
     about one Newton iteration a step (two predictors and two error norms, each with an N x N
     product): 0.77-0.79x the CPU time of a collision at order 5 with the same steps (standard
     preset, 4 scenes St 2.5-100, one run of each after the other, not alternated). A film
-    whose solution is not smooth in time (model/step.py, ``smooth_in_time``) stays at order 2
-    (and from where ``smooth_from_now`` says it is no longer: ``_control_from_now``)."""
+    whose solution is not smooth in time has ``max_order`` 2 (``_film_control``, and
+    ``_control_from_now`` from where it stops being so)."""
     k = hist.order[0]
-    if control.max_order > 2 and hist.order[1] >= k + 1 and model.smooth_in_time(phys):
+    if control.max_order > 2 and hist.order[1] >= k + 1:
         k, err = _next_order(grid, phys, control, hist, dt, err, film, work)
         hist.order[0] = k
         hist.order[1] = -1
@@ -864,8 +867,7 @@ def _control_from_now(control, hist, factor, film, phys):
     (model/step.py: ``smooth_from_now``), BDF2 at the tolerance asked for (``_film_control``'s
     ``rtol`` over its factor) from the next step on, which does not grow (its tolerance
     tightens by that factor). Returns the control and the next step's factor."""
-    if control.max_order > 2 and model.smooth_in_time(phys) \
-            and not model.smooth_from_now(film, phys):
+    if control.max_order > 2 and not model.smooth_from_now(film, phys):
         hist.order[0] = min(hist.order[0], 2)
         return (Control(control.rtol / control.high_order_rtol_factor, control.dt_init,
                         control.dt_min, control.max_steps, min(control.max_order, 2), 1.0),
