@@ -83,25 +83,22 @@ def run(pool, jobs):
     return list(pool.map(solve, jobs, chunksize=1))
 
 
-def main():
-    t_start = time.perf_counter()
-    load_start = harness.load_now()
-    from solver import PRESETS, collide
-
-    collide(5.0, 0.01)  # compile once before the workers load the cache
-    results = {"panel": PANEL, "levels": LEVELS}
-    with ProcessPoolExecutor(max_workers=min(2, os.cpu_count() or 1)) as pool:
-        base = dict(switch=SWITCH_REF, release=RELEASE_REF)
-        print("reference levels ...", flush=True)
-        levels = [run(pool, [(st, ep, "fine", {**base, **lv}) for st, ep in PANEL]) for lv in LEVELS]
-        print("hand-over and release studies ...", flush=True)
-        switch_runs = [run(pool, [(st, ep, "fine", {**STUDY, "switch": s, "release": RELEASE_REF})
-                                  for st, ep in PANEL]) for s in SWITCHES]
-        release_runs = [run(pool, [(st, ep, "fine", {**STUDY, "switch": 0.005, "release": r})
-                                   for st, ep in PANEL]) for r in RELEASES]
+def references(pool, panel):
+    """The converged reference of each scene of ``panel`` (``(St, eps)`` pairs) and what it rests
+    on: three levels (``LEVELS``) Richardson-extrapolated with the observed order, corrected to
+    both thresholds -> 0 (``SWITCHES``, ``RELEASES``). Returns the per-scene lists ``reference``,
+    its estimated error, the observed orders and the threshold studies' errors."""
+    base = dict(switch=SWITCH_REF, release=RELEASE_REF)
+    print("reference levels ...", flush=True)
+    levels = [run(pool, [(st, ep, "fine", {**base, **lv}) for st, ep in panel]) for lv in LEVELS]
+    print("hand-over and release studies ...", flush=True)
+    switch_runs = [run(pool, [(st, ep, "fine", {**STUDY, "switch": s, "release": RELEASE_REF})
+                              for st, ep in panel]) for s in SWITCHES]
+    release_runs = [run(pool, [(st, ep, "fine", {**STUDY, "switch": 0.005, "release": r})
+                               for st, ep in panel]) for r in RELEASES]
 
     reference, ref_err, orders, switch_err, release_err = [], [], [], [], []
-    for i, _ in enumerate(PANEL):
+    for i, _ in enumerate(panel):
         ref, rerr, ordr, serr, lerr = {}, {}, {}, {}, {}
         for key in KEYS:
             if any(lv[i]["status"] != "ok" for lv in levels):
@@ -120,6 +117,18 @@ def main():
             lerr[key] = {r: error(v, r_lim, key) for r, v in zip(RELEASES, r_vals)}
         reference.append(ref), ref_err.append(rerr), orders.append(ordr)
         switch_err.append(serr), release_err.append(lerr)
+    return reference, ref_err, orders, switch_err, release_err
+
+
+def main():
+    t_start = time.perf_counter()
+    load_start = harness.load_now()
+    from solver import PRESETS, collide
+
+    collide(5.0, 0.01)  # compile once before the workers load the cache
+    results = {"panel": PANEL, "levels": LEVELS}
+    with ProcessPoolExecutor(max_workers=min(2, os.cpu_count() or 1)) as pool:
+        reference, ref_err, orders, switch_err, release_err = references(pool, PANEL)
 
     # presets and explicit resolutions, timed one at a time on one core
     print("presets ...", flush=True)
