@@ -17,10 +17,11 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 
-from . import far_field
+from . import extrapolation, far_field
 from ._jit import deferred_interrupt
 from .integration import stepper
 from .integration.grid import reference_grid, scaled_grid
@@ -183,6 +184,10 @@ def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 
             result = _rigid_only(physics, accuracy, numerics, head)
         else:
             result = _coupled(physics, accuracy, numerics, head, x_ref_x0)
+            if numerics.extrapolate and result.status == "ok":  # solver/extrapolation.py
+                half = replace(numerics.halved(), save_profiles=False)
+                extrapolation.combine(result, _coupled(physics, accuracy, half,
+                                                       rigid_head(physics, half), x_ref_x0))
         result.x_ref_x0 = x_ref_x0
         read_far(result, outer)
         check_energy(result)

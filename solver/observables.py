@@ -192,6 +192,10 @@ OBSERVABLES = (
     Observable("energy_error", "float", "max energy-closure error of the coupled phase (void "
                "work included)",
                "m v0^2 / 2", "energy closure error", master="lin energy"),
+    Observable("extrapolated", "flag", "the grid-smooth observables are Richardson-extrapolated "
+               "from this grid and the one with half the cells (the fine preset: "
+               "solver/extrapolation.py); false for a single grid, or where the coarser solve "
+               "failed", "1"),
     Observable("cavitated", "flag", "the film cavitated (its pressure reached the floor -Pi)", "1",
                "cavitated",
                scene=(SceneKey("cavitated", label="cavitated", when="cavitation!=off"),)),

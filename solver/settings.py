@@ -38,9 +38,22 @@ class Numerics:
     # the time tolerance where the order may rise above 2 (max_order > 2, a film smooth in
     # time) is rtol times this; a film that stays at BDF2 keeps rtol
     high_order_rtol_factor: float = 1.0
+    # solve the scene on this grid and on ``halved()`` and report the observables whose grid
+    # error is smooth extrapolated, f + (f - f_half)/3 (solver/extrapolation.py)
+    extrapolate: bool = False
 
     def as_dict(self) -> dict:
         return asdict(self)
+
+    def halved(self) -> "Numerics":
+        """The same settings on the grid with half the cells: half the inner cells, the outer
+        cells growing twice as fast (``stretch - 1`` doubled) and twice as wide (``max_rel``), as
+        the reference levels of benchmarks/bench_accuracy.py refine; the axis cells stay the same
+        fraction of an inner cell. The time tolerance, orders and thresholds stay: their errors
+        are the same in both solves."""
+        return replace(self, n_inner=self.n_inner // 2,
+                       stretch=min(_BOUNDS["stretch"][1], 1.0 + 2.0 * (self.stretch - 1.0)),
+                       max_rel=min(_BOUNDS["max_rel"][1], 2.0 * self.max_rel), extrapolate=False)
 
 
 PRESETS = {
@@ -58,9 +71,14 @@ PRESETS = {
                          outer_extent=30.0, max_rel=0.3, inner_factor=1.2, rtol=5e-5, switch=0.001,
                          release=0.0003, max_steps=50000, max_order=5,
                          high_order_rtol_factor=4.0),
-    "fine": Numerics(n_inner=128, axis_ratio=0.1, axis_extent=0.25, stretch=1.1, outer_extent=30.0,
-                     max_rel=0.2, inner_factor=1.2, rtol=1e-5, switch=0.0002, release=0.00005,
-                     max_steps=200000, max_order=5, high_order_rtol_factor=4.0),
+    # A pair since solver 1.15.0: the film on 80 inner cells (the axis refined to 0.05 of a
+    # cell) and on 40, extrapolated (``extrapolate``; benchmarks/extrapolation.md): every error
+    # of the accuracy table below the single 128-cell grid's of solver 1.14 on both panels
+    # there, at 0.63x its CPU time; the fine preset's tolerance and thresholds as before
+    "fine": Numerics(n_inner=80, axis_ratio=0.05, axis_extent=0.25, stretch=1.16,
+                     outer_extent=30.0, max_rel=0.3, inner_factor=1.2, rtol=1e-5, switch=0.0002,
+                     release=0.00005, max_steps=200000, max_order=5, high_order_rtol_factor=4.0,
+                     extrapolate=True),
 }
 
 _BOUNDS = {
@@ -105,11 +123,11 @@ def resolve(accuracy: str = "standard", **overrides) -> Numerics:
     for name, value in overrides.items():
         if value is None:
             continue
-        if name == "save_profiles":
+        if name in ("save_profiles", "extrapolate"):
             clean[name] = bool(value)
             continue
         if name not in _BOUNDS:
-            valid = sorted([*_BOUNDS, "save_profiles"])
+            valid = sorted([*_BOUNDS, "save_profiles", "extrapolate"])
             raise ValueError(f"unknown numerical setting {name!r}; valid settings: {valid}")
         lo, hi = _BOUNDS[name]
         v = _check_number(name, value, lo, hi, open_lo=name not in ("stretch",))
@@ -119,6 +137,10 @@ def resolve(accuracy: str = "standard", **overrides) -> Numerics:
             v = int(v)
         clean[name] = v
     numerics = replace(numerics, **clean)
+    if numerics.extrapolate and (numerics.n_inner % 2 or numerics.n_inner < 8):
+        raise ValueError(
+            f"extrapolate pairs the grid with one of half its inner cells: n_inner must be even and "
+            f"at least 8 (got {numerics.n_inner})")
     if numerics.release >= numerics.switch:
         raise ValueError(
             f"release ({numerics.release:g}) must be smaller than switch ({numerics.switch:g}): "
