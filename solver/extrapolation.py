@@ -33,6 +33,7 @@ IN_LOG = ("viscosity_ratio_max_approach",)
 # a speed that is 0 where the spheres stick: not smooth across the threshold, where one grid may
 # rebound and the other not
 STICKING = ("v_r", "e_wet", "e_x0")
+LOG_MAX = math.log(1.7976931348623157e308)  # the largest double's logarithm
 COUNTS = ("steps", "rejected_steps", "newton_iterations", "lu_factorizations",
           "higher_order_steps")
 
@@ -62,7 +63,9 @@ def combine(result, coarse) -> None:
     for name in IN_LOG:
         f, c = getattr(result, name), getattr(coarse, name)
         if f > 0.0 and c > 0.0 and math.isfinite(f) and math.isfinite(c):
-            setattr(result, name, math.exp(extrapolated(math.log(f), math.log(c))))
+            log_value = extrapolated(math.log(f), math.log(c))
+            # beyond the double range it is inf, as a single solve reports it (observables.py)
+            setattr(result, name, math.exp(log_value) if log_value < LOG_MAX else math.inf)
     # the whole collision's closest approach is at most the approach's
     result.h_m_x1 = min(result.h_m_x1, result.h_m_approach_x1)
     result.extrapolated = True

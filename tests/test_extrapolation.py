@@ -81,6 +81,14 @@ def test_a_pair_whose_coarse_solve_failed_or_does_not_rebound_keeps_the_finer_va
     assert mixed.extrapolated
     assert (mixed.v_r, mixed.e_wet) == (fine.v_r, fine.e_wet)
     assert mixed.h_m_x1 == pytest.approx(extrapolated(fine.h_m_x1, coarse.h_m_x1))
+    # a viscosity ratio is extrapolated in its log; beyond the double range it is inf, as one
+    # solve reports it (a glassy lens at beta 10 reaches 1e211: docs/model.md)
+    glassy = dataclasses.replace(fine, viscosity_ratio_max_approach=1e300)
+    combine(glassy, dataclasses.replace(coarse, viscosity_ratio_max_approach=1e200))
+    assert glassy.viscosity_ratio_max_approach == math.inf
+    lens = dataclasses.replace(fine, viscosity_ratio_max_approach=1e8)
+    combine(lens, dataclasses.replace(coarse, viscosity_ratio_max_approach=1e5))
+    assert lens.viscosity_ratio_max_approach == pytest.approx(1e9)  # log: 8 + (8 - 5)/3
 
 
 def test_extrapolate_needs_an_even_grid_that_halves_within_bounds():
