@@ -95,6 +95,7 @@ bench: $(STAMP)
 # of minutes; each also has its own script (benchmarks/README.md, "Validation")
 bench-validation: $(STAMP)
 	$(PY) benchmarks/bench_accuracy.py
+	$(PY) benchmarks/bench_extrapolation.py
 	$(PY) benchmarks/bench_cavitation.py
 	$(PY) benchmarks/bench_piezoviscous.py
 	$(PY) benchmarks/bench_trajectory.py
@@ -116,6 +117,7 @@ bench-sweep: $(STAMP)
 
 bench-accuracy: $(STAMP)
 	$(PY) benchmarks/bench_accuracy.py
+	$(PY) benchmarks/bench_extrapolation.py
 
 # The documentation site -> docs/_build/html/index.html (docs/conf.py), warnings as errors. Phony:
 # the docs/ folder never makes it "up to date". The docs extra is installed once per venv.
