@@ -8,7 +8,7 @@ share, the time error at one tolerance and the rigid phases' thresholds, passes 
 in ``f``. Measured against converged references (benchmarks/extrapolation.md): on 80 inner cells
 paired with 40, every error of the accuracy table fell below the single 128-cell grid's, on the
 accuracy panel and on a hold-out panel, for the classic film, both cavitation floors, Barus films,
-rough surfaces and slip, at 0.63x the CPU time.
+rough surfaces and slip, at 0.62x the CPU time.
 
 ``EXTRAPOLATED`` are the observables whose grid error was measured smooth (each one's largest
 error over 31 scenes below the 128-cell grid's). Left as the finer solve's, measured no better or

@@ -74,7 +74,7 @@ PRESETS = {
     # A pair since solver 1.15.0: the film on 80 inner cells (the axis refined to 0.05 of a
     # cell) and on 40, extrapolated (``extrapolate``; benchmarks/extrapolation.md): every error
     # of the accuracy table below the single 128-cell grid's of solver 1.14 on both panels
-    # there, at 0.63x its CPU time; the fine preset's tolerance and thresholds as before
+    # there, at 0.62x its CPU time; the fine preset's tolerance and thresholds as before
     "fine": Numerics(n_inner=80, axis_ratio=0.05, axis_extent=0.25, stretch=1.16,
                      outer_extent=30.0, max_rel=0.3, inner_factor=1.2, rtol=1e-5, switch=0.0002,
                      release=0.00005, max_steps=200000, max_order=5, high_order_rtol_factor=4.0,
