@@ -6,6 +6,7 @@ presets' numbers are read only when a parser with the numerics flags is built.
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 
@@ -61,11 +62,17 @@ def add_numerics_flags(p) -> None:
                    help="highest order of the BDF time stepping, 1-5; above 2 the solver "
                         "chooses each step's order where the film is smooth in time "
                         f"(docs/solver.md; default: {preset_values('max_order')})")
+    p.add_argument("--extrapolate", action=argparse.BooleanOptionalAction, default=None,
+                   help="solve also on the grid with half the cells and extrapolate the grid "
+                        "error away (docs/solver.md, \"Presets\"; default: the preset's: "
+                        + ", ".join(f"{k} {'on' if v.extrapolate else 'off'}"
+                                    for k, v in PRESETS.items()) + ")")
 
 
 def numerics_overrides(args) -> dict:
     return {"switch": args.switch, "release": args.release, "n_inner": args.n_inner,
-            "rtol": args.rtol, "max_steps": args.max_steps, "max_order": args.max_order}
+            "rtol": args.rtol, "max_steps": args.max_steps, "max_order": args.max_order,
+            "extrapolate": args.extrapolate}
 
 
 # Groups that act only when another group switches their piece of physics on: (the groups,

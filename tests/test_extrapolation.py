@@ -6,6 +6,7 @@ solves combined, its counts both solves', its profiles the finer solve's), and t
 pair is not combined."""
 
 import dataclasses
+import json
 import math
 
 import pytest
@@ -98,3 +99,19 @@ def test_extrapolate_needs_an_even_grid_that_halves_within_bounds():
     with pytest.raises(ValueError, match="at least 8"):
         resolve("fine", n_inner=6)
     assert resolve("fine", stretch=1.8).halved().stretch == 2.0  # the bound of stretch
+
+
+def test_ehd_run_pairs_as_its_preset_says_or_as_the_flag_asks(capsys):
+    """``--extrapolate`` / ``--no-extrapolate`` override the preset (the JSON's ``extrapolated``
+    says which ran), and the pair's values are the solver's."""
+    from pipeline.cli import main
+
+    def run(*flags):
+        assert main(["run", "--St", "10", "--eps", "1e-2", "--json", *flags]) == 0
+        return json.loads(capsys.readouterr().out)
+
+    assert not run()["extrapolated"]  # standard: one grid
+    paired = run("--extrapolate")
+    assert paired["extrapolated"]
+    assert paired["v_r"] == collide(SCENE, extrapolate=True).v_r
+    assert not run("--accuracy", "fine", "--no-extrapolate")["extrapolated"]
