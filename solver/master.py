@@ -145,6 +145,7 @@ class MasterCurve:
             status="ok", message=f"master curve at S = St V_switch = {s_value:.6g}",
             tau_handover=t_s * tau_per_t, **values)
         result.dimple = bool(result.dimple_depth_x1 > DIMPLE_DEPTH)
+        result.extrapolated = numerics.extrapolate  # the tabulated solves were pairs
         result.x_ref_x0 = x_ref_x0
         result.e_wet = rigid.restitution_from_rest(values["ln_x_e_x1"], physics,
                                                    x_ref_x0 * x_start)
