@@ -338,8 +338,9 @@ def render(res) -> str:
     from solver.extrapolation import EXTRAPOLATED
 
     for k, r in res["every_observable"].items():
+        # the derived ones follow their extrapolated source (x_e from ln x_e, e_far from e_x0)
         marked = "yes" if k in EXTRAPOLATED or k in ("h_m_x0", "h_m_approach_x0", "x_e_x1",
-                                                      "x_e_x0", "ln_x_e_x0") else ""
+                                                      "x_e_x0", "ln_x_e_x0", "e_far") else ""
         lines.append(f"| {k} | {r['n']} | {_fmt(r['old_max'])} | {_fmt(r['old_median'])} | "
                      f"{_fmt(r['new_max'])} | {_fmt(r['new_median'])} | {_fmt(r['ref_error'])} | "
                      f"{marked} |")

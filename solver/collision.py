@@ -184,15 +184,27 @@ def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 
             result = _rigid_only(physics, accuracy, numerics, head)
         else:
             result = _coupled(physics, accuracy, numerics, head, x_ref_x0)
-            if numerics.extrapolate and result.status == "ok":  # solver/extrapolation.py
-                half = replace(numerics.halved(), save_profiles=False)
-                extrapolation.combine(result, _coupled(physics, accuracy, half,
-                                                       rigid_head(physics, half), x_ref_x0))
+            if numerics.extrapolate and result.status == "ok":
+                _pair(result, x_ref_x0, outer)
         result.x_ref_x0 = x_ref_x0
         read_far(result, outer)
         check_energy(result)
     result.wall_s = time.perf_counter() - wall
     return result
+
+
+def _pair(result, x_ref_x0, outer):
+    """``result``, an ok solve, combined with the solve of its scene on half its cells
+    (solver/extrapolation.py), which is checked as any result is (``check_energy``: an
+    unphysical one is not combined); the peak viscosity and ``solidified`` from the extrapolated
+    approach pressure, as a single solve derives them."""
+    physics, numerics = result.physics, result.numerics
+    half = replace(numerics.halved(), save_profiles=False)
+    coarse = _coupled(physics, result.accuracy, half, rigid_head(physics, half), x_ref_x0)
+    coarse.x_ref_x0 = x_ref_x0
+    check_energy(read_far(coarse, outer))
+    if extrapolation.combine(result, coarse):
+        _approach_viscosity(result)
 
 
 def energy_violation(result) -> str:
@@ -320,6 +332,14 @@ def _rigid_only(physics, accuracy, numerics, head):
     return result
 
 
+def _approach_viscosity(result):
+    """The peak viscosity over the approach, at its peak pressure ``p_max_approach``, and
+    whether the film solidified (``SOLID_VISCOSITY_RATIO``)."""
+    result.viscosity_ratio_max_approach = float(
+        liquid.viscosity_ratio(result.p_max_approach, result.physics.as_array()))
+    result.solidified = bool(result.viscosity_ratio_max_approach >= SOLID_VISCOSITY_RATIO)
+
+
 def include_rigid_peaks(result, head):
     """Peaks are the larger of the coupled phase's (already in ``result``; NaN when none) and
     ``head``, those of the rigid approach before the hand-over (rigid.approach_peaks keys, and
@@ -328,9 +348,7 @@ def include_rigid_peaks(result, head):
     if not head["p_max"] <= result.p_max_approach:  # also when the result holds NaN
         result.p_max_approach = head["p_max"]
         result.h_axis_at_peak_pressure_x1 = head["x_p_max"]  # rigid: H(0) = X
-    result.viscosity_ratio_max_approach = float(
-        liquid.viscosity_ratio(result.p_max_approach, result.physics.as_array()))
-    result.solidified = bool(result.viscosity_ratio_max_approach >= SOLID_VISCOSITY_RATIO)
+    _approach_viscosity(result)
     for name, head_name, t_name in (("peak_force", "peak_force", "tau_peak_force"),
                                     ("w0_max_x1", "w0_max", "tau_max_deformation"),
                                     ("p_max", "p_max", None)):

@@ -11,29 +11,35 @@ accuracy panel and on a hold-out panel, for the classic film, both cavitation fl
 rough surfaces and slip, at 0.62x the CPU time.
 
 ``EXTRAPOLATED`` are the observables whose grid error was measured smooth (each one's largest
-error over 31 scenes below the 128-cell grid's). Left as the finer solve's, measured no better or
-worse extrapolated: the lowest pressure ``p_min`` and the dimple's depth and time (extremes of
-one cell's value, whose cell changes with the grid), the time of the peak force and the central
-gap at the peak pressure (no better), the strain energy at the hand-over (the threshold's),
-the cavity's size and onset (not measured); and the energy closure, which is the finer solve's
-own. The profiles and series are the finer solve's; its counts are both solves'.
+error over 31 scenes below the 128-cell grid's), and the approach's peak pressure
+``p_max_approach``, from which the caller derives the peak viscosity and ``solidified`` as a
+single solve does (collision.py). Left as the finer solve's, measured no better or worse
+extrapolated: the lowest pressure ``p_min`` and the dimple's depth and time (extremes of one
+cell's value, whose cell changes with the grid), the time of the peak force and the central gap
+at the peak pressure (no better), the strain energy at the hand-over (the threshold's), the
+cavity's size and onset (not measured); and the energy closure, which is the finer solve's own.
+The profiles and series are the finer solve's; its counts are both solves'.
+
+Observables that change regime at a threshold are not smooth across it, and a pair may straddle
+it (one grid rebounds, the other not): each is extrapolated only where the finer solve, the
+coarser one and the extrapolation agree on its regime, and with it its ``GROUPS`` (a rebound's
+speed and time; the departure's ``x_e``, ``e_wet`` and ``e_x0``, whose regimes are tied: a
+sphere that passes back out through ``x_ref`` departs with ``e_wet > 0``; the approach's closest
+gap and the time the spheres stop, or creep to rest). Elsewhere the finer solve's values stay.
 """
 
 from __future__ import annotations
 
 import math
 
-__all__ = ["EXTRAPOLATED", "IN_LOG", "COUNTS", "extrapolated", "combine"]
+__all__ = ["EXTRAPOLATED", "GROUPS", "COUNTS", "extrapolated", "combine"]
 
-EXTRAPOLATED = ("v_r", "e_wet", "e_x0", "h_m_x1", "h_m_approach_x1", "ln_x_e_x1",
-                "tau_max_deformation", "tau_v_zero", "tau_max_rebound", "peak_force", "p_max",
-                "w0_max_x1", "x_min_x1")
-# extrapolated in their logarithm (a ratio spanning decades; measured so: benchmarks/piezoviscous)
-IN_LOG = ("viscosity_ratio_max_approach",)
-# a speed that is 0 where the spheres stick: not smooth across the threshold, where one grid may
-# rebound and the other not
-STICKING = ("v_r", "e_wet", "e_x0")
-LOG_MAX = math.log(1.7976931348623157e308)  # the largest double's logarithm
+EXTRAPOLATED = ("v_r", "tau_max_rebound", "e_wet", "e_x0", "ln_x_e_x1", "h_m_x1",
+                "h_m_approach_x1", "tau_v_zero", "tau_max_deformation", "peak_force", "p_max",
+                "p_max_approach", "w0_max_x1", "x_min_x1")
+# extrapolated together or not at all (the others each alone)
+GROUPS = (("v_r", "tau_max_rebound"), ("ln_x_e_x1", "e_wet", "e_x0"),
+          ("h_m_approach_x1", "tau_v_zero"))
 COUNTS = ("steps", "rejected_steps", "newton_iterations", "lu_factorizations",
           "higher_order_steps")
 
@@ -44,28 +50,52 @@ def extrapolated(fine: float, coarse: float) -> float:
     return fine + (fine - coarse) / 3.0
 
 
-def combine(result, coarse) -> None:
+def _thresholds(result, name):
+    """Where ``name`` changes regime: ``x_e`` beyond ``x0`` (escaped) and beyond ``x_ref``
+    (``e_wet > 0``); every other observable at 0 (a speed that is 0 where the spheres stick,
+    ``x_min`` below 0 where the solids overlap)."""
+    if name == "ln_x_e_x1":
+        return (math.log(result.x0_over_x1), math.log(result.x_ref_x0 * result.x0_over_x1))
+    return (0.0,)
+
+
+def _regime(value, thresholds):
+    return (math.isfinite(value), *(value > t for t in thresholds))
+
+
+def _group_of(name):
+    return next((g for g in GROUPS if name in g), (name,))
+
+
+def combine(result, coarse) -> bool:
     """``result`` (the finer solve) with its ``EXTRAPOLATED`` observables extrapolated against
-    ``coarse`` (the solve on half the cells), in place, and both solves' counts. Each observable
-    only where both values are finite, and a speed of ``STICKING`` only where both rebound;
-    ``result.extrapolated`` says whether the pair was combined (both solves ok)."""
+    ``coarse`` (the solve on half the cells), in place, where ``_regime`` allows, and both
+    solves' counts; ``result.extrapolated`` and the return value say whether the pair was
+    combined (both solves ok). The invariants of a single solve hold after it: the closest
+    approach at most the approach's and at most ``x_e``, ``x_min`` at most ``x_e``, ``p_max`` at
+    least the approach's peak."""
     for name in COUNTS:
         setattr(result, name, getattr(result, name) + getattr(coarse, name))
     if result.status != "ok" or coarse.status != "ok":
-        return
+        return False
+    done = set()
     for name in EXTRAPOLATED:
-        f, c = getattr(result, name), getattr(coarse, name)
-        if not (math.isfinite(f) and math.isfinite(c)):
+        if name in done:
             continue
-        if name in STICKING and not (f > 0.0 and c > 0.0):
-            continue
-        setattr(result, name, extrapolated(f, c))
-    for name in IN_LOG:
-        f, c = getattr(result, name), getattr(coarse, name)
-        if f > 0.0 and c > 0.0 and math.isfinite(f) and math.isfinite(c):
-            log_value = extrapolated(math.log(f), math.log(c))
-            # beyond the double range it is inf, as a single solve reports it (observables.py)
-            setattr(result, name, math.exp(log_value) if log_value < LOG_MAX else math.inf)
-    # the whole collision's closest approach is at most the approach's
-    result.h_m_x1 = min(result.h_m_x1, result.h_m_approach_x1)
+        group = _group_of(name)
+        done.update(group)
+        new, agree = {}, True
+        for member in group:
+            f, c = getattr(result, member), getattr(coarse, member)
+            e = extrapolated(f, c) if math.isfinite(f) and math.isfinite(c) else f
+            t = _thresholds(result, member)
+            agree = agree and _regime(f, t) == _regime(c, t) == _regime(e, t)
+            new[member] = e
+        if agree:
+            for member, value in new.items():
+                setattr(result, member, value)
+    result.h_m_x1 = min(result.h_m_x1, result.h_m_approach_x1, result.x_e_x1)
+    result.x_min_x1 = min(result.x_min_x1, result.x_e_x1)
+    result.p_max = max(result.p_max, result.p_max_approach)
     result.extrapolated = True
+    return True

@@ -51,9 +51,8 @@ class Numerics:
         the reference levels of benchmarks/bench_accuracy.py refine; the axis cells stay the same
         fraction of an inner cell. The time tolerance, orders and thresholds stay: their errors
         are the same in both solves."""
-        return replace(self, n_inner=self.n_inner // 2,
-                       stretch=min(_BOUNDS["stretch"][1], 1.0 + 2.0 * (self.stretch - 1.0)),
-                       max_rel=min(_BOUNDS["max_rel"][1], 2.0 * self.max_rel), extrapolate=False)
+        return replace(self, n_inner=self.n_inner // 2, stretch=1.0 + 2.0 * (self.stretch - 1.0),
+                       max_rel=2.0 * self.max_rel, extrapolate=False)
 
 
 PRESETS = {
@@ -123,8 +122,13 @@ def resolve(accuracy: str = "standard", **overrides) -> Numerics:
     for name, value in overrides.items():
         if value is None:
             continue
-        if name in ("save_profiles", "extrapolate"):
+        if name == "save_profiles":
             clean[name] = bool(value)
+            continue
+        if name == "extrapolate":  # from a sweep file too: "false" is not False
+            if not isinstance(value, bool):
+                raise ValueError(f"extrapolate must be true or false, got {value!r}")
+            clean[name] = value
             continue
         if name not in _BOUNDS:
             valid = sorted([*_BOUNDS, "save_profiles", "extrapolate"])
@@ -137,10 +141,13 @@ def resolve(accuracy: str = "standard", **overrides) -> Numerics:
             v = int(v)
         clean[name] = v
     numerics = replace(numerics, **clean)
-    if numerics.extrapolate and (numerics.n_inner % 2 or numerics.n_inner < 8):
+    if numerics.extrapolate and (numerics.n_inner % 2 or numerics.n_inner < 10
+                                 or numerics.stretch > 1.5 or numerics.max_rel > 0.5):
         raise ValueError(
-            f"extrapolate pairs the grid with one of half its inner cells: n_inner must be even and "
-            f"at least 8 (got {numerics.n_inner})")
+            "extrapolate pairs the grid with the same grid at half its cells (n_inner/2, stretch "
+            "- 1 and max_rel doubled): n_inner must be even and at least 10, stretch at most 1.5 "
+            f"and max_rel at most 0.5 (got {numerics.n_inner}, {numerics.stretch:g}, "
+            f"{numerics.max_rel:g})")
     if numerics.release >= numerics.switch:
         raise ValueError(
             f"release ({numerics.release:g}) must be smaller than switch ({numerics.switch:g}): "

@@ -72,33 +72,63 @@ def test_a_pair_whose_coarse_solve_failed_or_does_not_rebound_keeps_the_finer_va
     coarse = collide(SCENE, **dataclasses.asdict(resolve("standard").halved()))
     failed = dataclasses.replace(coarse, status="max_steps")
     kept = dataclasses.replace(fine)
-    combine(kept, failed)
+    assert not combine(kept, failed)
     assert not kept.extrapolated
     assert all(getattr(kept, k) == getattr(fine, k) for k in EXTRAPOLATED)
     assert kept.steps == fine.steps + coarse.steps  # its work is counted all the same
-    stuck = dataclasses.replace(coarse, v_r=0.0, e_wet=0.0, e_x0=0.0)  # one grid sticks
+    # one grid sticks: the rebound and the departure keep the finer solve's values together
+    # (a threshold between the grids is not smooth); the closest approach is extrapolated
+    stuck = dataclasses.replace(coarse, v_r=0.0, tau_max_rebound=math.nan, e_wet=0.0, e_x0=0.0,
+                                ln_x_e_x1=math.log(coarse.x0_over_x1) - 1.0)
     mixed = dataclasses.replace(fine)
-    combine(mixed, stuck)
-    assert mixed.extrapolated
-    assert (mixed.v_r, mixed.e_wet) == (fine.v_r, fine.e_wet)
+    assert combine(mixed, stuck) and mixed.extrapolated
+    for key in ("v_r", "tau_max_rebound", "e_wet", "e_x0", "ln_x_e_x1"):
+        assert getattr(mixed, key) == getattr(fine, key), key
     assert mixed.h_m_x1 == pytest.approx(extrapolated(fine.h_m_x1, coarse.h_m_x1))
-    # a viscosity ratio is extrapolated in its log; beyond the double range it is inf, as one
-    # solve reports it (a glassy lens at beta 10 reaches 1e211: docs/model.md)
-    glassy = dataclasses.replace(fine, viscosity_ratio_max_approach=1e300)
-    combine(glassy, dataclasses.replace(coarse, viscosity_ratio_max_approach=1e200))
-    assert glassy.viscosity_ratio_max_approach == math.inf
-    lens = dataclasses.replace(fine, viscosity_ratio_max_approach=1e8)
-    combine(lens, dataclasses.replace(coarse, viscosity_ratio_max_approach=1e5))
-    assert lens.viscosity_ratio_max_approach == pytest.approx(1e9)  # log: 8 + (8 - 5)/3
 
 
-def test_extrapolate_needs_an_even_grid_that_halves_within_bounds():
+@pytest.mark.parametrize("stokes, eps", [
+    (12.149579626020863, 1e-4),  # the finer grid sticks (x_e < x0), the pair's x_e is beyond x0
+    (12.150794705491412, 1e-4),  # the finer grid rebounds by 2.5e-10, the coarser not
+    (2.0, 1e-2),  # p_max extrapolated alone fell below the approach's peak
+])
+def test_a_pair_near_a_threshold_keeps_the_invariants_of_one_solve(stokes, eps):
+    """Where the two grids straddle the stick-or-rebound threshold the pair reports as one solve
+    would: it escapes beyond x0 exactly when it departs with e > 0 (x_ref = x0); the closest
+    approach is at most the approach's and at most x_e; p_max is at least the approach's peak.
+    (Found by a review: the pair's ln x_e said escaped while its e_wet was 0.)"""
+    c = collide(Physics(St=stokes, eps=eps), accuracy="fine", save_profiles=False)
+    assert c.status == "ok" and c.extrapolated
+    assert c.escaped == (c.e_wet > 0.0) == (c.e_x0 > 0.0)
+    assert c.h_m_x1 <= min(c.h_m_approach_x1, c.x_e_x1)
+    assert c.x_min_x1 <= c.x_e_x1 and c.p_max >= c.p_max_approach
+
+
+def test_a_pressure_dependent_pairs_viscosity_is_its_extrapolated_pressures():
+    """The peak viscosity and ``solidified`` follow the extrapolated approach pressure as in one
+    solve (collision._approach_viscosity), at the threshold of 1e4 (beta 2.875: 9988 with
+    ``solidified`` true when the viscosity was extrapolated on its own) and in a glassy lens
+    (beta 10, St 1.74: about 1e207)."""
+    from solver.model import liquid
+
+    for physics in (Physics(St=30.0, eps=1e-4, beta=2.875115488655865),
+                    Physics(St=1.74, eps=1e-2, beta=10.0)):
+        c = collide(physics, accuracy="fine", save_profiles=False)
+        assert c.status == "ok" and c.extrapolated
+        assert c.p_max == c.p_max_approach  # a pressure-dependent film's p_max is the approach's
+        ratio = liquid.viscosity_ratio(c.p_max_approach, physics.as_array())
+        assert c.viscosity_ratio_max_approach == ratio
+        assert c.solidified == (ratio >= 1e4)
+
+
+def test_extrapolate_needs_an_even_grid_whose_half_is_within_bounds():
     assert PRESETS["fine"].extrapolate and not PRESETS["standard"].extrapolate
-    with pytest.raises(ValueError, match="n_inner must be even"):
-        resolve("fine", n_inner=81)
-    with pytest.raises(ValueError, match="at least 8"):
-        resolve("fine", n_inner=6)
-    assert resolve("fine", stretch=1.8).halved().stretch == 2.0  # the bound of stretch
+    for bad in (dict(n_inner=81), dict(n_inner=8), dict(stretch=1.6), dict(max_rel=0.6)):
+        with pytest.raises(ValueError, match="n_inner must be even and at least 10"):
+            resolve("fine", **bad)
+    for not_a_bool in ("false", 0, "no"):  # a sweep file's "false" must not run pairs
+        with pytest.raises(ValueError, match="extrapolate must be true or false"):
+            resolve("standard", extrapolate=not_a_bool)
 
 
 def test_ehd_run_pairs_as_its_preset_says_or_as_the_flag_asks(capsys):

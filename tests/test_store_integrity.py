@@ -225,10 +225,14 @@ def test_an_older_schema_is_refused_with_its_reason(ws, capsys):
 
     p = ws / "s.zarr" / "zarr.json"
     meta = json.loads(p.read_text())
-    meta["attributes"]["store_schema"] = STORE_SCHEMA - 1
+    meta["attributes"]["store_schema"] = 7  # before the manifest: its chunks are not bound
     p.write_text(json.dumps(meta))
     code, _, err = ehd(capsys, "status", "s.zarr")
     assert code == EXIT_USAGE and "not bound to their places" in _one_error(err), err
+    meta["attributes"]["store_schema"] = STORE_SCHEMA - 1  # the last one: another version
+    p.write_text(json.dumps(meta))
+    code, _, err = ehd(capsys, "status", "s.zarr")
+    assert code == EXIT_USAGE and f"store schema {STORE_SCHEMA - 1}," in _one_error(err), err
 
 
 def test_every_chunk_is_in_the_manifest_and_the_manifest_is_current(ws):

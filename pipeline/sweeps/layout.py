@@ -33,8 +33,9 @@ __all__ = ["STORE_SCHEMA", "VARIABLES", "FLOATS", "FLAGS", "COUNTS", "DIAGNOSTIC
 # bump when variables, their encoding or their meaning change (an old store is then refused);
 # 6: checksummed chunks (crc32c), the coordinates' copy ``grid`` and ``metadata_sha256``;
 # 7: the far-field observables e_far and v_outer_start;
-# 8: the manifest (pipeline/sweeps/manifest.py): every chunk's sha256 keyed by its place
-STORE_SCHEMA = 8
+# 8: the manifest (pipeline/sweeps/manifest.py): every chunk's sha256 keyed by its place;
+# 9: the flag ``extrapolated`` (solver 1.15.0: the fine preset's two grids)
+STORE_SCHEMA = 9
 
 _DTYPE = {"float": "f8", "flag": "i1", "count": "i4"}
 # name: (dtype, long_name, units), generated from the registry; flags are int8 0/1 with fill -1
