@@ -147,7 +147,8 @@ def level_references(pool, scenes, keys):
         out[k] = []
         for i in range(len(scenes)):
             vals = [lv[i][k] for lv in levels]
-            ok = all(math.isfinite(v) for v in vals) and all(lv[i]["status"] == "ok" for lv in levels)
+            ok = all(math.isfinite(v) for v in vals) and all(
+                lv[i]["status"] == "ok" for lv in levels)
             limit, _, err = richardson(vals) if ok else (math.nan, math.nan, math.nan)
             out[k].append((limit, err))
     return out
@@ -191,7 +192,8 @@ def other_films(pool, quick):
             [r["reference"] for r in cav], OTHER_KEYS),
         "Barus (beta 2, 5)": (
             [(r["St"], r["eps"], dict(beta=r["beta"])) for r in piezo if r["beta"] > 0.0],
-            [r["reference"] for r in piezo if r["beta"] > 0.0], (*OTHER_KEYS, "ln_viscosity_ratio")),
+            [r["reference"] for r in piezo if r["beta"] > 0.0],
+            (*OTHER_KEYS, "ln_viscosity_ratio")),
     }
     scenes = OTHER[:2] if quick else OTHER
     refs = level_references(pool, scenes, OTHER_KEYS)
@@ -320,9 +322,10 @@ def render(res) -> str:
              "absolute in ln x_e.", ""]
     lines += render_panels(res)
     lines += ["## Cost", "",
-              f"CPU time of the classic accuracy panel ({len(res['accuracy']['panel'])} scenes) per "
-              f"candidate, {res['rounds']} rounds alternated in one process (one core); the "
-              "ratio is the median of the per-round ratios [their range].", "",
+              "CPU time of the classic accuracy panel "
+              f"({len(res['accuracy']['panel'])} scenes) per candidate, {res['rounds']} rounds "
+              "alternated in one process (one core); the ratio is the median of the per-round "
+              "ratios [their range].", "",
               *_cost_rows(res["cpu"]), "",
               f"The other films' scenes below ({res['other_scenes']} scenes), alike:", "",
               *_cost_rows(res["cpu_other"]), ""]

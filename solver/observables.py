@@ -195,7 +195,7 @@ OBSERVABLES = (
     Observable("extrapolated", "flag", "the grid-smooth observables are Richardson-extrapolated "
                "from this grid and the one with half the cells (the fine preset: "
                "solver/extrapolation.py); false for a single grid, or where the coarser solve "
-               "failed", "1"),
+               "failed", "1", "extrapolated (two grids)"),
     Observable("cavitated", "flag", "the film cavitated (its pressure reached the floor -Pi)", "1",
                "cavitated",
                scene=(SceneKey("cavitated", label="cavitated", when="cavitation!=off"),)),
@@ -244,17 +244,18 @@ OBSERVABLES = (
                scene=(SceneKey("outer_start_speed_m_per_s",
                                label="  approach speed at the outer start",
                                outer=True, null="not computed (no outer flow)"),)),
-    Observable("steps", "count", "accepted time steps of the coupled solve", "1", "steps",
+    Observable("steps", "count", "accepted time steps of the coupled solve (a pair's: both)",
+               "1", "steps", diagnostic=True),
+    Observable("rejected_steps", "count",
+               "rejected time steps of the coupled solve (a pair's: both)", "1", "  rejected",
                diagnostic=True),
-    Observable("rejected_steps", "count", "rejected time steps of the coupled solve", "1",
-               "  rejected", diagnostic=True),
-    Observable("newton_iterations", "count", "Newton iterations of the coupled solve", "1",
-               diagnostic=True),
-    Observable("lu_factorizations", "count", "LU factorisations of the coupled solve", "1",
-               diagnostic=True),
+    Observable("newton_iterations", "count",
+               "Newton iterations of the coupled solve (a pair's: both)", "1", diagnostic=True),
+    Observable("lu_factorizations", "count",
+               "LU factorisations of the coupled solve (a pair's: both)", "1", diagnostic=True),
     Observable("higher_order_steps", "count",
-               "accepted time steps of the coupled solve at a BDF order above 2 (max_order)", "1",
-               diagnostic=True),
+               "accepted time steps of the coupled solve at a BDF order above 2 (max_order; a "
+               "pair's: both)", "1", diagnostic=True),
     Observable("wall_s", "float", "wall time of the scene", "s", "wall time [s]",
                diagnostic=True, start=0.0),
 )
