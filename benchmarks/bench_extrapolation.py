@@ -70,6 +70,8 @@ OTHER = [(10.0, 1e-4, dict(roughness=0.5)), (30.0, 1e-4, dict(roughness=0.3)),
          (10.0, 1e-4, dict(roughness=0.5, e_dry=0.8)), (10.0, 1e-4, dict(slip_length=0.5)),
          (100.0, 1e-4, dict(slip_length=0.2))]
 OTHER_KEYS = ("v_r", "h_m_x1", "ln_x_e_x1", "e_wet")
+# the other films' speeds relative to at least 0.05, as benchmarks/accuracy.md measures v_r
+SPEED_FLOOR = 0.05
 
 
 def numerics(name):
@@ -154,11 +156,12 @@ def level_references(pool, scenes, keys):
     return out
 
 
-def _relative(value, ref, key):
-    """The error of a float observable: absolute for a logarithm, else relative (floor 1e-3)."""
+def _relative(value, ref, key, speed_floor=1e-3):
+    """The error of a float observable: absolute for a logarithm, else relative to ``|ref|``
+    with a floor of 1e-3, ``speed_floor`` for the speeds ``v_r`` and ``e_wet``."""
     if key.startswith("ln_"):
         return abs(value - ref)
-    return abs(value - ref) / max(abs(ref), 1e-3)
+    return abs(value - ref) / max(abs(ref), speed_floor if key in ("v_r", "e_wet") else 1e-3)
 
 
 def every_observable(pool, scenes):
@@ -209,18 +212,11 @@ def other_films(pool, quick):
             preset, overrides = CANDIDATES[name]
             values = list(pool.map(solve, [(s, preset, overrides, keys) for s in fam_scenes],
                                    chunksize=1))
-            row[name] = {k: max(_film_error(v[k], r[k], k) for v, r in zip(values, fam_refs))
+            row[name] = {k: max(_relative(v[k], r[k], k, SPEED_FLOOR)
+                                 for v, r in zip(values, fam_refs))
                          for k in keys}
         out[family] = row
     return out
-
-
-def _film_error(value, ref, key):
-    """As benchmarks/cavitation.md and piezoviscous.md measure: relative with a floor of 0.05
-    for the speeds, of 1e-3 otherwise; absolute for the logarithms."""
-    if key.startswith("ln_"):
-        return abs(value - ref)
-    return abs(value - ref) / max(abs(ref), 0.05 if key in ("v_r", "e_wet") else 1e-3)
 
 
 def cpu_rounds(scenes, names, rounds):

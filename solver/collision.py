@@ -185,7 +185,7 @@ def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 
         else:
             result = _coupled(physics, accuracy, numerics, head, x_ref_x0)
             if numerics.extrapolate and result.status == "ok":
-                _pair(result, x_ref_x0, outer)
+                _pair(result, head, x_ref_x0, outer)
         result.x_ref_x0 = x_ref_x0
         read_far(result, outer)
         check_energy(result)
@@ -193,14 +193,14 @@ def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 
     return result
 
 
-def _pair(result, x_ref_x0, outer):
+def _pair(result, head, x_ref_x0, outer):
     """``result``, an ok solve, combined with the solve of its scene on half its cells
-    (solver/extrapolation.py), which is checked as any result is (``check_energy``: an
-    unphysical one is not combined); the peak viscosity and ``solidified`` from the extrapolated
-    approach pressure, as a single solve derives them."""
-    physics, numerics = result.physics, result.numerics
-    half = replace(numerics.halved(), save_profiles=False)
-    coarse = _coupled(physics, result.accuracy, half, rigid_head(physics, half), x_ref_x0)
+    (solver/extrapolation.py) from the same rigid approach ``head`` (the grid does not enter
+    it), which is checked as any result is (``check_energy``: an unphysical one is not
+    combined); the peak viscosity and ``solidified`` from the extrapolated approach pressure, as
+    a single solve derives them."""
+    half = replace(result.numerics.halved(), save_profiles=False)
+    coarse = _coupled(result.physics, result.accuracy, half, head, x_ref_x0)
     coarse.x_ref_x0 = x_ref_x0
     check_energy(read_far(coarse, outer))
     if extrapolation.combine(result, coarse):

@@ -32,6 +32,8 @@ from __future__ import annotations
 
 import math
 
+from .observables import OBSERVABLES
+
 __all__ = ["EXTRAPOLATED", "GROUPS", "COUNTS", "extrapolated", "combine"]
 
 EXTRAPOLATED = ("v_r", "tau_max_rebound", "e_wet", "e_x0", "ln_x_e_x1", "h_m_x1",
@@ -40,8 +42,8 @@ EXTRAPOLATED = ("v_r", "tau_max_rebound", "e_wet", "e_x0", "ln_x_e_x1", "h_m_x1"
 # extrapolated together or not at all (the others each alone)
 GROUPS = (("v_r", "tau_max_rebound"), ("ln_x_e_x1", "e_wet", "e_x0"),
           ("h_m_approach_x1", "tau_v_zero"))
-COUNTS = ("steps", "rejected_steps", "newton_iterations", "lu_factorizations",
-          "higher_order_steps")
+# the cost counters, which a pair sums
+COUNTS = tuple(o.name for o in OBSERVABLES if o.kind == "count")
 
 
 def extrapolated(fine: float, coarse: float) -> float:
@@ -63,10 +65,6 @@ def _regime(value, thresholds):
     return (math.isfinite(value), *(value > t for t in thresholds))
 
 
-def _group_of(name):
-    return next((g for g in GROUPS if name in g), (name,))
-
-
 def combine(result, coarse) -> bool:
     """``result`` (the finer solve) with its ``EXTRAPOLATED`` observables extrapolated against
     ``coarse`` (the solve on half the cells), in place, where ``_regime`` allows, and both
@@ -78,12 +76,8 @@ def combine(result, coarse) -> bool:
         setattr(result, name, getattr(result, name) + getattr(coarse, name))
     if result.status != "ok" or coarse.status != "ok":
         return False
-    done = set()
-    for name in EXTRAPOLATED:
-        if name in done:
-            continue
-        group = _group_of(name)
-        done.update(group)
+    grouped = {name for group in GROUPS for name in group}
+    for group in (*GROUPS, *((name,) for name in EXTRAPOLATED if name not in grouped)):
         new, agree = {}, True
         for member in group:
             f, c = getattr(result, member), getattr(coarse, member)

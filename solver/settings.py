@@ -113,6 +113,21 @@ def _check_number(name, value, lo, hi, *, open_lo=True):
     return v
 
 
+def _check_halves(numerics: Numerics) -> None:
+    """``extrapolate`` pairs the grid with ``halved()``: that grid must be within ``_BOUNDS``
+    and exactly half (an even ``n_inner``)."""
+    half = numerics.halved()
+    n_lo, stretch_hi, rel_hi = _BOUNDS["n_inner"][0], _BOUNDS["stretch"][1], _BOUNDS["max_rel"][1]
+    if (numerics.n_inner % 2 or half.n_inner <= n_lo or half.stretch > stretch_hi
+            or half.max_rel > rel_hi):
+        raise ValueError(
+            "extrapolate pairs the grid with the same grid at half its cells (n_inner/2, stretch "
+            f"- 1 and max_rel doubled): n_inner must be even and at least {2 * (n_lo + 1)}, "
+            f"stretch at most {1.0 + (stretch_hi - 1.0) / 2:g} and max_rel at most "
+            f"{rel_hi / 2:g} (got {numerics.n_inner}, {numerics.stretch:g}, "
+            f"{numerics.max_rel:g})")
+
+
 def resolve(accuracy: str = "standard", **overrides) -> Numerics:
     """The preset ``accuracy`` with explicit overrides applied and checked."""
     if accuracy not in PRESETS:
@@ -141,13 +156,8 @@ def resolve(accuracy: str = "standard", **overrides) -> Numerics:
             v = int(v)
         clean[name] = v
     numerics = replace(numerics, **clean)
-    if numerics.extrapolate and (numerics.n_inner % 2 or numerics.n_inner < 10
-                                 or numerics.stretch > 1.5 or numerics.max_rel > 0.5):
-        raise ValueError(
-            "extrapolate pairs the grid with the same grid at half its cells (n_inner/2, stretch "
-            "- 1 and max_rel doubled): n_inner must be even and at least 10, stretch at most 1.5 "
-            f"and max_rel at most 0.5 (got {numerics.n_inner}, {numerics.stretch:g}, "
-            f"{numerics.max_rel:g})")
+    if numerics.extrapolate:
+        _check_halves(numerics)
     if numerics.release >= numerics.switch:
         raise ValueError(
             f"release ({numerics.release:g}) must be smaller than switch ({numerics.switch:g}): "
