@@ -201,7 +201,6 @@ def _pair(result, head, x_ref_x0, outer):
     a single solve derives them."""
     half = replace(result.numerics.halved(), save_profiles=False)
     coarse = _coupled(result.physics, result.accuracy, half, head, x_ref_x0)
-    coarse.x_ref_x0 = x_ref_x0
     check_energy(read_far(coarse, outer))
     if extrapolation.combine(result, coarse):
         _approach_viscosity(result)
@@ -417,7 +416,7 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
         newton_iterations=int(counters[stepper.NEWTON]),
         lu_factorizations=int(counters[stepper.LU]),
         higher_order_steps=int(counters[stepper.HIGHER_ORDER]),
-        tau_handover=head.t * tau_per_t, radius=grid.radius)
+        tau_handover=head.t * tau_per_t, radius=grid.radius, x_ref_x0=x_ref_x0)
     if numerics.save_profiles:
         _save_profiles(result, t_c, x_c, p_hist, w_hist, theta_hist)
     if name != "ok":

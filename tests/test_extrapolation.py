@@ -145,3 +145,22 @@ def test_ehd_run_pairs_as_its_preset_says_or_as_the_flag_asks(capsys):
     assert paired["extrapolated"]
     assert paired["v_r"] == collide(SCENE, extrapolate=True).v_r
     assert not run("--accuracy", "fine", "--no-extrapolate")["extrapolated"]
+
+
+def test_the_pair_compares_x_e_with_the_x_ref_asked_for(monkeypatch):
+    """Whether the departure's regimes agree depends on ``x_ref`` (``e_wet > 0`` where the
+    spheres pass back out through it): both solves reach ``combine`` with the ``x_ref_x0`` of
+    the call (each coupled solve carried the default 1 until ``collide`` set it after the pair
+    was combined)."""
+    from solver import extrapolation
+
+    seen = []
+    original = extrapolation.combine
+
+    def spy(result, coarse):
+        seen.append((result.x_ref_x0, coarse.x_ref_x0))
+        return original(result, coarse)
+
+    monkeypatch.setattr(extrapolation, "combine", spy)
+    c = collide(SCENE, extrapolate=True, x_ref_x0=2.0, save_profiles=False)
+    assert c.extrapolated and seen == [(2.0, 2.0)]
