@@ -224,15 +224,22 @@ def render(results: dict, meta: dict, before: dict | None, doc: dict) -> str:
               "zarr, never dask.distributed, dask or pint (no cluster is started; the coordinates "
               "are built over a pandas Index, so xarray does not look for dask or pint arrays). "
               "The up-to-date `ehd figures` lists the store's files and reads nothing "
-              "(`pipeline/plots/stamp.py`). The warm `ehd run` (timed inside one such run, "
-              "-S -P, 3 runs, 2026-12-03): importing numba 0.27 s and scipy 0.32 s (linalg for "
-              "the LAPACK addresses, special for the elastic kernel; not optimize since solver 1.11.0, which finds the hand-over's root itself: about 0.2 s), the "
-              "solver's modules 0.07 s, loading the compiled kernels from the cache 0.30 s, the "
-              "solve 0.06 s. Before, the grid's record was built by its Python constructor, which "
-              "numba compiles in every process (now `grid._as_nodes`, compiled and cached), and "
-              "every run imported scipy.integrate, which only the rigid paths of cavitation, the "
-              "liquid laws and slip use. The 0.5 s target needs fewer imports than numba and "
-              "scipy alone take here.",
+              "(`pipeline/plots/stamp.py`). The warm `ehd run` (its steps timed inside one "
+              "process, -S -P, 3 runs, 2026-12-05, solver 1.15.0): importing numpy 0.06 s, numba "
+              "0.14 s and scipy 0.12 s (special for the elastic kernel, which brings scipy's "
+              "array-API layer; linalg's Cython LAPACK alone loads in 0.01 s, but special costs "
+              "the same without it; not optimize since solver 1.11.0, which finds the hand-over's "
+              "root itself: about 0.2 s), the solver's modules 0.05 s, the first collision 0.17 s: "
+              "loading its four kernels from the cache 0.14 s (numba parses each cached module's "
+              "bitcode to list its symbols, 0.04 s, and unpickles their environments, 0.05 s), "
+              "the solve 0.015 s. numba's loader no longer refreshes its typing and target "
+              "contexts before each load (solver/_jit.py), which cost 0.12 s: the run above is "
+              "0.85x the time of solver 1.15.0 as released (the comparison's per-round ratios). "
+              "Before, the grid's record was built by its Python constructor, which numba "
+              "compiles in every process (now `grid._as_nodes`, compiled and cached), and every "
+              "run imported scipy.integrate, which only the rigid paths of cavitation, the liquid "
+              "laws and slip use. The 0.5 s target needs fewer imports than numpy, numba and "
+              "scipy alone take here (0.32 s), with the kernels' load on top.",
               ""]
     return "\n".join(lines)
 

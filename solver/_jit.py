@@ -27,8 +27,16 @@
 - ``leaf``: ``jit`` compiled without numba's reference counting, for the functions called once
   per face or cell that read arrays and return numbers (the liquid's laws, the face flux):
   inlined instead, their bindings of ``phys`` were still counted in every call.
+- A kernel loaded from the cache starts only numba's runtime (``rtsys.initialize``), not a
+  refresh of its typing and target contexts, which numba's ``Cache.load_overload`` does before
+  every load: the refresh installs every lowering and typing registry, which only a compile
+  reads (numba refreshes again before compiling, compiler.py), and cost a warm ``ehd run`` about
+  0.12 s of its 0.82 s (benchmarks/startup.md). Our kernels are plain ``njit`` functions (no
+  object mode, no ufunc built on load: the cases numba's refresh was added for, numba issue
+  2198). Where numba lacks the internals this relies on, its own loader runs unchanged.
 """
 
+import functools
 import hashlib
 import os
 import signal
@@ -39,6 +47,8 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import numba
+from numba.core.caching import FunctionCache
+from numba.core.runtime import rtsys
 
 FASTMATH = {"nsz", "arcp", "contract", "afn"}
 
@@ -112,8 +122,27 @@ if CACHE_DIR is not None:
 _FLAGS = dict(cache=CACHE_DIR is not None, nogil=True, fastmath=FASTMATH, error_model="numpy")
 
 
+def _load_without_refresh(cache, sig, target_context):
+    """numba's ``Cache.load_overload`` (numba/core/caching.py) less its ``refresh()`` of the
+    target context (the module docstring says why): the runtime a loaded kernel calls into is
+    started, the rest is numba's own code path."""
+    rtsys.initialize(target_context)
+    with cache._guard_against_spurious_io_errors():
+        return cache._load_overload(sig, target_context)
+
+
+def _loaded_without_refresh(dispatcher):
+    """``dispatcher``, its cache loading through ``_load_without_refresh`` where numba's cache
+    has the methods it calls (an uncached dispatcher is left as it is)."""
+    cache = dispatcher._cache
+    needs = ("_load_overload", "_guard_against_spurious_io_errors")
+    if isinstance(cache, FunctionCache) and all(hasattr(cache, name) for name in needs):
+        cache.load_overload = functools.partial(_load_without_refresh, cache)
+    return dispatcher
+
+
 def jit(func):
-    return numba.njit(**_FLAGS)(func)
+    return _loaded_without_refresh(numba.njit(**_FLAGS)(func))
 
 
 def leaf(func):
@@ -125,7 +154,7 @@ def leaf(func):
     pressure-dependent liquid's face flux took 5-10 of them per face, 38 % of its collision's
     CPU time (docs/solver.md, "Reference counting"). Never for a function that returns an array
     or a view: its caller would release a reference it was never given."""
-    return numba.njit(**_FLAGS, _nrt=False)(func)
+    return _loaded_without_refresh(numba.njit(**_FLAGS, _nrt=False)(func))
 
 
 def hook(func):
@@ -133,7 +162,7 @@ def hook(func):
     small hooks that choose between the classic film and a piece (model/step.py). Called rather
     than inlined, such a hook kept the reference counts of everything it received, because its
     piece's branch makes a call (docs/solver.md, "Reference counting")."""
-    return numba.njit(**_FLAGS, inline="always")(func)
+    return _loaded_without_refresh(numba.njit(**_FLAGS, inline="always")(func))
 
 
 @jit
