@@ -181,12 +181,11 @@ def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 
     with deferred_interrupt():  # Ctrl-C or SIGTERM inside compiled code: taken on return
         head = rigid_head(physics, numerics)
         if head.rests:
-            result = _rigid_only(physics, accuracy, numerics, head)
+            result = _rigid_only(physics, accuracy, numerics, head, x_ref_x0)
         else:
             result = _coupled(physics, accuracy, numerics, head, x_ref_x0)
             if numerics.extrapolate and result.status == "ok":
                 _pair(result, head, x_ref_x0, outer)
-        result.x_ref_x0 = x_ref_x0
         read_far(result, outer)
         check_energy(result)
     result.wall_s = time.perf_counter() - wall
@@ -317,7 +316,7 @@ def _concat(blocks):
     return {k: np.concatenate([b[k] for b in blocks]) for k in blocks[0]}
 
 
-def _rigid_only(physics, accuracy, numerics, head):
+def _rigid_only(physics, accuracy, numerics, head, x_ref_x0):
     """The scene never deforms enough to need the coupled solution: its rigid approach, exact,
     comes to rest at ``head.x``."""
     x_stop = head.x
@@ -326,7 +325,7 @@ def _rigid_only(physics, accuracy, numerics, head):
         message="deformation stays below the hand-over threshold: rigid solution (exact)",
         v_r=0.0, e_wet=0.0, e_x0=0.0, h_m_x1=x_stop, h_m_approach_x1=x_stop, ln_x_e_x1=math.log(x_stop),
         tau_v_zero=math.inf, tau_max_rebound=math.nan, x_min_x1=x_stop, energy_error=0.0,
-        p_min=0.0, series=head.block)
+        p_min=0.0, series=head.block, x_ref_x0=x_ref_x0)
     include_rigid_peaks(result, head.peaks)
     return result
 
@@ -392,7 +391,7 @@ def _save_profiles(result, t_c, x_c, p_hist, w_hist, theta_hist):
     result.profile_x = x_c
 
 
-def _coupled(physics, accuracy, numerics, head, x_ref_x0=1.0):
+def _coupled(physics, accuracy, numerics, head, x_ref_x0):
     stokes, x_start, tau_per_t = physics.St, physics.x_start, physics.tau_per_t
     shortcuts = plan(physics)
     grid, code, counters, rows, p_hist, w_hist, theta_hist = _integrate(physics, numerics, head,

@@ -42,6 +42,9 @@ EXTRAPOLATED = ("v_r", "tau_max_rebound", "e_wet", "e_x0", "ln_x_e_x1", "h_m_x1"
 # extrapolated together or not at all (the others each alone)
 GROUPS = (("v_r", "tau_max_rebound"), ("ln_x_e_x1", "e_wet", "e_x0"),
           ("h_m_approach_x1", "tau_v_zero"))
+# the order combine walks them: each group, then each other observable alone
+_UNITS = (*GROUPS, *((name,) for name in EXTRAPOLATED
+                     if not any(name in group for group in GROUPS)))
 # the cost counters, which a pair sums
 COUNTS = tuple(o.name for o in OBSERVABLES if o.kind == "count")
 
@@ -76,8 +79,7 @@ def combine(result, coarse) -> bool:
         setattr(result, name, getattr(result, name) + getattr(coarse, name))
     if result.status != "ok" or coarse.status != "ok":
         return False
-    grouped = {name for group in GROUPS for name in group}
-    for group in (*GROUPS, *((name,) for name in EXTRAPOLATED if name not in grouped)):
+    for group in _UNITS:
         new, agree = {}, True
         for member in group:
             f, c = getattr(result, member), getattr(coarse, member)
