@@ -1,6 +1,6 @@
 """ehd-collision solver core: one elastohydrodynamic collision of two elastic spheres.
 
-Pure numerics (numpy, scipy.special, numba); no I/O. Public API::
+Pure numerics (numpy, numba, SciPy); no I/O. Public API::
 
     from solver import Physics, collide
     c = collide(Physics(St=5.0, eps=0.01), accuracy="standard")   # or collide(5.0, 0.01)

@@ -20,7 +20,8 @@ so a uniformly loaded annulus ``[c0, c1]`` contributes ``D(R, c1) - D(R, c0)``: 
 singularity of ``phi`` at ``rho = R`` is integrated exactly, with no quadrature near it. Each
 interval between nodes is split into ``SUB_ANNULI`` annuli carrying the mean of the linear
 pressure on them (error ``O((h/SUB_ANNULI)^2)``, below the interpolation error ``O(h^2)``). ``K``
-close to ``m = 1`` is evaluated in the complementary form ``ellipkm1(1 - m)`` so no digits are lost.
+close to ``m = 1`` is evaluated in the complementary form ``ellipkm1(1 - m)`` so no digits are lost
+(solver/special.py: the arithmetic-geometric mean).
 
 The pressure beyond the last node ``R_L`` is the far-field tail ``P_L (R_L / rho)**4`` (rigid far
 field ``P ~ 12 V / R**4``); its deflection decays only like ``1/R`` and is part of the matrix.
@@ -29,7 +30,7 @@ field ``P ~ 12 V / R**4``); its deflection decays only like ``1/R`` and is part 
 from __future__ import annotations
 
 import numpy as np
-from scipy import special
+from .. import special
 
 __all__ = ["kernel", "disk_deflection", "influence_matrix", "force_weights", "SUB_ANNULI",
            "TAIL_RATIO", "TAIL_CELLS"]
@@ -63,11 +64,11 @@ def disk_deflection(r, c):
     inside = (r <= c) & (c > 0)
     outside = r > c
     ci, ri = c[inside], r[inside]
-    out[inside] = ci * special.ellipe((ri / ci) ** 2)
+    out[inside] = ci * special.ellipke((ri / ci) ** 2)[1]
     ro, co = r[outside], c[outside]
-    m = (co / ro) ** 2
     m1 = (ro - co) * (ro + co) / ro**2  # 1 - m without cancellation
-    out[outside] = ro * (special.ellipe(m) - m1 * special.ellipkm1(m1))
+    k, e = special.ellipke((co / ro) ** 2, m1)
+    out[outside] = ro * (e - m1 * k)
     return out
 
 

@@ -22,11 +22,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import special
-
 from ..integration.events import RELAXED
 from ..physics import parse_table
 from . import contact
+from ..special import scaled_ei
 
 __all__ = [
     "I0",
@@ -57,24 +56,6 @@ I0 = math.pi**2 / (4.0 * math.sqrt(2.0))  # I(0), the maximum of the deformation
 HANDOVER_COEFF = 3.0 * I0  # W(0)/X = HANDOVER_COEFF * V * X**-2.5 along the rigid path
 
 
-def _scaled_ei(z):
-    """``exp(-z) Ei(z)`` without overflow: for ``|z| > 40`` the asymptotic series
-    ``(1/z) sum_k k!/z^k`` (terms fall until k ~ |z|; truncation error ~ exp(-|z|))."""
-    z = np.asarray(z, dtype=float)
-    out = np.empty_like(z)
-    mid = np.abs(z) <= 40.0
-    out[mid] = np.exp(-z[mid]) * special.expi(z[mid])
-    zl = z[~mid]
-    if zl.size:
-        term = np.ones_like(zl)
-        total = np.ones_like(zl)
-        for k in range(1, 30):
-            term = term * k / zl
-            total += term
-        out[~mid] = total / zl
-    return out
-
-
 def velocity(x, x_from, v_from, stokes):
     """Approach velocity ``V = V1 + ln(X/X1)/St`` on the rigid path through ``(X1, V1)``."""
     return v_from + np.log(np.asarray(x, dtype=float) / x_from) / stokes
@@ -84,7 +65,7 @@ def elapsed_time(x, x_from, v_from, stokes):
     """Time ``T - T1`` to move rigidly from ``X1`` (velocity ``V1``) to ``X`` (docs/model.md, "Rigid solution")."""
     a = stokes * v_from
     u = np.log(np.asarray(x, dtype=float) / x_from)
-    return stokes * x_from * (_scaled_ei(np.full_like(u, a)) - np.exp(u) * _scaled_ei(a + u))
+    return stokes * x_from * (scaled_ei(np.full_like(u, a)) - np.exp(u) * scaled_ei(a + u))
 
 
 def rest_separation(x_from, v_from, stokes):
