@@ -94,6 +94,12 @@ def alpha_equal(gap: float) -> float:
     return math.asinh(math.sqrt(g * (2.0 + g)))
 
 
+# The powers 2k+1 (k = 1..24) of _sinh_excess's series and their factorials:
+# (y t)^(2k) / (2k+1)! < 1e-17 relative by k = 10 when y t < 1
+_ODD = 2.0 * np.arange(1, 25) + 1.0
+_ODD_FACTORIAL = np.array([float(math.factorial(int(k))) for k in _ODD])
+
+
 def _sinh_excess(y: np.ndarray, t: float) -> np.ndarray:
     """``exp(-y t) (sinh(y t) - y sinh t)`` for ``y >= 1``, ``t > 0``, accurate where it is
     ``O(t^3)`` (series ``sum_k (y^(2k+1) - y) t^(2k+1) / (2k+1)!`` for ``y t < 1``)."""
@@ -101,10 +107,8 @@ def _sinh_excess(y: np.ndarray, t: float) -> np.ndarray:
     out = np.empty_like(yt)
     small = yt < 1.0
     if small.any():
-        ys = y[small]
-        acc = np.zeros_like(ys)
-        for k in range(1, 25):  # (y t)^(2k) / (2k+1)! < 1e-17 relative by k = 10 when y t < 1
-            acc += (ys ** (2 * k + 1) - ys) * (t ** (2 * k + 1) / math.factorial(2 * k + 1))
+        ys = y[small][:, None]
+        acc = ((ys**_ODD - ys) * (t**_ODD / _ODD_FACTORIAL)).sum(axis=1)
         out[small] = np.exp(-yt[small]) * acc
     big = ~small
     if big.any():
