@@ -33,7 +33,12 @@
   reads (numba refreshes again before compiling, compiler.py), and cost a warm ``ehd run`` about
   0.12 s of its 0.82 s (benchmarks/startup.md). Our kernels are plain ``njit`` functions (no
   object mode, no ufunc built on load: the cases numba's refresh was added for, numba issue
-  2198). Where numba lacks the internals this relies on, its own loader runs unchanged.
+  2198). Nor does a load import the numba modules whose helper functions were compiled into a
+  kernel (array allocation, strings, hashing: 25 modules, 0.03 s): numba rebuilds each compiled
+  function's environment with its module's globals, which nopython code never reads (only
+  object mode does, numba/core/pylowering.py), so a numba module not yet imported gets its name
+  alone (``_environment_without_import``). Where numba lacks the internals this relies on, its
+  own loader runs unchanged.
 """
 
 import functools
@@ -47,6 +52,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import numba
+from numba.core import environment
 from numba.core.caching import FunctionCache
 from numba.core.runtime import rtsys
 
@@ -122,21 +128,48 @@ if CACHE_DIR is not None:
 _FLAGS = dict(cache=CACHE_DIR is not None, nogil=True, fastmath=FASTMATH, error_model="numpy")
 
 
+_rebuild_environment = getattr(environment, "_rebuild_env", None)  # numba's, which pickle calls
+
+
+def _environment_without_import(module_name, consts, env_name):
+    """numba's ``_rebuild_env`` (numba/core/environment.py), except that the environment of a
+    function of a numba module not imported yet holds the module's name, not its globals (the
+    module docstring says why)."""
+    if module_name in sys.modules or not module_name.startswith("numba."):
+        return _rebuild_environment(module_name, consts, env_name)
+    env = environment.lookup_environment(env_name)
+    if env is None:
+        env = environment.Environment({"__name__": module_name})
+        env.consts[:] = consts
+        env.env_name = env_name
+        environment.Environment._memo[env_name] = env
+    return env
+
+
 def _load_without_refresh(cache, sig, target_context):
     """numba's ``Cache.load_overload`` (numba/core/caching.py) less its ``refresh()`` of the
-    target context (the module docstring says why): the runtime a loaded kernel calls into is
-    started, the rest is numba's own code path."""
+    target context, its environments rebuilt by ``_environment_without_import`` (the module
+    docstring says why): the runtime a loaded kernel calls into is started, the rest is numba's
+    own code path. Called under numba's compiler lock (``Dispatcher.compile`` holds it), which
+    the swap of ``_rebuild_env`` relies on."""
     rtsys.initialize(target_context)
-    with cache._guard_against_spurious_io_errors():
-        return cache._load_overload(sig, target_context)
+    environment._rebuild_env = _environment_without_import
+    try:
+        with cache._guard_against_spurious_io_errors():
+            return cache._load_overload(sig, target_context)
+    finally:
+        environment._rebuild_env = _rebuild_environment
 
 
 def _loaded_without_refresh(dispatcher):
-    """``dispatcher``, its cache loading through ``_load_without_refresh`` where numba's cache
-    has the methods it calls (an uncached dispatcher is left as it is)."""
+    """``dispatcher``, its cache loading through ``_load_without_refresh`` where numba has the
+    internals it calls (an uncached dispatcher is left as it is)."""
     cache = dispatcher._cache
     needs = ("_load_overload", "_guard_against_spurious_io_errors")
-    if isinstance(cache, FunctionCache) and all(hasattr(cache, name) for name in needs):
+    if (isinstance(cache, FunctionCache) and all(hasattr(cache, name) for name in needs)
+            and _rebuild_environment is not None
+            and all(hasattr(environment, name) for name in ("lookup_environment", "Environment"))
+            and hasattr(environment.Environment, "_memo")):
         cache.load_overload = functools.partial(_load_without_refresh, cache)
     return dispatcher
 

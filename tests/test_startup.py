@@ -39,8 +39,7 @@ def test_run_help_reads_the_physics_without_compiled_code():
 
 
 # A classic collision in a fresh interpreter: the numba functions it compiles (numba's compile
-# event fires on a compile, not on a load from the cache) and whether scipy.integrate or
-# scipy.optimize is loaded
+# event fires on a compile, not on a load from the cache) and which of scipy's packages it loads
 WARM_RUN = """
 import sys
 from numba.core import event
@@ -58,10 +57,13 @@ def counted(self):
 BaseContext.refresh = counted
 from solver import Physics, collide
 c = collide(Physics(St=10.0, eps=1e-4), accuracy="standard")
-print(c.status, compiled, "scipy.integrate" in sys.modules, "scipy.optimize" in sys.modules,
-      len(refreshes))
-import numba
-print(numba.njit(lambda x: x + 1)(1), len(refreshes) > 0)
+print(c.status, compiled, *(f"scipy.{name}" in sys.modules
+                            for name in ("integrate", "optimize", "special", "linalg")),
+      len(refreshes), "numba.np.arrayobj" in sys.modules)
+import numba, numpy
+print(numba.njit(lambda n: numpy.ones(n).sum())(2), len(refreshes) > 0,
+      "numba.np.arrayobj" in sys.modules,
+      collide(Physics(St=10.0, eps=1e-4), accuracy="standard").v_r == c.v_r)
 """
 
 
@@ -70,9 +72,12 @@ def test_a_warm_collision_compiles_nothing_and_loads_only_what_it_solves_with():
     from Python (a numba StructRef's own constructor is never cached) was compiled in every
     ``ehd run``. scipy.integrate and scipy.optimize serve only the rigid paths of cavitation,
     the liquid laws and slip; the classic film imports neither (0.2 s for scipy.optimize, whose
-    root finder its hand-over had used: benchmarks/startup.md). Nor does loading the kernels
-    refresh numba's contexts (solver/_jit.py; 0.12 s), and a compile after it still works (it
-    refreshes them itself)."""
+    root finder its hand-over had used: benchmarks/startup.md), nor scipy.special (its elliptic
+    and exponential integrals are solver/special.py's) nor the package scipy.linalg (its LAPACK
+    bindings are loaded from their file: 0.1 s for the two). Nor does loading the kernels
+    refresh numba's contexts (solver/_jit.py; 0.12 s) or import the numba modules whose helpers
+    they contain (0.03 s); a compile after it still works (it refreshes the contexts and imports
+    those modules itself), and the kernels loaded before it give the same answer after it."""
     def run():
         p = subprocess.run([sys.executable, "-c", WARM_RUN], cwd=REPO, capture_output=True,
                            text=True, timeout=600)
@@ -80,8 +85,8 @@ def test_a_warm_collision_compiles_nothing_and_loads_only_what_it_solves_with():
         return p.stdout.splitlines()
     run()  # fills the cache if this is the first collision of the suite
     collision, compile_after = run()
-    assert collision == "ok [] False False 0", collision
-    assert compile_after == "2 True", compile_after
+    assert collision == "ok [] False False False False 0 False", collision
+    assert compile_after == "2.0 True True True", compile_after
 
 
 def test_a_sweep_with_nothing_to_do_loads_neither_dask_nor_the_solver(tmp_path):

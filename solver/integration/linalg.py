@@ -10,6 +10,11 @@ transpose: ``lu_factor`` transposes the matrix in place before factorising it, s
 uses ``trans = 'N'``.
 """
 
+import importlib.machinery
+import importlib.util
+import os
+import sys
+
 import llvmlite.binding as llvm
 from llvmlite import ir
 from numba import types
@@ -18,9 +23,38 @@ from numba.extending import get_cython_function_address, intrinsic
 
 from .._jit import copy_into, jit
 
+
+def _load_scipy_bindings(name: str) -> str:
+    """Import SciPy's Cython bindings ``scipy.linalg.<name>`` from their file, without running
+    the package ``scipy.linalg`` (its ``__init__`` imports SciPy's array-API layer: about 0.1 s
+    of every run, for two modules that need none of it); returns the module's name.
+
+    The module registers itself in ``sys.modules`` under that name (Cython does), so a later
+    ``import scipy.linalg.<name>`` finds it; the one difference from a plain import is that the
+    attribute ``scipy.linalg.<name>`` is set only if ``scipy.linalg`` was imported first. Where
+    the file is not found (another SciPy layout), the plain import."""
+    full = f"scipy.linalg.{name}"
+    if full in sys.modules or "scipy.linalg" in sys.modules:
+        return full
+    scipy_spec = importlib.util.find_spec("scipy")  # a top-level package: found, not imported
+    folder = os.path.join(os.path.dirname(scipy_spec.origin), "linalg")
+    for suffix in importlib.machinery.EXTENSION_SUFFIXES:
+        path = os.path.join(folder, name + suffix)
+        if os.path.isfile(path):
+            loader = importlib.machinery.ExtensionFileLoader(full, path)
+            module = importlib.util.module_from_spec(
+                importlib.util.spec_from_file_location(full, path, loader=loader))
+            loader.exec_module(module)
+            sys.modules.setdefault(full, module)
+            break
+    return full
+
+
+_LAPACK = _load_scipy_bindings("cython_lapack")
+_BLAS = _load_scipy_bindings("cython_blas")
 for _name in ("dgetrf", "dgetrs"):
-    llvm.add_symbol(f"ehd_{_name}", get_cython_function_address("scipy.linalg.cython_lapack", _name))
-llvm.add_symbol("ehd_dgemv", get_cython_function_address("scipy.linalg.cython_blas", "dgemv"))
+    llvm.add_symbol(f"ehd_{_name}", get_cython_function_address(_LAPACK, _name))
+llvm.add_symbol("ehd_dgemv", get_cython_function_address(_BLAS, "dgemv"))
 
 _p = types.voidptr
 _dgetrf = types.ExternalFunction("ehd_dgetrf", types.void(_p, _p, _p, _p, _p, _p))
