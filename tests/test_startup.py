@@ -111,6 +111,23 @@ def test_a_sweep_with_nothing_to_do_loads_neither_dask_nor_the_solver(tmp_path):
     assert not heavy & loaded, sorted(heavy & loaded)
 
 
+def test_the_executable_returns_the_commands_exit_code_and_freezes_the_collector():
+    """``ehd`` (the ``executable`` entry point) exits with the command's code and leaves what
+    it made frozen out of the garbage collector, so the interpreter's exit does not walk it
+    (pipeline/cli.py); ``main``, which tests and scripts call, freezes nothing."""
+    from importlib.metadata import entry_points
+
+    (script,) = [e for e in entry_points(group="console_scripts") if e.name == "ehd"]
+    assert script.value == "pipeline.cli:executable"
+    code = ("import gc, sys\nfrom pipeline.cli import executable, main\n"
+            "sys.argv = ['ehd', 'run', '--St', '-1', '--eps', '1e-4']\n"
+            "first = main(sys.argv[1:]); frozen_by_main = gc.get_freeze_count()\n"
+            "print(first, frozen_by_main, executable(), gc.get_freeze_count() > 0)\n")
+    p = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True,
+                       timeout=120)
+    assert p.stdout.split() == ["2", "0", "2", "True"], p.stdout + p.stderr  # EXIT_USAGE
+
+
 def test_version_is_the_package_and_the_solver_version(capsys):
     from importlib.metadata import version
 
