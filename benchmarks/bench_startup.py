@@ -294,7 +294,10 @@ def main(argv=None) -> int:
     before = None
     if compared:
         before = {**compared["before"], **compared_run["before"]}
-        meta["before_source"] = str(args.compare)
+        commit, dirty = harness.commit_of(Path(args.compare))
+        meta["before_source"] = (f"{args.compare} (solver "
+                                 f"{harness.solver_version(Path(args.compare))}, commit "
+                                 f"{commit[:7]}{' with changes' if dirty else ''})")
         meta["run_ratio"] = compared_run["ratio"]
         meta["compared"] = {**compared["after"], **compared_run["after"]}
         meta["compared_ratio"] = compared["ratio"]
