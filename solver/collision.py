@@ -197,12 +197,22 @@ def _pair(result, head, x_ref_x0, outer):
     (solver/extrapolation.py) from the same rigid approach ``head`` (the grid does not enter
     it), which is checked as any result is (``check_energy``: an unphysical one is not
     combined); the peak viscosity and ``solidified`` from the extrapolated approach pressure, as
-    a single solve derives them."""
+    a single solve derives them. Where the half grid's solve fails, or raises (a defect, which
+    must not take the finer solve with it), ``result`` stays the finer solve's, not
+    extrapolated, and its message says why."""
     half = replace(result.numerics.halved(), save_profiles=False)
-    coarse = _coupled(result.physics, result.accuracy, half, head, x_ref_x0)
-    check_energy(read_far(coarse, outer))
+    try:
+        coarse = _coupled(result.physics, result.accuracy, half, head, x_ref_x0)
+        check_energy(read_far(coarse, outer))
+    except Exception as exc:  # noqa: BLE001 - the finer result is kept; the defect is named
+        result.message = (f"not extrapolated: the half grid's solve raised "
+                          f"{type(exc).__name__}: {exc}")
+        return
     if extrapolation.combine(result, coarse):
         _approach_viscosity(result)
+    elif coarse.status != "ok":
+        result.message = (f"not extrapolated: the half grid's solve failed ({coarse.status}: "
+                          f"{coarse.message})")
 
 
 def energy_violation(result) -> str:

@@ -87,6 +87,41 @@ def test_a_pair_whose_coarse_solve_failed_or_does_not_rebound_keeps_the_finer_va
     assert mixed.h_m_x1 == pytest.approx(extrapolated(fine.h_m_x1, coarse.h_m_x1))
 
 
+def test_a_pair_whose_coarse_solve_raises_or_fails_keeps_the_finer_solve_and_says_why(
+        monkeypatch):
+    """A defect that raises in the half grid's solve must not take the finer solve with it (the
+    whole collision raised before): the result is the finer solve's, ok, not extrapolated, its
+    message naming the exception; a half grid that fails is named the same way."""
+    from solver import collision
+
+    fine = collide(SCENE, extrapolate=False, save_profiles=False)
+    original = collision._coupled
+
+    def coarse_raises(physics, accuracy, numerics, head, x_ref_x0):
+        if numerics.n_inner < fine.numerics.n_inner:
+            raise FloatingPointError("a defect in the half grid")
+        return original(physics, accuracy, numerics, head, x_ref_x0)
+
+    monkeypatch.setattr(collision, "_coupled", coarse_raises)
+    kept = collide(SCENE, extrapolate=True, save_profiles=False)
+    assert kept.status == "ok" and not kept.extrapolated
+    assert all(getattr(kept, k) == getattr(fine, k) for k in EXTRAPOLATED)
+    assert kept.message == ("not extrapolated: the half grid's solve raised FloatingPointError: "
+                            "a defect in the half grid")
+
+    def coarse_fails(physics, accuracy, numerics, head, x_ref_x0):
+        result = original(physics, accuracy, numerics, head, x_ref_x0)
+        if numerics.n_inner < fine.numerics.n_inner:
+            result.status, result.message = "max_steps", "no time left"
+        return result
+
+    monkeypatch.setattr(collision, "_coupled", coarse_fails)
+    kept = collide(SCENE, extrapolate=True, save_profiles=False)
+    assert kept.status == "ok" and not kept.extrapolated
+    assert all(getattr(kept, k) == getattr(fine, k) for k in EXTRAPOLATED)
+    assert kept.message == "not extrapolated: the half grid's solve failed (max_steps: no time left)"
+
+
 @pytest.mark.parametrize("stokes, eps", [
     (12.149579626020863, 1e-4),  # the finer grid sticks (x_e < x0), the pair's x_e is beyond x0
     (12.150794705491412, 1e-4),  # the finer grid rebounds by 2.5e-10, the coarser not
