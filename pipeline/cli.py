@@ -475,8 +475,11 @@ def executable() -> int:
     process hands back anyway: 0.04 s of a 0.55 s warm ``ehd run`` (benchmarks/startup.md). Not
     done by ``main``, which tests and scripts call in a process that goes on."""
     code = main()
-    gc.collect()
-    gc.freeze()
+    try:
+        gc.collect()
+        gc.freeze()
+    except KeyboardInterrupt:  # after main restored the handlers: the command is done
+        pass
     return code
 
 

@@ -210,9 +210,8 @@ def _pair(result, head, x_ref_x0, outer):
         return
     if extrapolation.combine(result, coarse):
         _approach_viscosity(result)
-    elif coarse.status != "ok":
-        result.message = (f"not extrapolated: the half grid's solve failed ({coarse.status}: "
-                          f"{coarse.message})")
+    elif coarse.status != "ok":  # its status alone: its message's advice is for a failure
+        result.message = f"not extrapolated: the half grid's solve failed ({coarse.status})"
 
 
 def energy_violation(result) -> str:

@@ -111,6 +111,21 @@ def test_a_sweep_with_nothing_to_do_loads_neither_dask_nor_the_solver(tmp_path):
     assert not heavy & loaded, sorted(heavy & loaded)
 
 
+def test_scipy_linalg_imported_after_the_solver_is_a_plain_import():
+    """The solver loads SciPy's LAPACK and BLAS bindings from their files, without the package
+    scipy.linalg (solver/integration/linalg.py): a script that imports scipy.linalg afterwards
+    finds both as attributes, the same modules, with the functions the solver bound."""
+    code = ("import sys\nimport solver.integration.linalg\n"
+            "print('scipy.linalg' in sys.modules)\n"
+            "import scipy.linalg, scipy.linalg.cython_blas\n"
+            "print(scipy.linalg.cython_lapack is sys.modules['scipy.linalg.cython_lapack'],\n"
+            "      'dgetrf' in scipy.linalg.cython_lapack.__pyx_capi__,\n"
+            "      'dgemv' in scipy.linalg.cython_blas.__pyx_capi__)\n")
+    p = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True,
+                       timeout=120)
+    assert p.stdout.split() == ["False", "True", "True", "True"], p.stdout + p.stderr
+
+
 def test_the_executable_returns_the_commands_exit_code_and_freezes_the_collector():
     """``ehd`` (the ``executable`` entry point) exits with the command's code and leaves what
     it made frozen out of the garbage collector, so the interpreter's exit does not walk it

@@ -24,15 +24,19 @@ from numba.extending import get_cython_function_address, intrinsic
 from .._jit import copy_into, jit
 
 
+_LOADED_HERE: list[str] = []  # the bindings _load_scipy_bindings loaded without their package
+
+
 def _load_scipy_bindings(name: str) -> str:
     """Import SciPy's Cython bindings ``scipy.linalg.<name>`` from their file, without running
     the package ``scipy.linalg`` (its ``__init__`` imports SciPy's array-API layer: about 0.1 s
     of every run, for two modules that need none of it); returns the module's name.
 
-    The module registers itself in ``sys.modules`` under that name (Cython does), so a later
-    ``import scipy.linalg.<name>`` finds it; the one difference from a plain import is that the
-    attribute ``scipy.linalg.<name>`` is set only if ``scipy.linalg`` was imported first. Where
-    the file is not found (another SciPy layout), the plain import."""
+    The module registers itself in ``sys.modules`` under that name (Cython does); the caller
+    takes it out again once its functions are bound, so that a later import of
+    ``scipy.linalg.<name>`` is a plain one, which sets the attribute of ``scipy.linalg`` as
+    usual (Cython hands it the same module object). Where the file is not found (another SciPy
+    layout), the plain import."""
     full = f"scipy.linalg.{name}"
     if full in sys.modules or "scipy.linalg" in sys.modules:
         return full
@@ -46,6 +50,7 @@ def _load_scipy_bindings(name: str) -> str:
                 importlib.util.spec_from_file_location(full, path, loader=loader))
             loader.exec_module(module)
             sys.modules.setdefault(full, module)
+            _LOADED_HERE.append(full)
             break
     return full
 
@@ -55,6 +60,8 @@ _BLAS = _load_scipy_bindings("cython_blas")
 for _name in ("dgetrf", "dgetrs"):
     llvm.add_symbol(f"ehd_{_name}", get_cython_function_address(_LAPACK, _name))
 llvm.add_symbol("ehd_dgemv", get_cython_function_address(_BLAS, "dgemv"))
+for _full in _LOADED_HERE:  # bound: a later import of scipy.linalg's bindings is a plain one
+    sys.modules.pop(_full, None)
 
 _p = types.voidptr
 _dgetrf = types.ExternalFunction("ehd_dgetrf", types.void(_p, _p, _p, _p, _p, _p))
