@@ -472,7 +472,7 @@ def executable() -> int:
     ends after it, so what it leaves is collected once and the rest frozen out of the collector
     (``gc.freeze``). The interpreter's collections at exit, after its modules are cleared, walk
     every object numba made loading the solver (85,000 after a collision) to free memory the
-    process hands back anyway: 0.04 s of a 0.55 s warm ``ehd run`` (benchmarks/startup.md). Not
+    process hands back anyway: 0.04 s of a 0.5 s warm ``ehd run`` (benchmarks/startup.md). Not
     done by ``main``, which tests and scripts call in a process that goes on."""
     code = main()
     try:
