@@ -101,7 +101,7 @@ def ellipke(m, p=None):
 
 _EULER_GAMMA = 0.5772156649015329
 _ASYMPTOTIC = 40.0  # |z| beyond: the asymptotic series (its smallest term, at k = 40, is 7e-17)
-_SERIES_ROWS = 4096
+_SERIES_ROWS = 4096  # arguments per block of _series's terms (memory bounded whatever the input)
 
 
 def scaled_ei(z):
