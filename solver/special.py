@@ -102,6 +102,7 @@ def ellipke(m, p=None):
 _EULER_GAMMA = 0.5772156649015329
 _ASYMPTOTIC = 40.0  # |z| beyond: the asymptotic series (its smallest term, at k = 40, is 7e-17)
 _SERIES_ROWS = 4096  # arguments per block of _series's terms (memory bounded whatever the input)
+_K = np.arange(1.0, 2.0 * _ASYMPTOTIC + 62.0)  # the series' k, as many as |z| = 40 needs
 
 
 def scaled_ei(z):
@@ -117,6 +118,8 @@ def scaled_ei(z):
     - ``|z| > 40``: the asymptotic series ``(1/z) sum_k k!/z^k`` (DLMF 6.12.2; terms fall until
       ``k ~ |z|``)."""
     z = np.asarray(z, dtype=float)
+    if z.size and 0.0 < z.min() and z.max() <= _ASYMPTOTIC:  # the common case: one branch
+        return _series(z.ravel()).reshape(z.shape)[()]
     out = np.full(z.shape, -np.inf)
     out[np.isnan(z)] = np.nan
     series = ((z > 0.0) & (z <= _ASYMPTOTIC)) | ((z < 0.0) & (z >= -1.0))
@@ -131,9 +134,11 @@ def scaled_ei(z):
 def _series(z):
     """``exp(-z) Ei(z)``, ``Ei(z) = gamma + ln|z| + sum_k z^k / (k k!)``, for ``0 < |z| <= 40``:
     ``2|z| + 60`` terms (from ``k = 2|z|`` on, each term is under the sum and under half the one
-    before: 60 more leave less than ``2^-60`` of the sum), ``_SERIES_ROWS`` arguments at a time
-    (the terms of a block at most 4096 x 141 numbers, 4.6 MB)."""
-    k = np.arange(1.0, 2.0 * np.max(np.abs(z)) + 61.0)
+    before: 60 more leave less than ``2^-60`` of the sum), 20 where every ``|z| < 1`` (the 20th
+    term is below ``1/(20 20!) = 2e-20`` times ``|z|``, and the sum is at least ``3|z|/4``),
+    ``_SERIES_ROWS`` arguments at a time (the terms of a block at most 4096 x 141 numbers)."""
+    largest = np.max(np.abs(z))
+    k = _K[:20] if largest < 1.0 else _K[:int(2.0 * largest) + 61]
     total = np.empty_like(z)
     for start in range(0, z.size, _SERIES_ROWS):
         block = z[start:start + _SERIES_ROWS, None]

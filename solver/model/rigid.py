@@ -65,7 +65,8 @@ def elapsed_time(x, x_from, v_from, stokes):
     """Time ``T - T1`` to move rigidly from ``X1`` (velocity ``V1``) to ``X`` (docs/model.md, "Rigid solution")."""
     a = stokes * v_from
     u = np.log(np.asarray(x, dtype=float) / x_from)
-    return stokes * x_from * (scaled_ei(np.full_like(u, a)) - np.exp(u) * scaled_ei(a + u))
+    at_both = scaled_ei(np.append(a + u, a))  # exp(-z) Ei(z) at X and at X1, in one call
+    return stokes * x_from * (at_both[-1] - np.exp(u) * at_both[:-1].reshape(u.shape))
 
 
 def rest_separation(x_from, v_from, stokes):
