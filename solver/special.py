@@ -135,15 +135,22 @@ def _series(z):
     """``exp(-z) Ei(z)``, ``Ei(z) = gamma + ln|z| + sum_k z^k / (k k!)``, for ``0 < |z| <= 40``:
     ``2|z| + 60`` terms (from ``k = 2|z|`` on, each term is under the sum and under half the one
     before: 60 more leave less than ``2^-60`` of the sum), 20 where every ``|z| < 1`` (the 20th
-    term is below ``1/(20 20!) = 2e-20`` times ``|z|``, and the sum is at least ``3|z|/4``),
-    ``_SERIES_ROWS`` arguments at a time (the terms of a block at most 4096 x 141 numbers)."""
+    term is below ``1/(20 20!) = 2e-20`` times ``|z|``, and the sum is at least ``3|z|/4``)."""
     largest = np.max(np.abs(z))
     k = _K[:20] if largest < 1.0 else _K[:int(2.0 * largest) + 61]
+    total = _by_blocks(z, lambda block: (np.cumprod(block / k, axis=1) / k).sum(axis=1))
+    return np.exp(-z) * (_EULER_GAMMA + np.log(np.abs(z)) + total)  # z^k / k! / k summed
+
+
+def _by_blocks(z, row_sums):
+    """``row_sums`` of the column ``z[:, None]``, ``_SERIES_ROWS`` arguments at a time (a
+    block's terms at most 4096 x 141 numbers, whatever the input's size)."""
+    if z.size <= _SERIES_ROWS:
+        return row_sums(z[:, None])
     total = np.empty_like(z)
     for start in range(0, z.size, _SERIES_ROWS):
-        block = z[start:start + _SERIES_ROWS, None]
-        total[start:start + _SERIES_ROWS] = (np.cumprod(block / k, axis=1) / k).sum(axis=1)
-    return np.exp(-z) * (_EULER_GAMMA + np.log(np.abs(z)) + total)  # z^k / k! / k summed
+        total[start:start + _SERIES_ROWS] = row_sums(z[start:start + _SERIES_ROWS, None])
+    return total
 
 
 def _fraction(z):
@@ -161,9 +168,5 @@ def _asymptotic(z):
     """``exp(-z) Ei(z)`` for ``|z| > 40``: ``(1/z) sum_{k<=40} k!/z^k``, stopped where its terms
     are smallest (they fall while ``k < |z|``): the first omitted one is below ``41!/40^41``,
     7e-17 of the sum."""
-    term = np.ones_like(z)
-    total = np.ones_like(z)
-    for k in range(1, 41):
-        term = term * k / z
-        total += term
-    return total / z
+    k = _K[:40]
+    return (1.0 + _by_blocks(z, lambda block: np.cumprod(k / block, axis=1).sum(axis=1))) / z
