@@ -43,6 +43,7 @@
 
 import functools
 import hashlib
+import inspect
 import os
 import signal
 import sys
@@ -129,6 +130,14 @@ _FLAGS = dict(cache=CACHE_DIR is not None, nogil=True, fastmath=FASTMATH, error_
 
 
 _rebuild_environment = getattr(environment, "_rebuild_env", None)  # numba's, which pickle calls
+# whether numba rebuilds an environment as _environment_without_import expects (as numba 0.68
+# does: from its module's name, constants and name); otherwise loads import the modules as before
+_SWAP_ENVIRONMENTS = (
+    _rebuild_environment is not None
+    and list(inspect.signature(_rebuild_environment).parameters)
+    == ["modname", "consts", "env_name"]
+    and all(hasattr(environment, name) for name in ("lookup_environment", "Environment"))
+    and hasattr(environment.Environment, "_memo"))
 
 
 def _environment_without_import(module_name, consts, env_name):
@@ -153,12 +162,14 @@ def _load_without_refresh(cache, sig, target_context):
     own code path. Called under numba's compiler lock (``Dispatcher.compile`` holds it), which
     the swap of ``_rebuild_env`` relies on."""
     rtsys.initialize(target_context)
-    environment._rebuild_env = _environment_without_import
+    if _SWAP_ENVIRONMENTS:
+        environment._rebuild_env = _environment_without_import
     try:
         with cache._guard_against_spurious_io_errors():
             return cache._load_overload(sig, target_context)
     finally:
-        environment._rebuild_env = _rebuild_environment
+        if _SWAP_ENVIRONMENTS:
+            environment._rebuild_env = _rebuild_environment
 
 
 def _loaded_without_refresh(dispatcher):
@@ -166,10 +177,7 @@ def _loaded_without_refresh(dispatcher):
     internals it calls (an uncached dispatcher is left as it is)."""
     cache = dispatcher._cache
     needs = ("_load_overload", "_guard_against_spurious_io_errors")
-    if (isinstance(cache, FunctionCache) and all(hasattr(cache, name) for name in needs)
-            and _rebuild_environment is not None
-            and all(hasattr(environment, name) for name in ("lookup_environment", "Environment"))
-            and hasattr(environment.Environment, "_memo")):
+    if isinstance(cache, FunctionCache) and all(hasattr(cache, name) for name in needs):
         cache.load_overload = functools.partial(_load_without_refresh, cache)
     return dispatcher
 

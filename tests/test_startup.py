@@ -111,6 +111,23 @@ def test_a_sweep_with_nothing_to_do_loads_neither_dask_nor_the_solver(tmp_path):
     assert not heavy & loaded, sorted(heavy & loaded)
 
 
+def test_a_numba_whose_environments_differ_loads_the_kernels_its_own_way():
+    """Where numba's ``_rebuild_env`` is not what solver/_jit.py expects, its loads rebuild the
+    environments themselves, importing their modules as numba always did, and give the same
+    answer."""
+    code = ("import sys\nimport solver._jit as j\nj._SWAP_ENVIRONMENTS = False\n"
+            "from solver import Physics, collide\n"
+            "c = collide(Physics(St=10.0, eps=1e-4), accuracy='standard')\n"
+            "print(c.status, 'numba.np.arrayobj' in sys.modules, c.v_r.hex())\n")
+    ours = ("from solver import Physics, collide\n"
+            "print(collide(Physics(St=10.0, eps=1e-4), accuracy='standard').v_r.hex())\n")
+    runs = [subprocess.run([sys.executable, "-c", text], cwd=REPO, capture_output=True,
+                           text=True, timeout=600) for text in (ours, code)]
+    assert all(p.returncode == 0 for p in runs), [p.stderr for p in runs]
+    status, imported, v_r = runs[1].stdout.split()
+    assert (status, imported, v_r) == ("ok", "True", runs[0].stdout.strip())
+
+
 def test_scipy_linalg_imported_after_the_solver_is_a_plain_import():
     """The solver loads SciPy's LAPACK and BLAS bindings from their files, without the package
     scipy.linalg (solver/integration/linalg.py): a script that imports scipy.linalg afterwards
