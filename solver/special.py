@@ -61,13 +61,9 @@ def _agm(b, c):
 
 
 def ellipkm1(p):
-    """``K(1 - p)`` for ``0 <= p <= 1`` (``inf`` at ``p = 0``; NaN outside [0, 1])."""
-    p = np.asarray(p, dtype=float)
-    inside = (p >= 0.0) & (p <= 1.0)
-    p = np.where(inside, p, 1.0)
-    mean, _ = _agm(np.sqrt(p), np.sqrt(1.0 - p))
-    with np.errstate(divide="ignore"):
-        return np.where(inside, 0.5 * math.pi / mean, np.nan)[()]
+    """``K(1 - p)`` for ``0 <= p <= 1`` (``inf`` at ``p = 0``; NaN outside [0, 1]): ``ellipke``'s
+    ``K`` with ``1 - p`` given as ``p``."""
+    return ellipke(1.0 - np.asarray(p, dtype=float), p)[0]
 
 
 def ellipke(m, p=None):

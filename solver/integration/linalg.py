@@ -24,44 +24,40 @@ from numba.extending import get_cython_function_address, intrinsic
 from .._jit import copy_into, jit
 
 
-_LOADED_HERE: list[str] = []  # the bindings _load_scipy_bindings loaded without their package
+def _bind(name: str, functions: tuple[str, ...]) -> None:
+    """Bind ``functions`` of SciPy's Cython bindings ``scipy.linalg.<name>`` as the symbols
+    ``ehd_<function>``, loading the bindings from their file, without running the package
+    ``scipy.linalg`` (its ``__init__`` imports SciPy's array-API layer: about 0.1 s of every run,
+    for two modules that need none of it).
 
-
-def _load_scipy_bindings(name: str) -> str:
-    """Import SciPy's Cython bindings ``scipy.linalg.<name>`` from their file, without running
-    the package ``scipy.linalg`` (its ``__init__`` imports SciPy's array-API layer: about 0.1 s
-    of every run, for two modules that need none of it); returns the module's name.
-
-    The module registers itself in ``sys.modules`` under that name (Cython does); the caller
-    takes it out again once its functions are bound, so that a later import of
-    ``scipy.linalg.<name>`` is a plain one, which sets the attribute of ``scipy.linalg`` as
-    usual (Cython hands it the same module object). Where the file is not found (another SciPy
-    layout), the plain import."""
+    The module is in ``sys.modules`` under its name while its functions are bound (Cython
+    registers it itself), and taken out again after, so that a later import of ``scipy.linalg.<name>`` is a
+    plain one, which sets the attribute of ``scipy.linalg`` as usual (Cython hands it the same
+    module object). Where it or its package is imported already, or its file is not found
+    (another SciPy layout), numba imports it the plain way."""
     full = f"scipy.linalg.{name}"
-    if full in sys.modules or "scipy.linalg" in sys.modules:
-        return full
-    scipy_spec = importlib.util.find_spec("scipy")  # a top-level package: found, not imported
-    folder = os.path.join(os.path.dirname(scipy_spec.origin), "linalg")
-    for suffix in importlib.machinery.EXTENSION_SUFFIXES:
-        path = os.path.join(folder, name + suffix)
-        if os.path.isfile(path):
-            loader = importlib.machinery.ExtensionFileLoader(full, path)
-            module = importlib.util.module_from_spec(
-                importlib.util.spec_from_file_location(full, path, loader=loader))
-            loader.exec_module(module)
-            sys.modules.setdefault(full, module)
-            _LOADED_HERE.append(full)
-            break
-    return full
+    loaded_here = False
+    if full not in sys.modules and "scipy.linalg" not in sys.modules:
+        scipy_spec = importlib.util.find_spec("scipy")  # a top-level package: found, not imported
+        folder = os.path.join(os.path.dirname(scipy_spec.origin), "linalg")
+        for suffix in importlib.machinery.EXTENSION_SUFFIXES:
+            path = os.path.join(folder, name + suffix)
+            if os.path.isfile(path):
+                loader = importlib.machinery.ExtensionFileLoader(full, path)
+                module = importlib.util.module_from_spec(
+                    importlib.util.spec_from_file_location(full, path, loader=loader))
+                loader.exec_module(module)
+                sys.modules.setdefault(full, module)  # where Cython did not register it
+                loaded_here = True
+                break
+    for function in functions:
+        llvm.add_symbol(f"ehd_{function}", get_cython_function_address(full, function))
+    if loaded_here:
+        del sys.modules[full]
 
 
-_LAPACK = _load_scipy_bindings("cython_lapack")
-_BLAS = _load_scipy_bindings("cython_blas")
-for _name in ("dgetrf", "dgetrs"):
-    llvm.add_symbol(f"ehd_{_name}", get_cython_function_address(_LAPACK, _name))
-llvm.add_symbol("ehd_dgemv", get_cython_function_address(_BLAS, "dgemv"))
-for _full in _LOADED_HERE:  # bound: a later import of scipy.linalg's bindings is a plain one
-    sys.modules.pop(_full, None)
+_bind("cython_lapack", ("dgetrf", "dgetrs"))
+_bind("cython_blas", ("dgemv",))
 
 _p = types.voidptr
 _dgetrf = types.ExternalFunction("ehd_dgetrf", types.void(_p, _p, _p, _p, _p, _p))
