@@ -89,6 +89,69 @@ def test_a_warm_collision_compiles_nothing_and_loads_only_what_it_solves_with():
     assert compile_after == "2.0 True True True", compile_after
 
 
+# Collisions of every piece of physics and the DEM replica in a fresh interpreter: the compiled
+# functions Python called (a dispatcher holds a signature only once it was compiled or loaded,
+# and a warm process loads only what Python calls: its callees' code is in its library)
+WARM_ENTRIES = """
+import sys
+from solver import Physics, collide
+from pipeline.dem import liggghts
+for fields in (dict(), dict(Pi=1e-3, cavitation="jfo"), dict(Pi=1e-3, cavitation="reynolds"),
+               dict(beta=2.0), dict(roughness=1e-3, e_dry=0.9), dict(slip_length=0.1)):
+    assert collide(Physics(St=10.0, eps=1e-4, **fields), accuracy="fast").status == "ok"
+liggghts.replica_restitution(10.0, 0.9, 5.0)
+liggghts.replica_many([10.0, 20.0], 0.9, 5.0)
+from solver import _jit
+called = sorted({f"{d.py_func.__module__}.{d.py_func.__qualname__}"
+                 for module in list(sys.modules.values())
+                 if module and module.__name__.startswith(("solver", "pipeline"))
+                 for d in vars(module).values()
+                 if getattr(d, "signatures", None) and getattr(d, "py_func", None)
+                 and d.py_func not in _jit._ENTRIES})
+print(called)
+"""
+
+
+def test_python_calls_only_the_compiled_entries():
+    """Every compiled function the product calls from Python is marked ``entry``
+    (solver/_jit.py), so it is the one LLVM optimises whole: one that is not would run code
+    optimised function by function. Run twice: the first run may compile (then every callee
+    holds a signature too); the second loads from the cache only what Python calls."""
+    def run():
+        p = subprocess.run([sys.executable, "-c", WARM_ENTRIES], cwd=REPO, capture_output=True,
+                           text=True, timeout=900)
+        assert p.returncode == 0, p.stderr
+        return p.stdout.strip()
+    run()
+    assert run() == "[]"
+
+
+def test_only_an_entry_is_optimised_as_a_whole_module():
+    """A compiled function that is not an ``entry`` gets numba's passes per function only; an
+    entry's module, its callees linked in, gets LLVM's whole-module passes, which inline the
+    callee. Compiled here, not loaded (no cache): a loaded library is never finalised again."""
+    import numba
+
+    from solver import _jit
+
+    def twice(x):
+        return 2.0 * x
+
+    inner = numba.njit(pipeline_class=_jit._Compiler)(twice)
+
+    def plus_one(x):
+        return inner(x) + 1.0
+
+    outer = _jit.entry(numba.njit(pipeline_class=_jit._Compiler)(plus_one))
+    assert outer(1.5) == 4.0
+    library = {d: d.overloads[d.signatures[0]].library for d in (inner, outer)}
+    assert library[inner]._optimize_final_module is _jit._whole_module_passes_skipped
+    assert "_optimize_final_module" not in vars(library[outer])
+    ir = outer.inspect_llvm(outer.signatures[0])
+    inlined = [line for line in ir.splitlines() if "call" in line and "twice" in line]
+    assert not inlined, inlined
+
+
 def test_a_sweep_with_nothing_to_do_loads_neither_dask_nor_the_solver(tmp_path):
     """``make sweep`` on a complete store: no cluster is started, so distributed (and dask, pint,
     numba...) is never imported (benchmarks/startup.md measures what that saves)."""

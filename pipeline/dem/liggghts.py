@@ -38,7 +38,7 @@ import math
 import numpy as np
 from scipy import optimize
 
-from solver._jit import jit
+from solver._jit import entry, jit
 
 __all__ = ["replica_restitution", "replica_many", "closed_form_restitution", "calibrate",
            "calibrate_minimax",
@@ -106,6 +106,7 @@ def _hermite(s, a, da, b, db, h):
             + (3.0 * s2 - 2.0 * s3) * b + (s3 - s2) * h * db)
 
 
+@entry
 @jit
 def _replica(st_in, log_max, st_crit, fixed, limit, h, t_max):
     y, u = 0.0, 1.0
@@ -138,6 +139,7 @@ def _replica(st_in, log_max, st_crit, fixed, limit, h, t_max):
     return 0.0  # never separates within t_max: stuck (overdamped, limitForce)
 
 
+@entry
 @jit
 def _replica_many(st_in, e_max, st_crit, limit, h, t_max):
     out = np.empty(st_in.size)

@@ -20,7 +20,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .._jit import jit
+from .._jit import entry, jit
 from ..model.elasticity import force_weights, influence_matrix
 from ..model.state import array_record
 
@@ -55,6 +55,7 @@ Nodes = array_record("Nodes", ("s", "s_face", "area", "weight", "influence"),
                        __name__)
 
 
+@entry
 @jit
 def _as_nodes(s, s_face, area, weight, influence):
     """``Nodes`` built by compiled code, which loads from numba's cache: the record's Python

@@ -41,7 +41,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._jit import copy_into, hook, jit, leaf
+from .._jit import copy_into, entry, hook, jit, leaf
 from ..model import step as model
 from ..model.state import Step, array_record
 from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
@@ -626,6 +626,7 @@ def _newton_form(t, k, coef, x):
     return value, slope
 
 
+@entry
 @leaf
 def _extremum_in_step(t, rows, cells, k, sign, basis):
     """The extremum of ``rows[:, :cells]`` (the newest states first, times ``t``) over its
@@ -975,6 +976,7 @@ def _initial_film(grid, phys, hist, work):
     return film, strain, diss_rate
 
 
+@entry
 @jit
 def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles):
     """Integrate on the grid ``grid`` (grid.py: ``Nodes``) from ``start`` (``Start``) with the

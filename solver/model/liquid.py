@@ -32,7 +32,7 @@ import math
 
 import numpy as np
 
-from .._jit import leaf
+from .._jit import entry, leaf
 from ..physics import (BETA, DENSITY, DENSITY_LAWS, DH_C1, DH_C2, ROELANDS_PR, ROELANDS_Z, TABLE,
                        TENSION, TENSION_CHOICES, VISCOSITY, VISCOSITY_LAWS)
 
@@ -261,6 +261,7 @@ def compression_energy(p, phys):
     return c1 / (b * b) * (math.log1p(y) - y / (1.0 + y))
 
 
+@entry
 @leaf
 def viscosity_ratio(p, phys):
     """``mu/mu0`` at the pressure ``p`` (inf beyond the double range)."""
