@@ -27,14 +27,18 @@
 - ``leaf``: ``jit`` compiled without numba's reference counting, for the functions called once
   per face or cell that read arrays and return numbers (the liquid's laws, the face flux):
   inlined instead, their bindings of ``phys`` were still counted in every call.
-- LLVM optimises a function's module as a whole (inlining across functions, the reference-count
-  pruning) only for an ``entry``, a function Python calls: numba links every compiled function's
-  callees into its module and ran those passes again at every level of the call tree, though
-  only the machine code of what Python calls ever runs (a cached kernel holds all it calls). The
-  others get numba's passes per function; the entry's passes see them all, linked into its
-  module. The classic collision's cold compile fell from 38.5 to 29.1 s of CPU, the compiled code
-  as fast (1.01x, 7 alternated rounds, 0.96-1.04x), its results moved by rounding (where LLVM
-  fuses a multiply and an add depends on what it inlined: ``contract`` below).
+- Only an entry's module holds the code of the compiled functions it calls. numba links each
+  compiled function's callees into its module and optimises and emits the whole again, so the
+  functions at the top of the call tree paid again for everything below them, though only the
+  machine code of what Python calls ever runs (a cached kernel holds all it calls). Here an
+  entry (a function the solver calls from Python, marked ``entry``) links in every compiled
+  function below it, renamed for it alone, and gets LLVM's whole-module passes (inlining
+  across functions, the reference-count pruning); any other function gets numba's passes per
+  function, and its module holds its own code only: its callees stay declarations that the JIT
+  resolves to their own modules in the process, so it is never cached. The classic
+  collision's cold compile fell from 43.5 to 27.2 s of CPU (0.63x, 3 alternated rounds,
+  0.61-0.64x), the compiled code the same (145 of the 146 regression scenes to the bit, one
+  number by 1.8e-12 of itself). docs/solver.md, "Compiled code", says why the renaming.
 - A kernel loaded from the cache starts only numba's runtime (``rtsys.initialize``), not a
   refresh of its typing and target contexts, which numba's ``Cache.load_overload`` does before
   every load: the refresh installs every lowering and typing registry, which only a compile
@@ -61,7 +65,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import numba
-from numba.core import compiler, environment, typed_passes
+from numba.core import codegen, compiler, environment, typed_passes
 from numba.core.caching import FunctionCache
 from numba.core.compiler_machinery import AnalysisPass, register_pass
 from numba.core.runtime import rtsys
@@ -188,6 +192,8 @@ def _loaded_without_refresh(dispatcher):
     needs = ("_load_overload", "_guard_against_spurious_io_errors")
     if isinstance(cache, FunctionCache) and all(hasattr(cache, name) for name in needs):
         cache.load_overload = functools.partial(_load_without_refresh, cache)
+    if isinstance(cache, FunctionCache):
+        cache.save_overload = functools.partial(_save_if_self_contained, cache.save_overload)
     return dispatcher
 
 
@@ -195,10 +201,11 @@ _ENTRIES = set()  # the Python functions of the compiled functions Python calls 
 
 
 def entry(dispatcher):
-    """Marks a compiled function (``jit``, ``leaf``) that Python calls: its module, with every
-    compiled function it calls linked in, is the one LLVM optimises as a whole (the module
-    docstring says why). Any compiled function can still be called from Python (tests do); one
-    not marked runs code optimised function by function."""
+    """Marks a compiled function (``jit``, ``leaf``) that the solver calls from Python as an entry
+    (the module docstring says what that is): the cache holds it, and a warm process loads it
+    instead of compiling it. Any other compiled function can be called from Python too (tests
+    do): it is compiled in each process that calls it, and runs code optimised function by
+    function."""
     _ENTRIES.add(dispatcher.py_func)
     return dispatcher
 
@@ -207,10 +214,61 @@ def _whole_module_passes_skipped():
     """In place of a code library's ``_optimize_final_module`` (numba/core/codegen.py)."""
 
 
+def _declarations_expected():
+    """In place of an inner library's ``_verify_declare_only_symbols``: numba's check that every
+    function its module declares was linked in, which an inner library leaves to the JIT."""
+
+
+def _link_inner(library, callee):
+    """In place of an inner library's ``add_linking_library``: no callee's code is linked in (its
+    functions stay declarations, which the JIT resolves to the callee's own module, the callee
+    finalised first); it is remembered for the entries above (``_link_closure``)."""
+    callee._ensure_finalized()
+    library._inner_callees.append(callee)
+
+
+def _link_closure(library, callee):
+    """In place of an entry's ``add_linking_library``: an inner callee is linked in with every inner
+    library below it, so the entry's module holds all it runs."""
+    pending = [callee]
+    while pending:
+        lib = pending.pop()
+        if lib in library._linked:
+            continue
+        library._linked.add(lib)
+        type(library).add_linking_library(library, lib)
+        pending.extend(getattr(lib, "_inner_callees", ()))
+
+
+def _finalize_entry(library):
+    """In place of an entry's ``finalize``: remembers the functions of its own code before numba
+    links the others in (``_renamed_then_optimised``)."""
+    library._own = {f.name for f in library._final_module.functions if not f.is_declaration}
+    type(library).finalize(library)
+
+
+def _renamed_then_optimised(library):
+    """In place of an entry's ``_optimize_final_module``: every function linked in is renamed for
+    this entry alone, so its calls run its own copies, optimised with it, never another
+    module's (the JIT binds a call to a function that two modules define to the first it
+    loaded, and an inner function's own copy is optimised function by function); then numba's
+    passes. A name does not change the machine code, as a linkage would (``internal`` let LLVM
+    inline far more, 1.3x the compile)."""
+    suffix = "." + library.name
+    for function in library._final_module.functions:
+        if not function.is_declaration and function.name not in library._own:
+            function.name = function.name + suffix
+    type(library)._optimize_final_module(library)
+
+
 @register_pass(mutates_CFG=False, analysis_only=True)
 class _InnerLibrary(AnalysisPass):
-    """Creates the function's code library as numba's lowering would, and for a function that is
-    not an ``entry`` leaves out the whole-module passes when the library is finalised."""
+    """Creates the function's code library as numba's lowering would. An entry (``entry``) links
+    in every compiled function below it and is optimised as a whole. Any other function gets
+    numba's passes per function, and its module holds its own code only: its compiled callees
+    are declarations the JIT resolves in the process, so it is never cached. Which it is
+    depends on the function alone, never on what was compiled before it in the process, so an
+    entry's code (and every result) is the same wherever it was compiled."""
 
     _name = "ehd_inner_library"
 
@@ -218,12 +276,24 @@ class _InnerLibrary(AnalysisPass):
         AnalysisPass.__init__(self)
 
     def run_pass(self, state):
-        if state.library is not None or state.func_id.func in _ENTRIES:
+        if state.library is not None:
             return False
-        state.library = state.targetctx.codegen().create_library(state.func_id.func_qualname)
-        state.library.enable_object_caching()  # as numba's NativeLowering does
-        if hasattr(state.library, "_optimize_final_module"):
-            state.library._optimize_final_module = _whole_module_passes_skipped
+        library = state.targetctx.codegen().create_library(state.func_id.func_qualname)
+        library.enable_object_caching()  # as numba's NativeLowering does
+        state.library = library
+        if not _INNER_LIBRARIES:
+            return False
+        if state.func_id.func in _ENTRIES:
+            library._linked = set()
+            library.add_linking_library = functools.partial(_link_closure, library)
+            library.finalize = functools.partial(_finalize_entry, library)
+            library._optimize_final_module = functools.partial(_renamed_then_optimised,
+                                                               library)
+        else:
+            library._inner_callees = []
+            library._optimize_final_module = _whole_module_passes_skipped
+            library._verify_declare_only_symbols = _declarations_expected
+            library.add_linking_library = functools.partial(_link_inner, library)
         return False
 
 
@@ -237,7 +307,17 @@ class _Compiler(compiler.CompilerBase):
         return [pipeline]
 
 
+def _save_if_self_contained(save, sig, cres):
+    """In place of a cache's ``save_overload``: an inner library (its callees not linked in) is
+    not saved: loaded in another process, its calls would have nothing to resolve to."""
+    if getattr(cres.library, "_inner_callees", None) is None:
+        save(sig, cres)
+
+
 _FLAGS["pipeline_class"] = _Compiler
+# whether numba's code libraries have the methods the inner libraries replace
+_INNER_LIBRARIES = all(hasattr(codegen.CPUCodeLibrary, name) for name in (
+    "_optimize_final_module", "add_linking_library", "_ensure_finalized"))
 
 
 def jit(func):

@@ -117,6 +117,8 @@ SLOW = {
         "test_sigterm_inside_the_compiled_solve_of_a_serial_sweep_stores_nothing",
     ),
     "test_startup.py": (
+        "test_a_collision_is_the_same_compiled_or_loaded_and_whatever_was_compiled_before",
+        "test_python_calls_only_the_compiled_entries",
         "test_a_sweep_with_nothing_to_do_loads_neither_dask_nor_the_solver",
         "test_figures_stamp_skips_reading_an_unchanged_store",
         "test_sticking_threshold_separates_sticking_from_rebounding",

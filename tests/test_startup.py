@@ -3,6 +3,7 @@ the files shipped with the package, ``ehd examples``, named sweeps, the figures'
 Speed itself is measured in benchmarks/bench_startup.py, not here."""
 
 import json
+import os
 import subprocess
 import sys
 import tomllib
@@ -126,10 +127,11 @@ def test_python_calls_only_the_compiled_entries():
     assert run() == "[]"
 
 
-def test_only_an_entry_is_optimised_as_a_whole_module():
-    """A compiled function that is not an ``entry`` gets numba's passes per function only; an
-    entry's module, its callees linked in, gets LLVM's whole-module passes, which inline the
-    callee. Compiled here, not loaded (no cache): a loaded library is never finalised again."""
+def test_only_an_entry_links_in_and_optimises_the_code_below_it():
+    """A compiled function that is not an ``entry`` holds its own code only (its callee is a
+    declaration, resolved in the process: callable from Python all the same) and gets numba's
+    passes per function; an entry's module holds its callees' code and gets LLVM's whole-module
+    passes, which inline them. Compiled here (no cache): a loaded library is never finalised."""
     import numba
 
     from solver import _jit
@@ -142,14 +144,59 @@ def test_only_an_entry_is_optimised_as_a_whole_module():
     def plus_one(x):
         return inner(x) + 1.0
 
-    outer = _jit.entry(numba.njit(pipeline_class=_jit._Compiler)(plus_one))
-    assert outer(1.5) == 4.0
-    library = {d: d.overloads[d.signatures[0]].library for d in (inner, outer)}
-    assert library[inner]._optimize_final_module is _jit._whole_module_passes_skipped
-    assert "_optimize_final_module" not in vars(library[outer])
+    middle = numba.njit(pipeline_class=_jit._Compiler)(plus_one)
+
+    def thrice_that(x):
+        return 3.0 * middle(x)
+
+    outer = _jit.entry(numba.njit(pipeline_class=_jit._Compiler)(thrice_that))
+    assert outer(1.5) == 12.0
+    assert middle(1.5) == 4.0
+    library = {d: d.overloads[d.signatures[0]].library for d in (inner, middle, outer)}
+    assert library[middle]._optimize_final_module is _jit._whole_module_passes_skipped
+    twice_in_middle = [f for f in library[middle]._final_module.functions if "twice" in f.name]
+    assert twice_in_middle and all(f.is_declaration for f in twice_in_middle)
     ir = outer.inspect_llvm(outer.signatures[0])
-    inlined = [line for line in ir.splitlines() if "call" in line and "twice" in line]
-    assert not inlined, inlined
+    assert "twice" in ir and "plus_one" in ir  # linked in (renamed for the entry)
+    calls = [line for line in ir.splitlines()
+             if "call" in line and ("twice" in line or "plus_one" in line)]
+    assert not calls, calls  # inlined
+
+
+# A collision compiled in a fresh process with an empty cache, after Python called some of the
+# loop's inner compiled functions itself (argv[1] == "inner-first"), or not
+ORDER_RUN = """
+import sys
+import numpy as np
+if sys.argv[1] == "inner-first":  # the tests of the film's residual and Jacobian, the steps'
+    from tests import test_film, test_stepper  # coefficients, predictor and error norm
+    test_film.test_every_films_jacobian_matches_central_differences("classic", 0)
+    test_stepper.test_predictor_extrapolates_polynomials_exactly()
+    test_stepper.test_bdf_of_order_k_is_exact_for_polynomials_of_degree_k(4)
+    test_stepper.test_norm_counts_small_pressures_as_absolute()
+from solver import Physics, collide
+for fields in (dict(St=10.0, eps=1e-4), dict(St=10.0, eps=1e-4, Pi=1e-3, cavitation="jfo")):
+    c = collide(Physics(**fields), accuracy="standard")
+    print(c.v_r.hex(), c.h_m_x1.hex(), c.ln_x_e_x1.hex(), c.steps)
+"""
+
+
+def test_a_collision_is_the_same_compiled_or_loaded_and_whatever_was_compiled_before(tmp_path):
+    """Every result to the bit is the same whether ``integrate`` was compiled in the process
+    (after Python called some of its inner functions, or not) or loaded from the cache another
+    process filled: an entry's calls run its own copies of the functions below it, never an
+    inner function's own copy, which is optimised differently (solver/_jit.py). With the
+    entry's copies not renamed, the compiling process's results differed in the last digits
+    from every later process's (118 of the 146 regression scenes)."""
+    def run(order, cache):
+        env = dict(os.environ, EHD_CACHE_DIR=str(tmp_path / cache))
+        p = subprocess.run([sys.executable, "-c", ORDER_RUN, order], cwd=REPO, env=env,
+                           capture_output=True, text=True, timeout=900)
+        assert p.returncode == 0, p.stderr
+        return p.stdout
+    compiled_after_inner = run("inner-first", "a")
+    assert run("collision-only", "a") == compiled_after_inner  # loaded
+    assert run("collision-only", "b") == compiled_after_inner  # compiled alone
 
 
 def test_a_sweep_with_nothing_to_do_loads_neither_dask_nor_the_solver(tmp_path):
