@@ -163,10 +163,11 @@ def render(doc: dict) -> str:
             f"specialisations, {a['total_s']:.1f} s in all (wall, inside the process); the "
             f"solver's own {a['solver_functions']} functions {a['solver_s']:.1f} s, numba's "
             "library code (array allocation, StructRef constructors, min/max) the rest. A "
-            "function's own time is its compile less that of the functions it calls; numba "
-            "links each callee's code into the caller and optimises and emits the whole again, "
-            "so the functions at the top of the call tree (`integrate`, `_attempt`, `_newton`) "
-            "pay again for everything below them.", "",
+            "function's own time is its compile less that of the functions it calls. Only an "
+            "entry (a function the solver calls from Python: `integrate` here) links in the "
+            "code of every function below it and optimises and emits the whole (docs/solver.md, "
+            "\"Compiled code\"), so its own time includes that; every other function's is its "
+            "own code's.", "",
             "| function | own compile [s] | specialisations |", "|---|---:|---:|"]
         lines += [f"| `{name}` | {s:.2f} | {n} |" for name, s, n in a["top"]]
         several = ", ".join(f"`{k}` ({n})" for k, n in a["several"].items()) or "none"
@@ -203,7 +204,9 @@ def main(argv=None) -> int:
            "results": {case: summary(r["this"]) for case, r in runs.items()},
            "runs": runs, "attribution": found}
     if args.compare:
-        doc["before_source"] = str(args.compare)
+        commit, dirty = harness.commit_of(before)
+        doc["before_source"] = (f"{args.compare} (solver {harness.solver_version(before)}, "
+                                f"commit {commit[:7]}{' with changes' if dirty else ''})")
         doc["before"] = {case: summary(r["before"]) for case, r in runs.items()}
         doc["ratio"] = {case: harness.compare([x["cpu_s"] for x in r["this"]],
                                               [x["cpu_s"] for x in r["before"]])
