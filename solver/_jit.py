@@ -35,7 +35,9 @@
   function below it, renamed for it alone, and gets LLVM's whole-module passes (inlining
   across functions, the reference-count pruning); any other function gets numba's passes per
   function, and its module holds its own code only: its callees stay declarations that the JIT
-  resolves to their own modules in the process, so it is never cached. The classic
+  resolves to their own modules in the process, so it is never cached (a caller compiled by
+  numba's own pipeline, a user's ``njit`` function, links in a copy with everything below
+  it, as numba's libraries are linked). The classic
   collision's cold compile fell from 43.5 to 27.2 s of CPU (0.63x, 3 alternated rounds,
   0.61-0.64x), the compiled code the same (145 of the 146 regression scenes to the bit, one
   number by 1.8e-12 of itself). docs/solver.md, "Compiled code", says why the renaming.
@@ -227,17 +229,55 @@ def _link_inner(library, callee):
     library._inner_callees.append(callee)
 
 
-def _link_closure(library, callee):
-    """In place of an entry's ``add_linking_library``: an inner callee is linked in with every inner
-    library below it, so the entry's module holds all it runs."""
-    pending = [callee]
+def _closure(callee):
+    """The libraries ``callee`` runs: itself and, below an inner library, every library it calls,
+    each once, in a fixed order (an entry's, a loaded one's, numba's own hold their callees)."""
+    found, pending = [], [callee]
     while pending:
         lib = pending.pop()
-        if lib in library._linked:
-            continue
-        library._linked.add(lib)
-        type(library).add_linking_library(library, lib)
-        pending.extend(getattr(lib, "_inner_callees", ()))
+        if lib not in found:
+            found.append(lib)
+            pending.extend(reversed(getattr(lib, "_inner_callees", ())))
+    return found
+
+
+class _OwnCode:
+    """An inner library as an entry links it: its own code (the entry links the rest)."""
+
+    def __init__(self, library):
+        self.library = library
+        self._reload_init = library._reload_init
+
+    def _ensure_finalized(self):
+        self.library._ensure_finalized()
+
+    def _get_module_for_linking(self):
+        return type(self.library)._get_module_for_linking(self.library)
+
+
+def _link_closure(library, callee):
+    """In place of an entry's ``add_linking_library``: an inner callee is linked in with every
+    library below it, so the entry's module holds all it runs."""
+    for lib in _closure(callee):
+        if lib not in library._linked:
+            library._linked.add(lib)
+            own = hasattr(lib, "_inner_callees")
+            type(library).add_linking_library(library, _OwnCode(lib) if own else lib)
+
+
+def _self_contained_module(library):
+    """In place of an inner library's ``_get_module_for_linking``, for a caller compiled by numba's
+    own pipeline (a user's ``njit`` function): its own code with everything below it linked
+    in, as numba's libraries are (the caller's machine code, which numba may cache, must hold
+    all it runs). The solver's entries link ``_OwnCode`` instead."""
+    if library._self_contained is None:
+        module = type(library)._get_module_for_linking(library).clone()
+        for lib in _closure(library)[1:]:
+            own = hasattr(lib, "_inner_callees")
+            module.link_in((type(lib)._get_module_for_linking(lib) if own
+                            else lib._get_module_for_linking()), preserve=True)
+        library._self_contained = module
+    return library._self_contained
 
 
 def _finalize_entry(library):
@@ -249,12 +289,13 @@ def _finalize_entry(library):
 
 def _renamed_then_optimised(library):
     """In place of an entry's ``_optimize_final_module``: every function linked in is renamed for
-    this entry alone, so its calls run its own copies, optimised with it, never another
-    module's (the JIT binds a call to a function that two modules define to the first it
-    loaded, and an inner function's own copy is optimised function by function); then numba's
-    passes. A name does not change the machine code, as a linkage would (``internal`` let LLVM
-    inline far more, 1.3x the compile)."""
-    suffix = "." + library.name
+    this entry alone (for this signature of it: the suffix is a digest of its own functions'
+    names, which carry the argument types), so its calls run its own copies, optimised with it,
+    never another module's (the JIT binds a call to a function that two modules define to the
+    first it loaded, and an inner function's own copy is optimised function by function); then
+    numba's passes. A name does not change the machine code, as a linkage would (``internal``
+    let LLVM inline far more, 1.3x the compile)."""
+    suffix = "." + hashlib.sha256("\n".join(sorted(library._own)).encode()).hexdigest()[:16]
     for function in library._final_module.functions:
         if not function.is_declaration and function.name not in library._own:
             function.name = function.name + suffix
@@ -291,6 +332,8 @@ class _InnerLibrary(AnalysisPass):
                                                                library)
         else:
             library._inner_callees = []
+            library._self_contained = None
+            library._get_module_for_linking = functools.partial(_self_contained_module, library)
             library._optimize_final_module = _whole_module_passes_skipped
             library._verify_declare_only_symbols = _declarations_expected
             library.add_linking_library = functools.partial(_link_inner, library)
@@ -315,9 +358,11 @@ def _save_if_self_contained(save, sig, cres):
 
 
 _FLAGS["pipeline_class"] = _Compiler
-# whether numba's code libraries have the methods the inner libraries replace
+# whether numba's code libraries have the methods entries and inner libraries replace or call
+# (else every function is compiled as numba compiles it)
 _INNER_LIBRARIES = all(hasattr(codegen.CPUCodeLibrary, name) for name in (
-    "_optimize_final_module", "add_linking_library", "_ensure_finalized"))
+    "finalize", "_optimize_final_module", "add_linking_library", "_ensure_finalized",
+    "_verify_declare_only_symbols", "_get_module_for_linking"))
 
 
 def jit(func):

@@ -163,6 +163,58 @@ def test_only_an_entry_links_in_and_optimises_the_code_below_it():
     assert not calls, calls  # inlined
 
 
+# A user's own numba functions that call the solver's inner compiled functions (linalg's LU,
+# which calls another inner function; copy_into on 2-D arrays, which calls numba's helpers)
+USER_MODULE = """
+import numba
+import numpy as np
+from solver._jit import copy_into
+from solver.integration.linalg import lu_factor, lu_solve
+
+
+@numba.njit(cache=True)
+def user_solve(a, b):
+    piv = np.empty(a.shape[0], np.int32)
+    lu_factor(a, piv)
+    return lu_solve(a, piv, b)
+
+
+@numba.njit(cache=True)
+def user_copy(dst, src):
+    copy_into(dst, src)
+"""
+USER_RUN = """
+import json
+import numpy as np
+import usermod
+a = np.array([[4.0, 1.0], [2.0, 3.0]])
+x = usermod.user_solve(a.copy(), np.array([1.0, 2.0]))
+d = np.zeros((2, 2))
+usermod.user_copy(d, a)
+print(json.dumps([bool(np.allclose(a @ x, [1.0, 2.0], rtol=1e-15, atol=0.0)), d.tolist(),
+                  sum(usermod.user_solve.stats.cache_hits.values())]))
+"""
+
+
+def test_a_users_numba_function_may_call_the_solvers_inner_functions(tmp_path):
+    """A function compiled by numba's own pipeline that calls an inner function links in all the
+    code below it (as numba's libraries hold it), so it compiles (numba checks that every
+    helper it declares was linked in: it raised for copy_into on 2-D arrays) and numba may
+    cache it: loaded in the next process, it ran into an unresolved call (a segmentation
+    fault) when it held the inner function's own code only."""
+    (tmp_path / "usermod.py").write_text(USER_MODULE)
+    env = dict(os.environ, EHD_CACHE_DIR=str(tmp_path / "cache"),
+               PYTHONPATH=os.pathsep.join([str(tmp_path), str(REPO)]))
+    outputs = []
+    for _ in range(2):  # compiled and cached, then loaded
+        p = subprocess.run([sys.executable, "-c", USER_RUN], cwd=tmp_path, env=env,
+                           capture_output=True, text=True, timeout=600)
+        assert p.returncode == 0, p.stderr
+        outputs.append(json.loads(p.stdout))
+    solved_and_copied = [True, [[4.0, 1.0], [2.0, 3.0]]]
+    assert outputs == [solved_and_copied + [0], solved_and_copied + [1]]  # a miss, then a hit
+
+
 # A collision compiled in a fresh process with an empty cache, after Python called some of the
 # loop's inner compiled functions itself (argv[1] == "inner-first"), or not
 ORDER_RUN = """
