@@ -6,9 +6,9 @@ from scipy import integrate, special
 
 def _kernel(r, y):
     """``phi(r, y) = y/(y+r) K(4ry/(r+y)^2)`` (solver/model/elasticity.py: ``kernel``) with SciPy's
-    elliptic integral, independent of the solver's own (solver/special.py), and a ufunc on a
-    scalar: quadrature calls it some 10^5 times, where the solver's numpy AGM costs about
-    0.1 ms a call (23 s for test_collision's asymptotics, 0.3 s with this)."""
+    elliptic integral, independent of the solver's own (solver/special.py) and its kernel. (The
+    solver's through numpy arrays cost 0.1 ms a call, and quadrature makes some 10^5: 23 s of
+    test_collision's asymptotics; one value now takes special.py's scalar path.)"""
     return y / (y + r) * special.ellipkm1(((r - y) / (r + y)) ** 2)
 
 

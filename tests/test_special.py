@@ -47,6 +47,25 @@ def test_complete_elliptic_integrals_agree_with_scipy():
     np.testing.assert_allclose(e_p, reference.ellipe(1.0 - p), rtol=ELLIPTIC_RTOL, atol=0)
 
 
+def test_one_value_takes_the_scalar_path_with_the_arrays_answer():
+    """A float (and a 0-d array) goes through ``_ellipke_scalar``, the same operations in the
+    same order as one element of an array, so the same answer to the bit; every value of a
+    batch agrees with it to the unit of the last place the batch's extra AGM steps can move
+    (the batch iterates until its slowest element has converged); NaN outside [0, 1]."""
+    m = _parameters()[::7]
+    batch_k, batch_e = special.ellipke(m)
+    for i, mi in enumerate(m):
+        k, e = special.ellipke(float(mi))
+        one_k, one_e = special.ellipke(np.array([mi]))
+        assert (k, e) == (one_k[0], one_e[0]), mi
+        assert special.ellipke(np.float64(mi)) == (k, e)
+        assert abs(k - batch_k[i]) <= ULP * abs(k) and abs(e - batch_e[i]) <= ULP * abs(e), mi
+        if mi > 0.0:
+            assert special.ellipkm1(float(mi)) == special.ellipkm1(np.array([mi]))[0], mi
+    assert all(math.isnan(v) for x in (-0.5, 1.5, math.nan) for v in special.ellipke(x))
+    assert special.ellipkm1(0.0) == math.inf
+
+
 def test_complete_elliptic_integrals_closed_forms():
     k_half = math.gamma(0.25) ** 2 / (4.0 * math.sqrt(math.pi))  # K(1/2)
     e_half = (0.5 * math.pi + k_half**2) / (2.0 * k_half)  # Legendre's relation at m = 1/2
