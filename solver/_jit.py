@@ -189,7 +189,8 @@ def _load_without_refresh(cache, sig, target_context):
 
 def _loaded_without_refresh(dispatcher):
     """``dispatcher``, its cache loading through ``_load_without_refresh`` where numba has the
-    internals it calls (an uncached dispatcher is left as it is)."""
+    internals it calls, and saving only self-contained libraries (``_save_if_self_contained``);
+    an uncached dispatcher is left as it is."""
     cache = dispatcher._cache
     needs = ("_load_overload", "_guard_against_spurious_io_errors")
     if isinstance(cache, FunctionCache) and all(hasattr(cache, name) for name in needs):
@@ -255,14 +256,19 @@ class _OwnCode:
         return type(self.library)._get_module_for_linking(self.library)
 
 
+def _as_linked(library):
+    """``library`` as it is linked into a module that holds everything below it: an inner
+    library's own code (the rest comes with the closure), any other library whole."""
+    return _OwnCode(library) if hasattr(library, "_inner_callees") else library
+
+
 def _link_closure(library, callee):
     """In place of an entry's ``add_linking_library``: an inner callee is linked in with every
     library below it, so the entry's module holds all it runs."""
     for lib in _closure(callee):
         if lib not in library._linked:
             library._linked.add(lib)
-            own = hasattr(lib, "_inner_callees")
-            type(library).add_linking_library(library, _OwnCode(lib) if own else lib)
+            type(library).add_linking_library(library, _as_linked(lib))
 
 
 def _self_contained_module(library):
@@ -271,11 +277,9 @@ def _self_contained_module(library):
     in, as numba's libraries are (the caller's machine code, which numba may cache, must hold
     all it runs). The solver's entries link ``_OwnCode`` instead."""
     if library._self_contained is None:
-        module = type(library)._get_module_for_linking(library).clone()
+        module = _OwnCode(library)._get_module_for_linking().clone()
         for lib in _closure(library)[1:]:
-            own = hasattr(lib, "_inner_callees")
-            module.link_in((type(lib)._get_module_for_linking(lib) if own
-                            else lib._get_module_for_linking()), preserve=True)
+            module.link_in(_as_linked(lib)._get_module_for_linking(), preserve=True)
         library._self_contained = module
     return library._self_contained
 
