@@ -8,17 +8,20 @@ interpreter (issue 30: the reference counting and allocation under 5 % of a coll
 
 A child process solves the same classic collision (St 10, eps 1e-4, standard, the issue's
 profile) in a loop from the warm cache; ``perf record`` samples it for ``--seconds`` per round,
-after the warm-up. numba's runtime functions are compiled at start-up, outside perf's view, so
-the child writes their addresses in perf's map file (``/tmp/perf-PID.map``): that is how the
-samples in ``NRT_incref``/``NRT_decref`` get their names. Needs Linux ``perf`` with access to
+after the warm-up. Compiled code is outside perf's view, so the child writes the addresses of
+numba's runtime functions and of every function the solver's compiled code defines in perf's map
+file (``/tmp/perf-PID.map``): that is how the samples in ``NRT_incref``/``NRT_decref`` get their
+names, and those in an entry's own copies of them (``NRT_incref.<digest>``, solver/_jit.py;
+before this map named them, from solver 1.15.2 on, this benchmark read 0 % of reference
+counting, which a run found to be 4.2 %). Needs Linux ``perf`` with access to
 one's own processes (``kernel.perf_event_paranoid <= 2``); writes benchmarks/refcount.json and
 refcount.md (the classic scene), or ``--out`` and the .json beside it for another scene
 (``--scene``: ``Physics`` fields as ``name=value`` over St 10, eps 1e-4). The shares are of the
 child's samples, each round's, then their median and range. ``--functions`` adds each
-function's share: the child then compiles the solver afresh in an empty cache folder and names
-every compiled function in the map too (a cold compile per round); that is how the in-step
-extremum's bisection was found to take a fifth of a classic collision (docs/solver.md, Versions,
-1.12.2).
+function's share (from the warm cache too: a loaded entry names its functions, its own copies of
+those it links in with them; until solver 1.15.2 this took a cold compile per round); that is
+how the in-step extremum's bisection was found to take a fifth of a classic collision
+(docs/solver.md, Versions, 1.12.2).
 """
 
 from __future__ import annotations
@@ -47,16 +50,19 @@ CHILD = textwrap.dedent("""
     from solver import Physics, collide
     physics = Physics(**json.loads(sys.argv[2]))
     collide(physics, save_profiles=False)  # the cache loaded, the scene warm
+    import gc
+    from numba.core.registry import CPUDispatcher
     from numba.core.runtime import nrt
-    libraries = [nrt.rtsys.library]
-    if sys.argv[3] == "functions":  # every compiled function too (compiled afresh: named)
-        import gc
-        from numba.core.registry import CPUDispatcher
-        libraries += [r.library for d in gc.get_objects() if isinstance(d, CPUDispatcher)
-                      for r in d.overloads.values()]
+    libraries = [nrt.rtsys.library] + [r.library for d in gc.get_objects()
+                                       if isinstance(d, CPUDispatcher)
+                                       for r in d.overloads.values()]
     found = set()
     for library in libraries:
-        for f in library._final_module.functions:
+        # a library loaded from the cache defines its functions in its module for linking
+        module = library._final_module
+        if not any(not f.is_declaration for f in module.functions):
+            module = getattr(library, "_shared_module", None) or module
+        for f in module.functions:
             if not f.is_declaration:
                 found.add((library.get_pointer_to_function(f.name), f.name))
     found = sorted((a, name) for a, name in found if a)
@@ -74,8 +80,10 @@ CHILD = textwrap.dedent("""
 # a sample's kind, from its symbol and its shared object (first match wins)
 KINDS = (
     # NRT_incref / NRT_decref and the atomic add and subtract they are made of
-    ("reference counting", lambda sym, dso: sym in ("NRT_incref", "NRT_decref", "nrt_atomic_add",
-                                                   "nrt_atomic_sub")),
+    # (an entry's own copies carry a suffix: NRT_incref.<digest>, solver/_jit.py)
+    ("reference counting", lambda sym, dso: sym.split(".")[0] in ("NRT_incref", "NRT_decref",
+                                                                  "nrt_atomic_add",
+                                                                  "nrt_atomic_sub")),
     ("allocation", lambda sym, dso: sym.startswith(("NRT_MemInfo", "NRT_Allocate", "NRT_Free",
                                                    "nrt_internal", "NRT_dealloc"))
      or sym in ("malloc", "free", "cfree", "_int_malloc", "_int_free", "unlink_chunk.constprop.0",
@@ -137,14 +145,10 @@ def by_function(report: str, floor: float = 0.2) -> dict:
 
 def one_round(seconds: float, folder: Path, fields: dict, functions: bool = False) -> dict:
     """One child solving the scene ``fields`` sampled for ``seconds``: its shares and its
-    collisions' count; with ``functions``, also each function's share (``by_function``), from a
-    child that compiles the solver afresh in an empty cache folder (a function loaded from the
-    cache has no symbols to name it by), which takes a cold compile, about a minute."""
+    collisions' count; with ``functions``, also each function's share (``by_function``)."""
     stop, data = folder / "stop", folder / "perf.data"
     stop.unlink(missing_ok=True)
     env = {**os.environ, "PYTHONPATH": str(harness.REPO)}
-    if functions:
-        env["EHD_CACHE_DIR"] = tempfile.mkdtemp(dir=folder)
     child = subprocess.Popen([sys.executable, "-c", CHILD, str(stop), json.dumps(fields),
                               "functions" if functions else "runtime"],
                              stdout=subprocess.PIPE, text=True, cwd=harness.REPO, env=env)
@@ -175,9 +179,7 @@ def report(data: dict) -> str:
     lines = ["# Where a collision's CPU time goes", "",
              "Generated by `benchmarks/bench_refcount.py` (perf samples of a child process "
              f"solving {harness.describe_scene(data.get('scene', harness.CLASSIC_SCENE))}, "
-             "standard, "
-             + ("compiled afresh in each round" if "functions" in data["rounds"][0]
-                else "from the warm cache") + "; "
+             "standard, from the warm cache; "
              f"{len(data['rounds'])} rounds of {data['seconds']:g} s). " + harness.describe(data),
              "", "| kind | share of the samples, median | rounds |", "|---|---|---|"]
     for kind in kinds:
@@ -185,8 +187,8 @@ def report(data: dict) -> str:
         lines.append(f"| {kind} | {statistics.median(values):.1f} % | "
                      f"{min(values):.1f}-{max(values):.1f} % |")
     if "functions" in data["rounds"][0]:
-        lines += ["", "By function (`--functions`: the solver compiled afresh, so that each compiled "
-                  "function has its name; a function LLVM inlined counts for its caller; BLAS's "
+        lines += ["", "By function (`--functions`: each compiled function by its name, an entry's own "
+                  "copies of the functions it links in by theirs; a function LLVM inlined counts for its caller; BLAS's "
                   "and the interpreter's by their symbols; at least 0.2 % in a round):", "",
                   "| function | share, median | rounds |", "|---|---|---|"]
         names = {n for r in data["rounds"] for n in r["functions"]}

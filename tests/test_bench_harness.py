@@ -200,6 +200,23 @@ def test_profile_names_numba_functions_and_sums_their_specialisations():
                       "dgemm_kernel_SKYLAKEX": 11.48}  # memcpy is below the 0.2 % floor
 
 
+
+def test_profile_counts_an_entrys_own_copies_of_the_runtime_as_reference_counting():
+    """bench_refcount.py: an entry's own copy of the runtime's reference counting, which a map
+    names with the entry's suffix (solver/_jit.py), is reference counting; a function whose name
+    only begins alike is not."""
+    bench = _load("bench_refcount")
+    report = "\n".join([
+        "     2.00%  perf-123.map  [.] NRT_incref.0561b3d7b6b39f48",
+        "     1.50%  perf-123.map  [.] NRT_decref",
+        "     0.50%  perf-123.map  [.] NRT_increfs_all",
+        "    10.00%  libscipy_openblas.so  [.] dgemm_kernel_SKYLAKEX",
+    ])
+    shares = bench.shares(report)
+    assert shares["reference counting"] == pytest.approx(3.5)
+    assert shares["compiled model code"] == pytest.approx(0.5)
+    assert shares["BLAS/LAPACK"] == pytest.approx(10.0)
+
 @pytest.mark.parametrize("scene", [["nonsense=1"], ["beta=-3"], ["beta"]])
 def test_a_profiling_scripts_bad_scene_is_one_line_exit_2(harness, scene, tmp_path, capsys):
     """``--scene`` of bench_refcount.py and refcount_callers.py: a field that is malformed or

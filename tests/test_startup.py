@@ -9,6 +9,7 @@ import sys
 import tomllib
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 REPO = Path(__file__).resolve().parent.parent
@@ -161,6 +162,38 @@ def test_only_an_entry_links_in_and_optimises_the_code_below_it():
     calls = [line for line in ir.splitlines()
              if "call" in line and ("twice" in line or "plus_one" in line)]
     assert not calls, calls  # inlined
+
+
+def test_an_entry_prunes_the_reference_counts_of_the_code_it_inlines():
+    """An array passed down two calls counts a reference at each; inlined into the entry, those
+    counts are redundant, and numba's pruning pass removes them, which finds the runtime's calls
+    by their names: an entry renames what it links in except those (``_jit._RUNTIME_KEPT``).
+    With them renamed too (1.15.2), two increments and two decrements stayed in this entry."""
+    import re
+
+    import numba
+
+    from solver import _jit
+
+    def first_plus_size(a):
+        return a[0] + a.size
+
+    inner = numba.njit(pipeline_class=_jit._Compiler)(first_plus_size)
+
+    def doubled(a):
+        return 2.0 * inner(a)
+
+    middle = numba.njit(pipeline_class=_jit._Compiler)(doubled)
+
+    def plus_one(a):
+        return middle(a) + 1.0
+
+    outer = _jit.entry(numba.njit(pipeline_class=_jit._Compiler)(plus_one))
+    assert outer(np.array([1.5, 2.0])) == 8.0
+    ir = outer.inspect_llvm(outer.signatures[0])
+    assert "define" in ir and "first_plus_size" in ir  # linked in
+    assert not re.findall(r"@NRT_(?:incref|decref)\.", ir)  # the runtime's names kept
+    assert not re.findall(r"call \w+ @NRT_incref\b", ir)  # every increment pruned
 
 
 # A user's own numba functions that call the solver's inner compiled functions (linalg's LU,
