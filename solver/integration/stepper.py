@@ -414,10 +414,8 @@ def _newton(grid, phys, step, rtol, film, fac, work):
     decided at every iterate (a primal-dual active set), and an iterate whose set changed goes
     on with the new set and the matrix updated in the slots that changed (``_update_for_set``;
     a fresh factorisation when too many did); a converged iterate is accepted once the set it
-    gives is the one it was solved with. Deciding only at the first iterate and at converged
-    ones, as until solver 1.15.2, moved the edge of a cavity by one cell per converged
-    iteration: JFO, St 10, eps 1e-4, Pi 1e-3, standard, 2286 Newton iterations against 1821,
-    the same 439-449 changes of the set.
+    gives is the one it was solved with (decided only at converged iterates, until solver
+    1.15.2, a cavity's edge moved one cell per converged iteration: docs/solver.md, 1.16.0).
 
     Returns
     -------
@@ -789,9 +787,10 @@ def _next_order(grid, phys, control, hist, dt, err, film, work):
 
 
 @jit
-def _next_step(grid, phys, control, hist, dt, err, film, work):
-    """After an accepted step of error ``err``: the next step's order into ``hist.order``, and
-    its size over this one's (``_step_factor``). Above order 2, once ``k + 1`` steps were taken
+def _next_step(grid, phys, control, hist, dt, err, changes, film, work):
+    """After an accepted step of error ``err`` whose Newton iteration met ``changes`` changes of
+    the active set: the next step's order into ``hist.order``, and its size over this one's
+    (``_step_factor``, at most ``_switch_factor``). Above order 2, once ``k + 1`` steps were taken
     at the order ``k``, ``_next_order`` chooses it again, and the choice (the same order or
     another) holds for ``k + 1`` steps, as SciPy's BDF does: checking after every step cost
     about one Newton iteration a step (two predictors and two error norms, each with an N x N
@@ -805,7 +804,7 @@ def _next_step(grid, phys, control, hist, dt, err, film, work):
         hist.order[0] = k
         hist.order[1] = -1
     hist.order[1] += 1
-    return _step_factor(err, k)
+    return min(_step_factor(err, k), _switch_factor(changes))
 
 
 @jit
@@ -1028,8 +1027,7 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
     rows = 256
     series, p_hist, w_hist, theta_hist = _series(rows, n, save_profiles)
     film, strain, diss_rate = _initial_film(grid, phys, hist, work)
-    dissipated = start.dissipated
-    n_rows = 0
+    dissipated, n_rows = start.dissipated, 0
     # the order of the step that ended at the newest state (0: none yet), an int64 from the start
     k_step = np.int64(0)  # (as the literal 0, a second compile: docs/solver.md, "Compiled code")
     dt = control.dt_init
@@ -1065,8 +1063,7 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
             model.surface_gap(grid, phys, y0, film, w, h)
             continue
         k_step = min(hist.order[0], hist.n[0])
-        factor = min(_next_step(grid, phys, control, hist, dt, err, film, work),
-                     _switch_factor(changes))
+        factor = _next_step(grid, phys, control, hist, dt, err, changes, film, work)
         _accept(grid, phys, hist, dt, film, work)
         control, factor = _control_from_now(control, hist, factor, film, phys)
         strain_new, diss_new = model.energies(grid, phys, y0, w, h, q, film)
