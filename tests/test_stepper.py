@@ -181,19 +181,6 @@ def test_step_factor_bounds_growth_and_keeps_the_lu():
                                                              rel=1e-15)
 
 
-def test_switch_factor_holds_the_next_steps_changes_of_the_set_within_the_attempts_bound():
-    """The changes of the active set grow with the step, and an attempt with more than
-    ``MAX_SET_CHANGES`` is halved: after ``c`` changes the next step is at most
-    ``(MAX_SET_CHANGES - 1) / c`` of this one (so ``c`` times it stays under the bound), and a
-    step without a change is not bounded."""
-    assert stepper._switch_factor(0) == np.inf
-    for changes in range(1, stepper.MAX_SET_CHANGES + 1):
-        factor = stepper._switch_factor(changes)
-        assert factor == (stepper.MAX_SET_CHANGES - 1) / changes
-        assert changes * factor <= stepper.MAX_SET_CHANGES - 1
-    assert stepper._switch_factor(stepper.MAX_SET_CHANGES) < 1.0 <= stepper._switch_factor(1)
-
-
 def test_norm_counts_small_pressures_as_absolute():
     """A pressure far below the largest one is measured against ``PRESSURE_SCALE`` of it (plus
     the absolute scale), a gap below ``GAP_SCALE`` against that; X and V against 1 and 0.1."""

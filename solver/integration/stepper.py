@@ -17,12 +17,11 @@ The loop in parts, each a function of its own (in the spirit of SciPy's BDF, ``_
 - ``_next_step``: the next step's size and, above order 2, its order (``_next_order``);
 - ``_newton``: a chord-Newton iteration whose LU is reused while ``b dt`` stays within 30 % of
   the factorised value; a stalled iteration first refreshes the Jacobian, then halves the step.
-  With an active set, the set is decided at every iterate, and an iterate whose set changed
-  goes on with the new set and the matrix updated where the set changed (a low-rank update of
-  its factorisation, not a new one); Newton converges only with a settled set (no BDF restart
-  at a change: the error test rejects and shrinks the step across the switching kink, which
-  keeps the integration second order), and the next step grows no further than keeps its
-  changes of the set within ``MAX_SET_CHANGES`` (``_switch_factor``);
+  With an active set, a converged iterate whose set would change goes on with the new set and
+  the matrix updated where the set changed (a low-rank update of its factorisation, not a new
+  one), and converges only with a settled set (no BDF restart at a change: the error
+  test rejects and shrinks the step across the switching kink, which keeps the integration
+  second order);
 - ``_local_error``: the distance to the predictor, ``dt / (t_{n+1} - t_{n-2}) |y_{n+1} -
   y_pred|``, measured on the gap (relative above ``GAP_SCALE``), the pressure (absolute below
   ``PRESSURE_SCALE`` of its maximum: a purely relative test collapses the step when the pressure
@@ -411,17 +410,15 @@ def _newton(grid, phys, step, rtol, film, fac, work):
     (module docstring), reusing the LU while ``bh`` stays within 30 % of the ``bh`` it was
     factorised at. The gap update of an iterate is the next iterate's gap minus this one's, so
     each iteration costs one K-product (in gap) and one LU solve. With an active set, the set is
-    decided at every iterate (a primal-dual active set), and an iterate whose set changed goes
-    on with the new set and the matrix updated in the slots that changed (``_update_for_set``;
-    a fresh factorisation when too many did); a converged iterate is accepted once the set it
-    gives is the one it was solved with (decided only at converged iterates, until solver
-    1.15.2, a cavity's edge moved one cell per converged iteration: docs/solver.md, 1.16.0).
+    decided at the first iterate and held while Newton converges; a converged iterate whose set
+    would change goes on with the new set and the matrix updated in the slots that changed
+    (``_update_for_set``; a fresh factorisation when too many did).
 
     Returns
     -------
-    outcome, fresh, changes
+    outcome, fresh
         ``CONVERGED``, ``DIVERGED`` or ``SINGULAR``; whether the LU was factorised in this
-        attempt (its state in ``fac``); how many times the active set changed in it.
+        attempt (its state in ``fac``).
     """
     bh = step.bh
     y, w, h = work.y, work.w, work.h
@@ -429,11 +426,11 @@ def _newton(grid, phys, step, rtol, film, fac, work):
     if (not fac.valid[0]) or abs(bh / fac.bh[0] - 1.0) > 0.3:
         model.surface_gap(grid, phys, y, film, w, h)
         if not _positive(h):  # the predictor's gap is not admissible: a smaller step
-            return DIVERGED, True, 0
+            return DIVERGED, True
         _factorise(grid, phys, bh, y, h, film, fac, work)
         fresh = True
         if not fac.valid[0]:
-            return SINGULAR, fresh, 0
+            return SINGULAR, fresh
     active_set = model.has_active_set(phys)
     p_abs = model.pressure_scale(film)
     converged = False
@@ -447,7 +444,8 @@ def _newton(grid, phys, step, rtol, film, fac, work):
         it += 1
         if not _admissible(h):
             break
-        model.step_residual(grid, phys, step, y, film, True, work.q, w, h, work.res)
+        model.step_residual(grid, phys, step, y, film, it == 1 or pending, work.q, w, h,
+                            work.res)
         if active_set:
             same = model.settled(film)
             if pending and same:
@@ -484,8 +482,8 @@ def _newton(grid, phys, step, rtol, film, fac, work):
             pending = True
         norm_prev = norm
     if active_set and not fac.valid[0]:
-        return SINGULAR, fresh, set_changes
-    return (CONVERGED if converged else DIVERGED), fresh, set_changes
+        return SINGULAR, fresh
+    return (CONVERGED if converged else DIVERGED), fresh
 
 
 @jit
@@ -751,20 +749,6 @@ def _step_factor(err, order):
 
 
 @jit
-def _switch_factor(changes):
-    """The largest next step over this one's after an accepted step whose Newton iteration met
-    ``changes`` changes of the active set: those grow with the step (a cavity's edge crossing
-    cells), and an attempt with more than ``MAX_SET_CHANGES`` is halved, so the next step is
-    held to ``MAX_SET_CHANGES - 1`` of them; no bound without a change. Where a JFO cavity
-    refills, its edge crossed 3-4 cells a step and each step tried at twice the size failed
-    (JFO, St 10, eps 1e-4, Pi 1e-3, standard: 40 of 54 halved attempts, 10 Newton iterations
-    and a factorisation each)."""
-    if changes == 0:
-        return np.inf
-    return (MAX_SET_CHANGES - 1.0) / changes
-
-
-@jit
 def _next_order(grid, phys, control, hist, dt, err, film, work):
     """After an accepted step (``work.y``) of order ``k = hist.order[0]`` with error ``err``:
     the local errors of orders ``k - 1`` and ``k + 1`` (``_local_error`` with their predictors;
@@ -787,10 +771,9 @@ def _next_order(grid, phys, control, hist, dt, err, film, work):
 
 
 @jit
-def _next_step(grid, phys, control, hist, dt, err, changes, film, work):
-    """After an accepted step of error ``err`` whose Newton iteration met ``changes`` changes of
-    the active set: the next step's order into ``hist.order``, and its size over this one's
-    (``_step_factor``, at most ``_switch_factor``). Above order 2, once ``k + 1`` steps were taken
+def _next_step(grid, phys, control, hist, dt, err, film, work):
+    """After an accepted step of error ``err``: the next step's order into ``hist.order``, and
+    its size over this one's (``_step_factor``). Above order 2, once ``k + 1`` steps were taken
     at the order ``k``, ``_next_order`` chooses it again, and the choice (the same order or
     another) holds for ``k + 1`` steps, as SciPy's BDF does: checking after every step cost
     about one Newton iteration a step (two predictors and two error norms, each with an N x N
@@ -804,7 +787,7 @@ def _next_step(grid, phys, control, hist, dt, err, changes, film, work):
         hist.order[0] = k
         hist.order[1] = -1
     hist.order[1] += 1
-    return min(_step_factor(err, k), _switch_factor(changes))
+    return _step_factor(err, k)
 
 
 @jit
@@ -818,9 +801,8 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
 
     Returns
     -------
-    status, accepted, dt, err, changes
-        ``RUNNING`` or the failure; whether a step was accepted, its size and error, and how
-        many times the active set changed in its Newton iteration.
+    status, accepted, dt, err
+        ``RUNNING`` or the failure; whether a step was accepted, its size and error.
     """
     counters = work.counters
     y, t = hist.y, hist.t
@@ -829,7 +811,6 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
     a = work.a
     status = RUNNING
     err = 0.0
-    changes = 0
     accepted = False
     while not accepted:
         if counters[STEPS] >= control.max_steps:
@@ -849,7 +830,7 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
         model.start_attempt(work.y, film, phys)
         step = Step(b * dt, work.c_hist, x_hist, v_hist)
         newton_before = counters[NEWTON]
-        outcome, fresh, changes = _newton(grid, phys, step, control.rtol, film, fac, work)
+        outcome, fresh = _newton(grid, phys, step, control.rtol, film, fac, work)
         if k > 2 and not fresh and counters[NEWTON] - newton_before >= SLOW_NEWTON:
             fac.valid[0] = False  # a fresh Jacobian for the next attempt (docs at SLOW_NEWTON)
         if outcome == SINGULAR:
@@ -878,7 +859,7 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
         accepted = True
         if k > 2:
             counters[HIGHER_ORDER] += 1
-    return status, accepted, dt, err, changes
+    return status, accepted, dt, err
 
 
 @jit
@@ -1027,7 +1008,8 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
     rows = 256
     series, p_hist, w_hist, theta_hist = _series(rows, n, save_profiles)
     film, strain, diss_rate = _initial_film(grid, phys, hist, work)
-    dissipated, n_rows = start.dissipated, 0
+    dissipated = start.dissipated
+    n_rows = 0
     # the order of the step that ended at the newest state (0: none yet), an int64 from the start
     k_step = np.int64(0)  # (as the literal 0, a second compile: docs/solver.md, "Compiled code")
     dt = control.dt_init
@@ -1054,8 +1036,7 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
             status = OK
             break
         # ---- attempt steps until one is accepted ---------------------------------------------
-        status, accepted, dt, err, changes = _attempt(grid, phys, control, hist, dt, film, fac,
-                                                      work)
+        status, accepted, dt, err = _attempt(grid, phys, control, hist, dt, film, fac, work)
         if not accepted:
             # record the last accepted state with the failure status, then stop; w and h (and
             # the active set) hold the rejected trial's, so restore the state's and recompute
@@ -1063,7 +1044,7 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
             model.surface_gap(grid, phys, y0, film, w, h)
             continue
         k_step = min(hist.order[0], hist.n[0])
-        factor = _next_step(grid, phys, control, hist, dt, err, changes, film, work)
+        factor = _next_step(grid, phys, control, hist, dt, err, film, work)
         _accept(grid, phys, hist, dt, film, work)
         control, factor = _control_from_now(control, hist, factor, film, phys)
         strain_new, diss_new = model.energies(grid, phys, y0, w, h, q, film)
