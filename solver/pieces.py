@@ -173,13 +173,17 @@ def _cavity_restitution(physics, x_c, v_c, j, x_ref, cols):
     that refills (the coupled phase ran until the film is full again, from where the classic
     rigid departure is exact), by the classic departure where the film is full from row ``j``
     on, else from the coupled phase's own speed where it crosses ``x_ref`` (possibly with a
-    cavity open), interpolated."""
-    if cavitation.exact_for(physics):
+    cavity open), interpolated. Both rigid departures are of spheres apart: from a row where
+    rough surfaces' mean planes still overlap (``X <= 0``, their asperities unloading), the
+    coupled phase's own speed is read instead (the floor's departure took ``ln X`` of it and
+    raised: rough, Reynolds, St 300, eps 1e-2, Pi 1e-6, fast)."""
+    apart = x_c[j] > 0.0
+    if apart and cavitation.exact_for(physics):
         return cavitation.restitution(x_c[j], v_c[j], physics, x_ref)
     open_cavity = cols["cavity_radius"] + cols["void_volume"]
     st_ref = rigid.impact_stokes(physics.St, physics.x_start, x_ref) / physics.St
     last = len(x_c) - 1
-    if not np.any(open_cavity[j:] > 0.0):  # full from row j on: the classic departure
+    if apart and not np.any(open_cavity[j:] > 0.0):  # full from row j on: the classic departure
         return rigid.departure_speed(x_c[j], v_c[j], physics.St, x_ref) / st_ref
     if x_c[last] > x_ref and v_c[last] < 0.0:
         out = np.nonzero((x_c[1:] > x_ref) & (x_c[:-1] <= x_ref) & (v_c[1:] < 0.0))[0]
