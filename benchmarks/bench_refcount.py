@@ -187,9 +187,10 @@ def report(data: dict) -> str:
         lines.append(f"| {kind} | {statistics.median(values):.1f} % | "
                      f"{min(values):.1f}-{max(values):.1f} % |")
     if "functions" in data["rounds"][0]:
-        lines += ["", "By function (`--functions`: each compiled function by its name, an entry's own "
-                  "copies of the functions it links in by theirs; a function LLVM inlined counts for its caller; BLAS's "
-                  "and the interpreter's by their symbols; at least 0.2 % in a round):", "",
+        lines += ["", "By function (`--functions`: each compiled function by its name, an "
+                  "entry's own copies of the functions it links in by theirs; a function LLVM "
+                  "inlined counts for its caller; BLAS's and the interpreter's by their symbols; "
+                  "at least 0.2 % in a round):", "",
                   "| function | share, median | rounds |", "|---|---|---|"]
         names = {n for r in data["rounds"] for n in r["functions"]}
         per_round = {n: [r["functions"].get(n, 0.0) for r in data["rounds"]] for n in names}

@@ -200,7 +200,6 @@ def test_profile_names_numba_functions_and_sums_their_specialisations():
                       "dgemm_kernel_SKYLAKEX": 11.48}  # memcpy is below the 0.2 % floor
 
 
-
 def test_profile_counts_an_entrys_own_copies_of_the_runtime_as_reference_counting():
     """bench_refcount.py: an entry's own copy of the runtime's reference counting, which a map
     names with the entry's suffix (solver/_jit.py), is reference counting; a function whose name
@@ -216,6 +215,7 @@ def test_profile_counts_an_entrys_own_copies_of_the_runtime_as_reference_countin
     assert shares["reference counting"] == pytest.approx(3.5)
     assert shares["compiled model code"] == pytest.approx(0.5)
     assert shares["BLAS/LAPACK"] == pytest.approx(10.0)
+
 
 @pytest.mark.parametrize("scene", [["nonsense=1"], ["beta=-3"], ["beta"]])
 def test_a_profiling_scripts_bad_scene_is_one_line_exit_2(harness, scene, tmp_path, capsys):

@@ -362,16 +362,21 @@ def test_a_cell_the_cavity_edge_crossed_leaves_the_gap_error_norm():
     assert dh.tolist() == [1, 1, 1, 0, 0, 0, 1, 1, 1, 1]
 
 
-@pytest.mark.parametrize("model, steps, rejected", [("jfo", 487, 120), ("reynolds", 473, 104)])
-def test_the_cavity_edge_costs_few_rejected_steps(model, steps, rejected):
+@pytest.mark.parametrize("model, steps, rejected, newton, lu",
+                         [("jfo", 487, 120, 2286, 176), ("reynolds", 473, 104, 1683, 148)])
+def test_the_cavity_edge_costs_few_rejected_steps(model, steps, rejected, newton, lu):
     """With the gaps of the cells the cavity's edge crossed in the norm, each crossing cost about
     three rejected steps: 558 steps / 184 rejections (JFO) and 531 / 152 (Reynolds) at St 10,
     eps 1e-4, Pi 1e-3, standard (solver 1.13.0); measured without them: the parameters. The
-    ceilings allow tests/test_cost.py's 30 % drift."""
+    Newton iterations and factorisations are solver 1.15.2's (a change of how the active set is
+    decided moved them by 10-20 % either way: docs/solver.md, "Cavitation"). The ceilings allow
+    tests/test_cost.py's 30 % drift."""
     c = collide(Physics(St=10.0, eps=1e-4, Pi=1e-3, cavitation=model), save_profiles=False)
     assert c.ok
     assert c.steps < 1.3 * steps
     assert c.rejected_steps < 1.3 * rejected
+    assert c.newton_iterations < 1.3 * newton
+    assert c.lu_factorizations < 1.3 * lu
 
 
 def test_rough_surfaces_with_a_floor_read_e_wet_where_their_mean_planes_still_overlap():
