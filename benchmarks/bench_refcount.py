@@ -149,8 +149,7 @@ def one_round(seconds: float, folder: Path, fields: dict, functions: bool = Fals
     stop, data = folder / "stop", folder / "perf.data"
     stop.unlink(missing_ok=True)
     env = {**os.environ, "PYTHONPATH": str(harness.REPO)}
-    child = subprocess.Popen([sys.executable, "-c", CHILD, str(stop), json.dumps(fields),
-                              "functions" if functions else "runtime"],
+    child = subprocess.Popen([sys.executable, "-c", CHILD, str(stop), json.dumps(fields)],
                              stdout=subprocess.PIPE, text=True, cwd=harness.REPO, env=env)
     try:
         if child.stdout.readline().strip() != "ready":

@@ -192,10 +192,10 @@ def _loaded_without_refresh(dispatcher):
     internals it calls, and saving only self-contained libraries (``_save_if_self_contained``);
     an uncached dispatcher is left as it is."""
     cache = dispatcher._cache
-    needs = ("_load_overload", "_guard_against_spurious_io_errors")
-    if isinstance(cache, FunctionCache) and all(hasattr(cache, name) for name in needs):
-        cache.load_overload = functools.partial(_load_without_refresh, cache)
     if isinstance(cache, FunctionCache):
+        needs = ("_load_overload", "_guard_against_spurious_io_errors")
+        if all(hasattr(cache, name) for name in needs):
+            cache.load_overload = functools.partial(_load_without_refresh, cache)
         cache.save_overload = functools.partial(_save_if_self_contained, cache.save_overload)
     return dispatcher
 

@@ -494,13 +494,19 @@ def _wet_restitution(physics, shortcuts, cols, x_ref):
     after the spheres passed it), from the last row inside ``x_ref`` on the way out, so the
     departure crosses ``x_ref`` on the rigid path of a state whose deformation is ``O(release)``.
     A piece whose departure or refill the plan gives reads it its own way
-    (``Piece.restitution``)."""
+    (``Piece.restitution``). Every rigid departure is of spheres apart: where that row's mean
+    planes still overlap (``X <= 0``: surfaces whose asperities still unload) and the coupled
+    phase crosses ``x_ref``, its own speed there is read (``pieces.crossing_speed``; a departure
+    from ``X <= 0`` took ``ln X`` and raised: docs/solver.md, Versions, 1.15.3)."""
     x_c, v_c = cols["X"], cols["V"]
     j = len(x_c) - 1
     if x_c[j] > x_ref and v_c[j] < 0.0:
         inside = np.nonzero((x_c <= x_ref) & (v_c < 0.0))[0]
         if inside.size:
             j = int(inside[-1])
+    speed = pieces.crossing_speed(x_c, v_c, x_ref) if x_c[j] <= 0.0 else None
+    if speed is not None:
+        return speed / (rigid.impact_stokes(physics.St, physics.x_start, x_ref) / physics.St)
     if shortcuts.reader is not None:
         return shortcuts.reader.restitution(physics, x_c, v_c, j, x_ref, cols)
     return rigid.restitution(x_c[j], v_c[j], physics, x_ref)

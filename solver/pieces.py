@@ -168,29 +168,36 @@ def _floor_departure(physics, x, v, t, lost):
     return x_end, -u_end, t_end, block
 
 
-def _cavity_restitution(physics, x_c, v_c, j, x_ref, cols):
-    """``e`` at ``x_ref`` with a floor: by the floor's departure from row ``j``; or, for a film
-    that refills (the coupled phase ran until the film is full again, from where the classic
-    rigid departure is exact), by the classic departure where the film is full from row ``j``
-    on, else from the coupled phase's own speed where it crosses ``x_ref`` (possibly with a
-    cavity open), interpolated. Both rigid departures are of spheres apart: from a row where
-    rough surfaces' mean planes still overlap (``X <= 0``, their asperities unloading), the
-    coupled phase's own speed is read instead (the floor's departure took ``ln X`` of it and
-    raised: rough, Reynolds, St 300, eps 1e-2, Pi 1e-6, fast)."""
-    apart = x_c[j] > 0.0
-    if apart and cavitation.exact_for(physics):
-        return cavitation.restitution(x_c[j], v_c[j], physics, x_ref)
-    open_cavity = cols["cavity_radius"] + cols["void_volume"]
-    st_ref = rigid.impact_stokes(physics.St, physics.x_start, x_ref) / physics.St
+def crossing_speed(x_c, v_c, x_ref):
+    """The separation speed ``-V`` with which the coupled phase's rows ``x_c``, ``v_c`` last cross
+    ``x_ref`` outwards, interpolated between the two rows either side; None when they do not
+    end beyond it, moving out."""
     last = len(x_c) - 1
-    if apart and not np.any(open_cavity[j:] > 0.0):  # full from row j on: the classic departure
-        return rigid.departure_speed(x_c[j], v_c[j], physics.St, x_ref) / st_ref
     if x_c[last] > x_ref and v_c[last] < 0.0:
         out = np.nonzero((x_c[1:] > x_ref) & (x_c[:-1] <= x_ref) & (v_c[1:] < 0.0))[0]
         if out.size:
             k = int(out[-1])
             frac = (x_ref - x_c[k]) / (x_c[k + 1] - x_c[k])
-            return float(-(v_c[k] + frac * (v_c[k + 1] - v_c[k]))) / st_ref
+            return float(-(v_c[k] + frac * (v_c[k + 1] - v_c[k])))
+    return None
+
+
+def _cavity_restitution(physics, x_c, v_c, j, x_ref, cols):
+    """``e`` at ``x_ref`` with a floor: by the floor's departure from row ``j``; or, for a film
+    that refills (the coupled phase ran until the film is full again, from where the classic
+    rigid departure is exact), by the classic departure where the film is full from row ``j``
+    on, else from the coupled phase's own speed where it crosses ``x_ref`` (possibly with a
+    cavity open), interpolated."""
+    if cavitation.exact_for(physics):
+        return cavitation.restitution(x_c[j], v_c[j], physics, x_ref)
+    open_cavity = cols["cavity_radius"] + cols["void_volume"]
+    st_ref = rigid.impact_stokes(physics.St, physics.x_start, x_ref) / physics.St
+    if not np.any(open_cavity[j:] > 0.0):  # full from row j on: the classic departure
+        return rigid.departure_speed(x_c[j], v_c[j], physics.St, x_ref) / st_ref
+    speed = crossing_speed(x_c, v_c, x_ref)
+    if speed is not None:
+        return speed / st_ref
+    last = len(x_c) - 1
     return rigid.departure_speed(x_c[last], v_c[last], physics.St, x_ref) / st_ref
 
 
