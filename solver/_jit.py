@@ -34,13 +34,18 @@
   entry (a function the solver calls from Python, marked ``entry``) links in every compiled
   function below it, renamed for it alone, and gets LLVM's whole-module passes (inlining
   across functions, the reference-count pruning); any other function gets numba's passes per
-  function, and its module holds its own code only: its callees stay declarations that the JIT
-  resolves to their own modules in the process, so it is never cached (a caller compiled by
-  numba's own pipeline, a user's ``njit`` function, links in a copy with everything below
-  it, as numba's libraries are linked). The classic
+  function, and its module holds its own code only: its callees stay declarations, so it is
+  never cached (a caller compiled by numba's own pipeline, a user's ``njit`` function, links
+  in a copy with everything below it, as numba's libraries are linked). The classic
   collision's cold compile fell from 43.5 to 27.2 s of CPU (0.63x, 3 alternated rounds,
   0.61-0.64x), the compiled code the same (145 of the 146 regression scenes to the bit, one
   number by 1.8e-12 of itself). docs/solver.md, "Compiled code", says why the renaming.
+- An inner function's own machine code never runs, then: it is not emitted, nor the two wrappers
+  numba adds to every function for callers outside compiled code (one converts Python's
+  arguments, one is a C function pointer). A call from Python runs its twin (``_PythonCall``):
+  the same function, compiled as an entry at that call. The classic collision's cold compile
+  took 0.76x the CPU time of the code before (3 alternated rounds, 0.67-0.82x), every result
+  the same to the bit (146 regression scenes, compiled and loaded).
 - A kernel loaded from the cache starts only numba's runtime (``rtsys.initialize``), not a
   refresh of its typing and target contexts, which numba's ``Cache.load_overload`` does before
   every load: the refresh installs every lowering and typing registry, which only a compile
@@ -67,7 +72,8 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import numba
-from numba.core import codegen, compiler, environment, typed_passes
+from numba.core import codegen, compiler, environment, registry, typed_passes
+from numba.core import dispatcher as numba_dispatcher
 from numba.core.caching import FunctionCache
 from numba.core.compiler_machinery import AnalysisPass, register_pass
 from numba.core.runtime import rtsys
@@ -207,8 +213,7 @@ def entry(dispatcher):
     """Marks a compiled function (``jit``, ``leaf``) that the solver calls from Python as an entry
     (the module docstring says what that is): the cache holds it, and a warm process loads it
     instead of compiling it. Any other compiled function can be called from Python too (tests
-    do): it is compiled in each process that calls it, and runs code optimised function by
-    function."""
+    do): that call compiles its twin, an entry never cached, in each process (``_PythonCall``)."""
     _ENTRIES.add(dispatcher.py_func)
     return dispatcher
 
@@ -224,8 +229,8 @@ def _declarations_expected():
 
 def _link_inner(library, callee):
     """In place of an inner library's ``add_linking_library``: no callee's code is linked in (its
-    functions stay declarations, which the JIT resolves to the callee's own module, the callee
-    finalised first); it is remembered for the entries above (``_link_closure``)."""
+    functions stay declarations, the callee finalised first); it is remembered for the entries
+    above (``_link_closure``)."""
     callee._ensure_finalized()
     library._inner_callees.append(callee)
 
@@ -321,11 +326,13 @@ class _InnerLibrary(AnalysisPass):
     """Creates the function's code library as numba's lowering would. An entry (``entry``) links
     in every compiled function below it and is optimised as a whole. Any other function gets
     numba's passes per function, and its module holds its own code only: its compiled callees
-    are declarations the JIT resolves in the process, so it is never cached. Which it is
-    depends on the function alone, never on what was compiled before it in the process, so an
-    entry's code (and every result) is the same wherever it was compiled."""
+    are declarations, so it is never cached, and it is lowered without the wrappers Python
+    calls and never emitted as machine code (``_without_machine_code``). Which it is depends on
+    the function alone, never on what was compiled before it in the process, so an entry's
+    code (and every result) is the same wherever it was compiled."""
 
     _name = "ehd_inner_library"
+    _always_entry = False
 
     def __init__(self):
         AnalysisPass.__init__(self)
@@ -338,7 +345,7 @@ class _InnerLibrary(AnalysisPass):
         state.library = library
         if not _INNER_LIBRARIES:
             return False
-        if state.func_id.func in _ENTRIES:
+        if self._always_entry or state.func_id.func in _ENTRIES:
             library._linked = set()
             library.add_linking_library = functools.partial(_link_closure, library)
             library.finalize = functools.partial(_finalize_entry, library)
@@ -351,17 +358,112 @@ class _InnerLibrary(AnalysisPass):
             library._optimize_final_module = _whole_module_passes_skipped
             library._verify_declare_only_symbols = _declarations_expected
             library.add_linking_library = functools.partial(_link_inner, library)
+            library._finalize_final_module = functools.partial(_without_machine_code, library)
+            for flag in ("no_cpython_wrapper", "no_cfunc_wrapper", "no_compile"):
+                setattr(state.flags, flag, True)
+        return False
+
+
+@register_pass(mutates_CFG=False, analysis_only=True)
+class _Twin(_InnerLibrary):
+    """``_InnerLibrary`` for a twin (``_PythonCall``): an entry whatever its function."""
+
+    _name = "ehd_twin_library"
+    _always_entry = True
+
+
+@register_pass(mutates_CFG=False, analysis_only=True)
+class _CalledFromCompiledCode(AnalysisPass):
+    """After the lowering of an inner function, which ``_InnerLibrary`` told to make no wrapper and
+    no machine code (numba's ``no_compile``, which also leaves out the registration below):
+    registers the function for its compiled callers, as numba's lowering does, with a
+    ``_PythonCall`` in place of the callable Python would run. A caller's lowering finds the
+    function's library by that callable (numba's ``insert_user_function``)."""
+
+    _name = "ehd_called_from_compiled_code"
+
+    def __init__(self):
+        AnalysisPass.__init__(self)
+
+    def run_pass(self, state):
+        if getattr(state.library, "_inner_callees", None) is None:
+            return False
+        call = _PythonCall(state.func_id.func, state.locals, state.flags)
+        state.targetctx.insert_user_function(call, state.cr.fndesc, [state.library])
+        state.cr = state.cr._replace(cfunc=call)
         return False
 
 
 class _Compiler(compiler.CompilerBase):
-    """numba's nopython pipeline with ``_InnerLibrary`` before the lowering."""
+    """numba's nopython pipeline with ``_InnerLibrary`` before the lowering (and
+    ``_CalledFromCompiledCode`` after it)."""
+
+    _library_pass = _InnerLibrary
 
     def define_pipelines(self):
         pipeline = compiler.DefaultPassBuilder.define_nopython_pipeline(self.state)
-        pipeline.add_pass_after(_InnerLibrary, typed_passes.AnnotateTypes)
+        pipeline.add_pass_after(self._library_pass, typed_passes.AnnotateTypes)
+        pipeline.add_pass_after(_CalledFromCompiledCode, typed_passes.NativeLowering)
         pipeline.finalize()
         return [pipeline]
+
+
+class _TwinCompiler(_Compiler):
+    """``_Compiler`` for a twin: an entry whatever its function."""
+
+    _library_pass = _Twin
+
+
+class _PythonCall:
+    """What Python runs when it calls an inner function (compiled code calls the function itself):
+    its twin, the same function compiled with the same flags as an entry (its callees' code
+    linked in, machine code, the wrapper that converts Python's arguments), compiled at the
+    first call and never cached (in the cache, the inner function would load it, and an entry
+    compiled after that would link a loaded library's calls instead of the code below it).
+    numba's C dispatcher calls this through ``Dispatcher._compile_for_args``, since
+    ``_added_for_compiled_callers`` leaves it out of the table of callables it calls directly
+    (it takes every callable there for numba's compiled function object)."""
+
+    def __init__(self, py_func, locals, flags):
+        self._py_func = py_func
+        self._locals = dict(locals)
+        self._flags = flags.copy()
+        for flag in ("no_cpython_wrapper", "no_cfunc_wrapper", "no_compile"):
+            setattr(self._flags, flag, False)
+        self._twin = None
+        self._lock = threading.Lock()
+
+    def __call__(self, *args):
+        with self._lock:
+            if self._twin is None:
+                twin = registry.CPUDispatcher(
+                    self._py_func, locals=self._locals, targetoptions={"nopython": True},
+                    pipeline_class=_TwinCompiler)
+                twin._compiler._customize_flags = lambda flags: self._flags.copy()
+                self._twin = twin
+        return self._twin(*args)
+
+
+def _without_machine_code(library):
+    """In place of an inner library's ``_finalize_final_module``: its module is not handed to the
+    JIT. Only its code as an entry links it in ever runs (``_PythonCall`` says what Python
+    runs), so its machine code (and its wrappers, which ``_InnerLibrary`` leaves out) would be
+    compiled for nothing."""
+    library._finalize_dynamic_globals()
+    library._finalized = True
+
+
+_add_overload = numba_dispatcher.Dispatcher.add_overload
+
+
+def _added_for_compiled_callers(self, cres):
+    """numba's ``Dispatcher.add_overload``, except that an inner function's overload (whose
+    callable is a ``_PythonCall``) stays out of the table of callables numba's C code calls
+    directly: a call from Python finds none and asks ``_compile_for_args``, which returns the
+    ``_PythonCall``."""
+    if not isinstance(cres.entry_point, _PythonCall):
+        return _add_overload(self, cres)
+    self.overloads[tuple(cres.signature.args)] = cres
 
 
 def _save_if_self_contained(save, sig, cres):
@@ -376,7 +478,13 @@ _FLAGS["pipeline_class"] = _Compiler
 # (else every function is compiled as numba compiles it)
 _INNER_LIBRARIES = all(hasattr(codegen.CPUCodeLibrary, name) for name in (
     "finalize", "_optimize_final_module", "add_linking_library", "_ensure_finalized",
-    "_verify_declare_only_symbols", "_get_module_for_linking"))
+    "_verify_declare_only_symbols", "_get_module_for_linking", "_finalize_dynamic_globals")) and (
+    hasattr(numba_dispatcher, "_FunctionCompiler")
+    and hasattr(numba_dispatcher._FunctionCompiler, "_customize_flags")
+    and hasattr(numba_dispatcher.Dispatcher, "add_overload")
+    and {"no_cpython_wrapper", "no_cfunc_wrapper", "no_compile"} <= set(compiler.Flags.options))
+if _INNER_LIBRARIES:
+    numba_dispatcher.Dispatcher.add_overload = _added_for_compiled_callers
 
 
 def jit(func):

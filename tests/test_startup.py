@@ -130,9 +130,9 @@ def test_python_calls_only_the_compiled_entries():
 
 def test_only_an_entry_links_in_and_optimises_the_code_below_it():
     """A compiled function that is not an ``entry`` holds its own code only (its callee is a
-    declaration, resolved in the process: callable from Python all the same) and gets numba's
-    passes per function; an entry's module holds its callees' code and gets LLVM's whole-module
-    passes, which inline them. Compiled here (no cache): a loaded library is never finalised."""
+    declaration) and gets numba's passes per function; an entry's module holds its callees'
+    code and gets LLVM's whole-module passes, which inline them. Compiled here (no cache): a
+    loaded library is never finalised."""
     import numba
 
     from solver import _jit
@@ -162,6 +162,43 @@ def test_only_an_entry_links_in_and_optimises_the_code_below_it():
     calls = [line for line in ir.splitlines()
              if "call" in line and ("twice" in line or "plus_one" in line)]
     assert not calls, calls  # inlined
+
+
+def test_an_inner_function_emits_no_machine_code_and_python_runs_its_twin():
+    """An inner function is lowered without the wrappers Python calls and never handed to the JIT
+    (its machine code would never run: the entries link in its code). A call from Python runs
+    its twin, the function compiled as an entry: with its default arguments or keywords, and
+    raising what the function raises."""
+    import numba
+
+    from solver import _jit
+    from solver._jit import copy_into
+
+    def scaled(x, k=2.0):
+        return k * x
+
+    inner = numba.njit(pipeline_class=_jit._Compiler)(scaled)
+
+    def plus_one(x):
+        return inner(x) + 1.0
+
+    middle = numba.njit(pipeline_class=_jit._Compiler)(plus_one)
+    outer = _jit.entry(numba.njit(pipeline_class=_jit._Compiler)(lambda x: 3.0 * middle(x)))
+    assert outer(1.5) == 12.0
+    for d in (inner, middle):
+        cres = d.overloads[d.signatures[0]]
+        assert isinstance(cres.entry_point, _jit._PythonCall)
+        defined = {f.name for f in cres.library._final_module.functions if not f.is_declaration}
+        assert defined == {cres.fndesc.mangled_name}  # no wrapper
+        assert not cres.library._codegen._engine.is_symbol_defined(cres.fndesc.mangled_name)
+    assert middle(1.5) == 4.0 and middle(1.5) == 4.0  # compiled at the first call, then run
+    assert inner(1.5) == 3.0 and inner(1.5, 3.0) == 4.5 and inner(1.5, k=4.0) == 6.0
+    twin = middle.overloads[middle.signatures[0]].entry_point._twin
+    ir = twin.inspect_llvm(twin.signatures[0])
+    assert "scaled" in ir and not [line for line in ir.splitlines()
+                                   if "call" in line and "scaled" in line]  # linked, inlined
+    with pytest.raises(ValueError, match="shapes differ"):
+        copy_into(np.zeros(2), np.zeros(3))
 
 
 def test_an_entry_prunes_the_reference_counts_of_the_code_it_inlines():
