@@ -43,9 +43,13 @@
 - An inner function's own machine code never runs, then: it is not emitted, nor the two wrappers
   numba adds to every function for callers outside compiled code (one converts Python's
   arguments, one is a C function pointer). A call from Python runs its twin (``_PythonCall``):
-  the same function, compiled as an entry at that call. The classic collision's cold compile
-  took 0.76x the CPU time of the code before (3 alternated rounds, 0.67-0.82x), every result
-  the same to the bit (146 regression scenes, compiled and loaded).
+  the same function, compiled as an entry at that call. Its environment (which printing and
+  exceptions with values read) is set all the same (``_environments_set``). The classic
+  collision's cold compile took 0.76x the CPU time of the code before (3 alternated rounds,
+  0.67-0.82x), every result the same to the bit (146 regression scenes, compiled and loaded).
+  What an inner function can no longer be: a first-class function value (numba's
+  ``FunctionType`` takes the C wrapper's address), or one of two functions that call each
+  other (numba resolves that in machine code); the solver has neither.
 - A kernel loaded from the cache starts only numba's runtime (``rtsys.initialize``), not a
   refresh of its typing and target contexts, which numba's ``Cache.load_overload`` does before
   every load: the refresh installs every lowering and typing registry, which only a compile
@@ -71,6 +75,7 @@ import threading
 from contextlib import contextmanager
 from pathlib import Path
 
+import llvmlite.binding as llvm
 import numba
 from numba.core import codegen, compiler, environment, registry, typed_passes
 from numba.core import dispatcher as numba_dispatcher
@@ -282,6 +287,7 @@ def _self_contained_module(library):
     in, as numba's libraries are (the caller's machine code, which numba may cache, must hold
     all it runs). The solver's entries link ``_OwnCode`` instead."""
     if library._self_contained is None:
+        _environments_set(_closure(library))
         module = _OwnCode(library)._get_module_for_linking().clone()
         for lib in _closure(library)[1:]:
             module.link_in(_as_linked(lib)._get_module_for_linking(), preserve=True)
@@ -291,9 +297,39 @@ def _self_contained_module(library):
 
 def _finalize_entry(library):
     """In place of an entry's ``finalize``: remembers the functions of its own code before numba
-    links the others in (``_renamed_then_optimised``)."""
+    links the others in (``_renamed_then_optimised``), and sets the environments of the inner
+    functions it runs first (``_environments_set``)."""
     library._own = {f.name for f in library._final_module.functions if not f.is_declaration}
+    _environments_set(library._linked)
     type(library).finalize(library)
+
+
+def _environments_set(libraries):
+    """Sets the environment of every inner function among ``libraries`` in the JIT, as numba's
+    lowering would have (``get_executable``), before a caller that links in their code is
+    loaded: the code of a function that raises an exception with values, or prints, reads its
+    environment from a global variable named after it, which numba sets once a module that
+    defines it is loaded. An inner function's module never is, so a module defining those
+    variables alone is loaded instead (a caller's own definition of one is the same symbol: the
+    JIT binds a name that two modules define to the first it loaded). Without it, an inner
+    function's ``print`` hung the compiling process, and an exception with values came out as
+    a RuntimeError (a loaded entry sets them as numba's loader does)."""
+    pending = [lib for lib in libraries if getattr(lib, "_environment", None) is not None
+               and not lib._environment_set]
+    if not pending:
+        return
+    codegen_ = pending[0].codegen
+    module = codegen_._create_empty_module("ehd_environments")
+    for lib in pending:
+        if not codegen_._engine.is_symbol_defined(lib._environment.env_name):
+            registry.cpu_target.target_context.declare_env_global(module,
+                                                                  lib._environment.env_name)
+    if module.global_values:
+        codegen_._engine.add_module(llvm.parse_assembly(str(module)))
+        codegen_._engine.finalize_object()
+    for lib in pending:
+        codegen_.set_env(lib._environment.env_name, lib._environment)
+        lib._environment_set = True
 
 
 # The functions an entry links in that keep their names: numba's reference-count pruning pass
@@ -390,6 +426,8 @@ class _CalledFromCompiledCode(AnalysisPass):
             return False
         call = _PythonCall(state.func_id.func, state.locals, state.flags)
         state.targetctx.insert_user_function(call, state.cr.fndesc, [state.library])
+        state.library._environment = state.cr.env
+        state.library._environment_set = False
         state.cr = state.cr._replace(cfunc=call)
         return False
 
@@ -420,9 +458,11 @@ class _PythonCall:
     linked in, machine code, the wrapper that converts Python's arguments), compiled at the
     first call and never cached (in the cache, the inner function would load it, and an entry
     compiled after that would link a loaded library's calls instead of the code below it).
-    numba's C dispatcher calls this through ``Dispatcher._compile_for_args``, since
-    ``_added_for_compiled_callers`` leaves it out of the table of callables it calls directly
-    (it takes every callable there for numba's compiled function object)."""
+    numba's C dispatcher calls this through ``Dispatcher._compile_for_args`` the first time,
+    since ``_added_for_compiled_callers`` leaves it out of the table of callables it calls
+    directly (it takes every callable there for numba's compiled function object); the twin's
+    compiled function then goes into that table, so later calls run it as directly as they ran
+    the inner function's own machine code before."""
 
     def __init__(self, py_func, locals, flags):
         self._py_func = py_func
@@ -432,6 +472,8 @@ class _PythonCall:
             setattr(self._flags, flag, False)
         self._twin = None
         self._lock = threading.Lock()
+        self.dispatcher = None  # set by _added_for_compiled_callers, with the signature
+        self.signature = None
 
     def __call__(self, *args):
         with self._lock:
@@ -440,6 +482,8 @@ class _PythonCall:
                     self._py_func, locals=self._locals, targetoptions={"nopython": True},
                     pipeline_class=_TwinCompiler)
                 twin._compiler._customize_flags = lambda flags: self._flags.copy()
+                compiled = twin.compile(self.signature)
+                self.dispatcher._insert([a._code for a in self.signature], compiled, False)
                 self._twin = twin
         return self._twin(*args)
 
@@ -463,7 +507,9 @@ def _added_for_compiled_callers(self, cres):
     ``_PythonCall``."""
     if not isinstance(cres.entry_point, _PythonCall):
         return _add_overload(self, cres)
-    self.overloads[tuple(cres.signature.args)] = cres
+    cres.entry_point.dispatcher = self
+    cres.entry_point.signature = tuple(cres.signature.args)
+    self.overloads[cres.entry_point.signature] = cres
 
 
 def _save_if_self_contained(save, sig, cres):
