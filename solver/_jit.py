@@ -318,17 +318,17 @@ def _environments_set(libraries):
                and not lib._environment_set]
     if not pending:
         return
-    codegen_ = pending[0].codegen
-    module = codegen_._create_empty_module("ehd_environments")
+    jit_codegen = pending[0].codegen
+    module = jit_codegen._create_empty_module("ehd_environments")
     for lib in pending:
-        if not codegen_._engine.is_symbol_defined(lib._environment.env_name):
+        if not jit_codegen._engine.is_symbol_defined(lib._environment.env_name):
             registry.cpu_target.target_context.declare_env_global(module,
                                                                   lib._environment.env_name)
     if module.global_values:
-        codegen_._engine.add_module(llvm.parse_assembly(str(module)))
-        codegen_._engine.finalize_object()
+        jit_codegen._engine.add_module(llvm.parse_assembly(str(module)))
+        jit_codegen._engine.finalize_object()
     for lib in pending:
-        codegen_.set_env(lib._environment.env_name, lib._environment)
+        jit_codegen.set_env(lib._environment.env_name, lib._environment)
         lib._environment_set = True
 
 
@@ -503,8 +503,8 @@ _add_overload = numba_dispatcher.Dispatcher.add_overload
 def _added_for_compiled_callers(self, cres):
     """numba's ``Dispatcher.add_overload``, except that an inner function's overload (whose
     callable is a ``_PythonCall``) stays out of the table of callables numba's C code calls
-    directly: a call from Python finds none and asks ``_compile_for_args``, which returns the
-    ``_PythonCall``."""
+    directly: Python's first call finds none there and asks ``_compile_for_args``, which returns
+    the ``_PythonCall``, which puts its twin's compiled function there."""
     if not isinstance(cres.entry_point, _PythonCall):
         return _add_overload(self, cres)
     cres.entry_point.dispatcher = self
@@ -528,6 +528,8 @@ _INNER_LIBRARIES = all(hasattr(codegen.CPUCodeLibrary, name) for name in (
     hasattr(numba_dispatcher, "_FunctionCompiler")
     and hasattr(numba_dispatcher._FunctionCompiler, "_customize_flags")
     and hasattr(numba_dispatcher.Dispatcher, "add_overload")
+    and hasattr(numba_dispatcher._DispatcherBase, "_insert")
+    and all(hasattr(codegen.JITCPUCodegen, name) for name in ("set_env", "_create_empty_module"))
     and {"no_cpython_wrapper", "no_cfunc_wrapper", "no_compile"} <= set(compiler.Flags.options))
 if _INNER_LIBRARIES:
     numba_dispatcher.Dispatcher.add_overload = _added_for_compiled_callers
