@@ -490,9 +490,14 @@ def _depart(physics, shortcuts, cols, blocks):
 
 def _wet_restitution(physics, shortcuts, cols, x_ref):
     """``e_wet`` at ``x_ref`` from the coupled phase's end: the rigid departure (rigid.restitution)
-    from the release state; when the release lies beyond ``x_ref`` (the deformation relaxed only
-    after the spheres passed it), from the last row inside ``x_ref`` on the way out, so the
-    departure crosses ``x_ref`` on the rigid path of a state whose deformation is ``O(release)``.
+    from the release state; when the coupled phase ends beyond ``x_ref`` (the deformation relaxed,
+    or the film filled again, only after the spheres passed it, moving out or already turned
+    back), from the last row inside ``x_ref`` on the way out, so the departure crosses ``x_ref``
+    on the rigid path of a state whose deformation is ``O(release)``. (From an end turned back,
+    the rigid departure took the end as a state reached rigidly from ``x_ref``: a film with a
+    floor at St 3, eps 1e-2, Pi 1e-5 that ran to ``X`` 22.7 before it filled again gave
+    ``e_wet`` 0.43 with a largest separation speed ``v_r`` of 0.19; docs/solver.md, Versions,
+    1.15.4.)
     A piece whose departure or refill the plan gives reads it its own way
     (``Piece.restitution``). Every rigid departure is of spheres apart: where that row's mean
     planes still overlap (``X <= 0``: surfaces whose asperities still unload) and the coupled
@@ -500,7 +505,7 @@ def _wet_restitution(physics, shortcuts, cols, x_ref):
     from ``X <= 0`` took ``ln X`` and raised: docs/solver.md, Versions, 1.15.3)."""
     x_c, v_c = cols["X"], cols["V"]
     j = len(x_c) - 1
-    if x_c[j] > x_ref and v_c[j] < 0.0:
+    if x_c[j] > x_ref:
         inside = np.nonzero((x_c <= x_ref) & (v_c < 0.0))[0]
         if inside.size:
             j = int(inside[-1])

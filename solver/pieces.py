@@ -171,9 +171,9 @@ def _floor_departure(physics, x, v, t, lost):
 def crossing_speed(x_c, v_c, x_ref):
     """The separation speed ``-V`` with which the coupled phase's rows ``x_c``, ``v_c`` last cross
     ``x_ref`` outwards, interpolated between the two rows either side; None when they do not
-    end beyond it, moving out."""
+    end beyond it (moving out, or turned back)."""
     last = len(x_c) - 1
-    if x_c[last] > x_ref and v_c[last] < 0.0:
+    if x_c[last] > x_ref:
         out = np.nonzero((x_c[1:] > x_ref) & (x_c[:-1] <= x_ref) & (v_c[1:] < 0.0))[0]
         if out.size:
             k = int(out[-1])

@@ -9,6 +9,7 @@ switched off (``W = 0``) and the kinematics prescribed (``dH/dT = U`` everywhere
 primal-dual active set the time loop uses.
 """
 
+import itertools
 import math
 
 import numpy as np
@@ -395,3 +396,36 @@ def test_rough_surfaces_with_a_floor_read_e_wet_where_their_mean_planes_still_ov
         e_wet[model] = c.e_wet
     assert e_wet["reynolds"] == pytest.approx(e_wet["jfo"], abs=1e-5)
     assert 0.0 < e_wet["reynolds"] < 1.0
+
+
+def test_a_jfo_film_that_refills_after_turning_back_reads_e_wet_where_it_crossed_x_ref():
+    """A JFO film at St 3, eps 1e-2, Pi 1e-5 keeps its cavity open while the spheres pass x_ref
+    (= x0, where the approach speed is 1), reach their largest separation and turn back: the
+    coupled phase ends beyond x_ref with V > 0. e_wet is the speed where the rows crossed x_ref
+    outwards (interpolated between the two rows either side). The rigid departure from the
+    turned-back end gave 0.43, above the largest separation speed v_r 0.19."""
+    c = collide(Physics(St=3.0, eps=1e-2, Pi=1e-5, cavitation="jfo"), accuracy="fast")
+    assert c.ok, c.message
+    coupled = c.series["phase"] == 1
+    x, v = c.series["X"][coupled], c.series["V"][coupled]
+    x_ref = c.x0_over_x1 * c.x_ref_x0
+    assert x[-1] > x_ref and v[-1] > 0.0  # the case: ended beyond x_ref, turned back
+    k = np.nonzero((x[1:] > x_ref) & (x[:-1] <= x_ref) & (v[1:] < 0.0))[0][-1]
+    crossing = -np.interp(x_ref, x[k:k + 2], v[k:k + 2])
+    assert c.e_wet == pytest.approx(crossing, rel=1e-12)  # the same interpolation, in other words
+    assert c.e_wet <= c.v_r
+
+
+@pytest.mark.parametrize("beta", [0.0, 2.0, 5.0])
+def test_e_wet_is_never_above_the_largest_separation_speed(beta):
+    """With x_ref = x0 the approach speed there is 1, so e_wet is a separation speed the spheres
+    had on the way out, at most v_r, the largest. JFO films at St 3 and 5, eps 1e-2 and 1e-3,
+    Pi 1e-4 and 1e-5: 6 of these 24 read e_wet from the end of a coupled phase that had turned
+    back beyond x_ref, up to 0.65 against v_r 0.24 (beta 5)."""
+    for st, eps, pi in itertools.product((3.0, 5.0), (1e-2, 1e-3), (1e-4, 1e-5)):
+        fields = dict(St=st, eps=eps, Pi=pi, cavitation="jfo")
+        if beta:
+            fields["beta"] = beta
+        c = collide(Physics(**fields), accuracy="fast")
+        assert c.ok, (fields, c.message)
+        assert c.e_wet <= c.v_r * (1.0 + 1e-12), (fields, c.e_wet, c.v_r)
