@@ -219,7 +219,11 @@ def energy_violation(result) -> str:
     above ``ENERGY_CLOSURE_LIMIT``, or a speed ratio (``v_r``, ``e_wet``, ``e_far``) above what
     the energy at the start allows, ``sqrt(1 + start_strain_energy + ENERGY_CLOSURE_LIMIT)``
     (no term of the model adds energy: the film, the outer flow and the solids only take it;
-    ``x_ref >= x0``, so the approach speed an ``e`` divides by is at least ``v0``)."""
+    ``x_ref >= x0``, so the approach speed an ``e`` divides by is at least ``v0``); or ``e_wet``
+    above the largest separation speed ``v_r`` over the approach speed at ``x_ref``, by more
+    than ``ENERGY_CLOSURE_LIMIT`` of it: ``e_wet`` is a speed the spheres had on the way out
+    (a departure read from a coupled phase that had turned back gave twice ``v_r``, stored as
+    ok: docs/solver.md, Versions, 1.15.4)."""
     why = []
     closure = result.energy_error
     if not closure <= ENERGY_CLOSURE_LIMIT:  # NaN too
@@ -231,6 +235,10 @@ def energy_violation(result) -> str:
         value = float(getattr(result, name))
         if value > bound:
             why.append(f"{name} = {value:.4g} above {bound:.4g}")
+    approach = result.St_ref / result.St  # the approach speed at x_ref, units v0
+    if result.e_wet * approach > result.v_r * (1.0 + ENERGY_CLOSURE_LIMIT):
+        why.append(f"e_wet = {result.e_wet:.4g} above the largest separation speed "
+                   f"v_r = {result.v_r:.4g} over the approach speed at x_ref ({approach:.4g})")
     return "; ".join(why)
 
 

@@ -60,11 +60,15 @@ def test_a_rough_film_at_rest_has_no_cavity_and_repeats_exactly_in_another_proce
 
 def test_a_result_that_breaks_the_energy_balance_is_not_ok():
     """``check_energy`` turns an ok result whose closure error or speed ratios exceed what the
-    energy at the start allows into ``unphysical``, with the reason and no observables left."""
+    energy at the start allows, or whose ``e_wet`` exceeds the largest separation speed (with
+    ``x_ref = x0`` the approach speed there is 1), into ``unphysical``, with the reason and no
+    observables left."""
     good = collide(Physics(St=10.0, eps=1e-4), accuracy="fast")
     assert good.status == "ok" and energy_violation(good) == ""
+    assert 0.0 < good.v_r < 0.6  # so that 1.5 v_r is within the energy's bound
     for name, value, word in (("energy_error", 0.5, "closure"), ("v_r", 1.2, "v_r"),
                               ("e_wet", 1.1, "e_wet"), ("e_far", math.inf, "e_far"),
+                              ("e_wet", 1.5 * good.v_r, "largest separation speed"),
                               ("energy_error", math.nan, "closure")):
         bad = collide(Physics(St=10.0, eps=1e-4), accuracy="fast")
         setattr(bad, name, value)
