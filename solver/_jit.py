@@ -287,9 +287,10 @@ def _self_contained_module(library):
     in, as numba's libraries are (the caller's machine code, which numba may cache, must hold
     all it runs). The solver's entries link ``_OwnCode`` instead."""
     if library._self_contained is None:
-        _environments_set(_closure(library))
+        closure = _closure(library)
+        _environments_set(closure)
         module = _OwnCode(library)._get_module_for_linking().clone()
-        for lib in _closure(library)[1:]:
+        for lib in closure[1:]:
             module.link_in(_as_linked(lib)._get_module_for_linking(), preserve=True)
         library._self_contained = module
     return library._self_contained
@@ -424,7 +425,7 @@ class _CalledFromCompiledCode(AnalysisPass):
     def run_pass(self, state):
         if getattr(state.library, "_inner_callees", None) is None:
             return False
-        call = _PythonCall(state.func_id.func, state.locals, state.flags)
+        call = _PythonCall(state.func_id.func, state.locals, state.flags, tuple(state.args))
         state.targetctx.insert_user_function(call, state.cr.fndesc, [state.library])
         state.library._environment = state.cr.env
         state.library._environment_set = False
@@ -464,16 +465,16 @@ class _PythonCall:
     compiled function then goes into that table, so later calls run it as directly as they ran
     the inner function's own machine code before."""
 
-    def __init__(self, py_func, locals, flags):
+    def __init__(self, py_func, locals, flags, signature):
         self._py_func = py_func
+        self.signature = signature  # the argument types
         self._locals = dict(locals)
         self._flags = flags.copy()
         for flag in ("no_cpython_wrapper", "no_cfunc_wrapper", "no_compile"):
             setattr(self._flags, flag, False)
         self._twin = None
         self._lock = threading.Lock()
-        self.dispatcher = None  # set by _added_for_compiled_callers, with the signature
-        self.signature = None
+        self.dispatcher = None  # set by _added_for_compiled_callers
 
     def __call__(self, *args):
         with self._lock:
@@ -508,8 +509,7 @@ def _added_for_compiled_callers(self, cres):
     if not isinstance(cres.entry_point, _PythonCall):
         return _add_overload(self, cres)
     cres.entry_point.dispatcher = self
-    cres.entry_point.signature = tuple(cres.signature.args)
-    self.overloads[cres.entry_point.signature] = cres
+    self.overloads[tuple(cres.signature.args)] = cres
 
 
 def _save_if_self_contained(save, sig, cres):

@@ -519,7 +519,7 @@ def _wet_restitution(physics, shortcuts, cols, x_ref):
             j = int(inside[-1])
     speed = pieces.crossing_speed(x_c, v_c, x_ref) if x_c[j] <= 0.0 else None
     if speed is not None:
-        return speed / (rigid.impact_stokes(physics.St, physics.x_start, x_ref) / physics.St)
+        return rigid.restitution_of_speed(speed, physics, x_ref)
     if shortcuts.reader is not None:
         return shortcuts.reader.restitution(physics, x_c, v_c, j, x_ref, cols)
     return rigid.restitution(x_c[j], v_c[j], physics, x_ref)

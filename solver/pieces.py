@@ -191,14 +191,15 @@ def _cavity_restitution(physics, x_c, v_c, j, x_ref, cols):
     if cavitation.exact_for(physics):
         return cavitation.restitution(x_c[j], v_c[j], physics, x_ref)
     open_cavity = cols["cavity_radius"] + cols["void_volume"]
-    st_ref = rigid.impact_stokes(physics.St, physics.x_start, x_ref) / physics.St
     if not np.any(open_cavity[j:] > 0.0):  # full from row j on: the classic departure
-        return rigid.departure_speed(x_c[j], v_c[j], physics.St, x_ref) / st_ref
+        return rigid.restitution_of_speed(rigid.departure_speed(x_c[j], v_c[j], physics.St, x_ref),
+                                          physics, x_ref)
     speed = crossing_speed(x_c, v_c, x_ref)
     if speed is not None:
-        return speed / st_ref
+        return rigid.restitution_of_speed(speed, physics, x_ref)
     last = len(x_c) - 1
-    return rigid.departure_speed(x_c[last], v_c[last], physics.St, x_ref) / st_ref
+    return rigid.restitution_of_speed(
+        rigid.departure_speed(x_c[last], v_c[last], physics.St, x_ref), physics, x_ref)
 
 
 def _observe_cavity(result, cols, tau, blocks):

@@ -142,12 +142,12 @@ def restitution(x_from, v_from, physics, x_ref):
     (``speed_at``) over the approach speed there, ``1 + ln(x_ref/x0)/St`` (the approach is in
     compression, where the floor never acts: the classic rigid approach, rigid.impact_stokes).
     A state still approaching (``v_from >= 0``) creeps to rest: 0."""
-    from .rigid import impact_stokes
+    from .rigid import restitution_of_speed
 
     if v_from >= 0.0:
         return 0.0
-    speed = speed_at(x_from, -v_from, physics.St, physics.Pi, x_ref)
-    return speed / (impact_stokes(physics.St, physics.x_start, x_ref) / physics.St)
+    return restitution_of_speed(speed_at(x_from, -v_from, physics.St, physics.Pi, x_ref),
+                                physics, x_ref)
 
 
 def exact_for(physics) -> bool:

@@ -122,9 +122,7 @@ def restitution(x_from, v_from, physics, x_ref):
     differently (model/cavitation.py)."""
     if not departs_rigidly(physics):
         raise NotImplementedError(f"no departure model for non-classic physics {physics}")
-    x_start = physics.x_start
-    speed = departure_speed(x_from, v_from, physics.St, x_ref)
-    return speed / (impact_stokes(physics.St, x_start, x_ref) / physics.St)
+    return restitution_of_speed(departure_speed(x_from, v_from, physics.St, x_ref), physics, x_ref)
 
 
 def restitution_from_rest(ln_x_e, physics, x_ref):
@@ -132,7 +130,13 @@ def restitution_from_rest(ln_x_e, physics, x_ref):
     same closed form, ``x_e`` fixing the whole rigid departure."""
     if not departs_rigidly(physics):
         raise NotImplementedError(f"no departure model for non-classic physics {physics}")
-    speed = departure_speed_from_rest(ln_x_e, physics.St, x_ref)
+    return restitution_of_speed(departure_speed_from_rest(ln_x_e, physics.St, x_ref), physics,
+                                x_ref)
+
+
+def restitution_of_speed(speed, physics, x_ref):
+    """A separation speed at ``x_ref`` (units v0) over the approach speed there,
+    ``St_ref / St`` (``impact_stokes``): the restitution every departure model reports."""
     return speed / (impact_stokes(physics.St, physics.x_start, x_ref) / physics.St)
 
 
