@@ -15,6 +15,10 @@
   the summation order depend on how a kernel was compiled, so freshly compiled and cache-loaded
   code differed in the last digits (the elastic product uses BLAS instead, linalg.matvec).
 - ``error_model="numpy"``: division by zero gives inf (checked by the caller), not an exception.
+- ``filled(shape, value)`` instead of ``np.zeros``, ``np.ones`` and ``np.full`` in compiled code:
+  numba compiles each of those per form of its arguments, with the allocation it calls
+  (``np.empty``) in a form of its own, and a fill: 23 such compiles for the solver's calls;
+  ``filled`` allocates as the solver's own ``np.empty`` calls do (6 compiles in all).
 - ``copy_into`` instead of ``a[...] = b`` between arrays in compiled code: numba's slice
   assignment from an array carries a shape-mismatch error whose message is formatted in compiled
   code (``numba.np.arrayobj.raise_with_shape_context``), and its string machinery, linked into
@@ -77,11 +81,13 @@ from pathlib import Path
 
 import llvmlite.binding as llvm
 import numba
+import numpy as np
 from numba.core import codegen, compiler, environment, registry, typed_passes
 from numba.core import dispatcher as numba_dispatcher
 from numba.core.caching import FunctionCache
 from numba.core.compiler_machinery import AnalysisPass, register_pass
 from numba.core.runtime import rtsys
+from numba.extending import overload
 
 FASTMATH = {"nsz", "arcp", "contract", "afn"}
 
@@ -573,6 +579,34 @@ def copy_into(dst, src):
     flat_src = src.reshape(src.size)
     for i in range(flat_src.size):
         flat_dst[i] = flat_src[i]
+
+
+def filled(shape, value):
+    """A new array of ``shape`` (an int or a tuple of ints) holding ``value`` everywhere, float64,
+    int64 or bool as ``value`` is: ``np.full(shape, value)``. In compiled code it is numba's
+    ``np.empty`` in the forms the solver's own calls take (the reason is in the module
+    docstring)."""
+    return np.full(shape, value)
+
+
+@overload(filled)
+def _filled(shape, value):
+    kind = numba.types.unliteral(value)
+    if isinstance(kind, numba.types.Float):
+        def impl(shape, value):
+            out = np.empty(shape)
+            out[...] = value
+            return out
+
+        return impl
+    dtype = np.bool_ if isinstance(kind, numba.types.Boolean) else np.int64
+
+    def impl(shape, value):
+        out = np.empty(shape, dtype=dtype)
+        out[...] = value
+        return out
+
+    return impl
 
 
 # the signals whose Python handlers must not run inside compiled code (Ctrl-C; SIGTERM, which

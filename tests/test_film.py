@@ -14,7 +14,7 @@ import pytest
 
 from solver import Physics
 from solver.collision import scene_grid
-from solver.integration.linalg import lu_factor, lu_solve, lu_solve_rows, matvec
+from solver.integration.linalg import lu_factor, lu_solve, lu_solve_rows, matmul, matvec
 from solver.model import cavity_step, step
 from solver.model.film import gap
 from solver.model.state import Film, Step
@@ -193,6 +193,38 @@ def test_compiled_linear_algebra_matches_numpy():
         np.testing.assert_allclose(sols, np.linalg.solve(a, rows.T).T, rtol=1e-11, atol=1e-13)
     singular = np.zeros((4, 4))
     assert not lu_factor(singular, np.empty(4, dtype=np.int32))
+
+
+def test_matmul_is_numbas_product_to_the_bit():
+    """A rough film's contact multiplies two matrices with ``linalg.matmul`` (BLAS dgemm called as
+    numba's ``a @ b`` calls it) instead of numba's product: the same sums, so every number is
+    the same, for the shapes the contact makes (a few held cells against N + 1 columns) and
+    square ones."""
+    import numba
+
+    product = numba.njit(lambda a, b: a @ b)
+    rng = np.random.default_rng(5)
+    for rows, inner, cols in ((5, 1, 6), (3, 2, 4), (100, 37, 101), (130, 130, 131)):
+        a, b = rng.standard_normal((rows, inner)), rng.standard_normal((inner, cols))
+        out = np.empty((rows, cols))
+        matmul(a, b, out)
+        assert np.array_equal(out, product(a, b))
+
+
+def test_filled_allocates_what_np_full_does_in_compiled_code():
+    """``filled`` (solver/_jit.py) replaces ``np.zeros``, ``np.ones`` and ``np.full`` in compiled
+    code: the dtype follows the value (float64, int64, bool), for an int or a tuple shape."""
+    import numba
+
+    from solver._jit import filled
+
+    made = numba.njit(lambda n: (filled(n, 0.0), filled((n, 2), np.nan), filled(n, 2**40),
+                                 filled(n, True), filled(1, 1e-12)))(3)
+    expected = (np.zeros(3), np.full((3, 2), np.nan), np.full(3, 2**40), np.ones(3, bool),
+                np.array([1e-12]))
+    for got, want in zip(made, expected):
+        assert got.dtype == want.dtype and got.shape == want.shape
+        np.testing.assert_array_equal(got, want)
 
 
 def test_lowrank_update_solves_the_matrix_with_replaced_rows_and_columns():

@@ -41,7 +41,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._jit import copy_into, entry, hook, jit, leaf
+from .._jit import copy_into, entry, filled, hook, jit, leaf
 from ..model import step as model
 from ..model.state import Step, array_record
 from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
@@ -190,7 +190,7 @@ def _rows(rows, cols):
     """Rows of the series or the profiles, NaN until written: a column a row never wrote reads
     NaN, never uninitialised memory (it had stored a rough film's cavity radius as 6e-314 and
     619, different from run to run)."""
-    return np.full((rows, cols), np.nan)
+    return filled((rows, cols), np.nan)
 
 
 @jit
@@ -316,8 +316,8 @@ def _factorisation(m):
     return Factorisation(np.empty((m, m)), np.empty(m, dtype=np.int32), np.empty((m, m)),
                          np.empty((m, m)), np.empty((r, m)), np.empty((r, m)), np.empty((r, m)),
                          np.empty(r * r), np.empty(r, dtype=np.int32),
-                         np.empty(MAX_SLOTS, dtype=np.int64), np.zeros(1, dtype=np.int64),
-                         np.empty(r), np.zeros(1, dtype=np.bool_), np.ones(1))
+                         np.empty(MAX_SLOTS, dtype=np.int64), filled(1, 0), np.empty(r),
+                         filled(1, False), filled(1, 1.0))
 
 
 @jit
@@ -326,8 +326,8 @@ def _work(n):
     m = n + 2
     return Work(np.empty(m), np.empty(m), np.empty(m), np.empty(n), np.empty(n),
                 np.empty(n - 1), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
-                np.empty((n, 3)), np.zeros(SLOTS), np.zeros((4, SLOTS)),
-                np.zeros(len(COUNTERS), dtype=np.int64))
+                np.empty((n, 3)), filled(SLOTS, 0.0), filled((4, SLOTS), 0.0),
+                filled(len(COUNTERS), 0))
 
 
 @jit
@@ -903,10 +903,10 @@ def _history(grid, start, max_order):
     h = np.empty((slots, n))
     model.start_gap(s, grid.influence, start.x, start.p, w, h[0])
     _fill(h, h[0])
-    order = np.zeros(2, dtype=np.int64)
+    order = filled(2, 0)
     order[0] = min(max_order, 2)
-    return History(y, h, np.full((slots, n), np.nan), np.full(slots, start.t),
-                   np.full(slots, np.nan), np.ones(1, dtype=np.int64), order)
+    return History(y, h, filled((slots, n), np.nan), filled(slots, start.t),
+                   filled(slots, np.nan), filled(1, 1), order)
 
 
 @jit

@@ -45,8 +45,8 @@ matrix, ``D = dp_a/dH <= 0``, and the derivatives follow by the implicit functio
 
 import numpy as np
 
-from .._jit import jit
-from ..integration.linalg import lu_factor, lu_solve, matvec
+from .._jit import filled, jit
+from ..integration.linalg import lu_factor, lu_solve, matmul, matvec
 from ..physics import ASPERITY_K, PI, ROUGHNESS, ST
 
 # Int_0^D (D - t)^1.5 (3/4) t (2 - t) dt = (2/105) D^3.5 (9 - 2 D): the summits' parabolic
@@ -218,7 +218,7 @@ def _implicit_gap(s, influence, x, c, h_set, phys, idx, pa, w, h):
                 for b in range(m):
                     mat[a, b] = -kcc[a, b] * dc[b]
                 mat[a, a] += 1.0
-            if not np.all(np.isfinite(mat)) or not lu_factor(mat, piv):
+            if not _all_finite(mat) or not lu_factor(mat, piv):
                 return False
         dh = lu_solve(mat, piv, rhs)
         step = 0.0
@@ -241,6 +241,17 @@ def _implicit_gap(s, influence, x, c, h_set, phys, idx, pa, w, h):
         for a in range(m):
             w[i] += c * influence[i, idx[a]] * pa[idx[a]]
     return converged
+
+
+@jit
+def _all_finite(matrix):
+    """Whether every entry of ``matrix`` (2-D) is finite: ``np.all(np.isfinite(matrix))`` without
+    the array of flags it allocates (and numba's compile of the ufunc and of ``np.all``)."""
+    for i in range(matrix.shape[0]):
+        for j in range(matrix.shape[1]):
+            if not np.isfinite(matrix[i, j]):
+                return False
+    return True
 
 
 @jit
@@ -295,8 +306,8 @@ def contact_derivatives(influence, weight, slope, c, held, m, k_eff, dh_dx, forc
             rhs[a, j] = c * influence[idx[a], j]
         rhs[a, n] = 1.0
     piv = np.empty(m, dtype=np.int32)
-    z = np.full((m, n + 1), np.nan)  # Z, then z (NaN: a singular or non-finite contact)
-    if np.all(np.isfinite(mat)) and lu_factor(mat, piv):
+    z = filled((m, n + 1), np.nan)  # Z, then z (NaN: a singular or non-finite contact)
+    if _all_finite(mat) and lu_factor(mat, piv):
         col = np.empty(m)
         for j in range(n + 1):
             for a in range(m):
@@ -304,14 +315,15 @@ def contact_derivatives(influence, weight, slope, c, held, m, k_eff, dh_dx, forc
             lu_solve(mat, piv, col)
             for a in range(m):
                 z[a, j] = col[a]
-    if not np.all(np.isfinite(z)):
+    if not _all_finite(z):
         k_eff[:, :] = np.nan
         return np.nan
     kd = np.empty((n, m))
     for i in range(n):
         for a in range(m):
             kd[i, a] = c * influence[i, idx[a]] * d[a]
-    corr = kd @ z
+    corr = np.empty((n, n + 1))
+    matmul(kd, z, corr)
     force_dx = 0.0
     for a in range(m):
         wd = weight[idx[a]] * d[a]

@@ -11,7 +11,7 @@ pressures of the last gap computed, the unloading's set state, the film pressure
 
 import numpy as np
 
-from .._jit import copy_into, hook, jit
+from .._jit import copy_into, filled, hook, jit
 from ..observables import SERIES_INDEX
 from ..physics import E_DRY, PI, ROUGHNESS, ST
 from .cavity_step import held_cells
@@ -132,13 +132,13 @@ def coupling(grid, phys, film):
     (contact.contact_derivatives)."""
     n = grid.s.size
     if not on(phys):
-        return Coupling(grid.influence, np.ones(n), grid.weight, 0.0, np.empty(0))
+        return Coupling(grid.influence, filled(n, 1.0), grid.weight, 0.0, np.empty(0))
     c, slope = film.contact.load_scale[0], film.contact.slope
     held = _held(film, phys)
     dp_dh = np.empty(n)
     m = contact_slopes(slope, held, dp_dh)
     if m == 0 and c == 1.0:
-        return Coupling(grid.influence, np.ones(n), grid.weight, 0.0, dp_dh)
+        return Coupling(grid.influence, filled(n, 1.0), grid.weight, 0.0, dp_dh)
     k_eff = np.empty((n, n))
     dh_dx = np.empty(n)
     force_dp = np.empty(n)

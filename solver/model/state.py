@@ -28,7 +28,7 @@ import numpy as np
 from numba.core import types
 from numba.experimental import structref
 
-from .._jit import jit
+from .._jit import copy_into, filled, jit
 
 
 def array_record(name: str, fields: tuple, doc: str, module: str = __name__):
@@ -133,19 +133,11 @@ class Coupling(NamedTuple):
 
 
 @jit
-def _one(value):
-    out = np.empty(1)
-    out[0] = value
-    return out
-
-
-@jit
 def new_film(q):
     """The film's state at the start (``q`` the face fluxes of the initial state): no cavity,
     full cells, solids loading."""
     cells_n = q.size
     n = cells_n + 1
-    theta = np.ones(cells_n)
     # Absolute part of the pressure error scale. With a floor the film carries almost no
     # pressure once it has cavitated (|P| ~ Pi over the whole rebound), and a scale relative to
     # the instantaneous pressure made the steps collapse to 1e-9 where the last full cells at the
@@ -153,13 +145,15 @@ def new_film(q):
     # (both in the norm on their own), so they count as absolute below a fraction of the largest
     # pressure seen so far, from the film's first cavity on (step.record). The classic film (and
     # a film that never cavitates) keeps its instantaneous scale.
-    cavity = Cavity(np.zeros(cells_n, dtype=np.bool_), np.zeros(cells_n, dtype=np.bool_),
-                    np.zeros(cells_n, dtype=np.bool_), np.zeros(cells_n, dtype=np.bool_),
-                    np.zeros(cells_n, dtype=np.bool_), theta, theta.copy(), np.zeros(cells_n), np.zeros(cells_n),
-                    q.copy(), _one(0.0), _one(1e-12), _one(0.0), _one(0.0),
-                    np.full(cells_n, NEVER_SWITCHED, dtype=np.int64))
-    contact = Contact(np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
-                      np.zeros(n), np.zeros(n), _one(1.0), _one(0.0),
-                      _one(0.0), np.zeros(n, dtype=np.bool_), np.zeros(n),
-                      np.zeros(n, dtype=np.int64))
+    q_start = np.empty(cells_n)
+    copy_into(q_start, q)
+    cavity = Cavity(filled(cells_n, False), filled(cells_n, False), filled(cells_n, False),
+                    filled(cells_n, False), filled(cells_n, False), filled(cells_n, 1.0),
+                    filled(cells_n, 1.0), filled(cells_n, 0.0), filled(cells_n, 0.0), q_start,
+                    filled(1, 0.0), filled(1, 1e-12), filled(1, 0.0), filled(1, 0.0),
+                    filled(cells_n, NEVER_SWITCHED))
+    contact = Contact(filled(n, 0.0), filled(n, 0.0), filled(n, 0.0), filled(n, 0.0),
+                      filled(n, 0.0), filled(n, 0.0), filled(n, 0.0), filled(1, 1.0),
+                      filled(1, 0.0), filled(1, 0.0), filled(n, False), filled(n, 0.0),
+                      filled(n, 0))
     return Film(cavity, contact)
