@@ -53,6 +53,13 @@ ENERGY_CLOSURE_LIMIT = 0.02
 
 DIMPLE_DEPTH = 1e-3  # x1 units: a central gap this much above the minimum counts as a dimple
 
+# x1 units: a failed solve whose last smallest gap is below this had drained the film to
+# round-off (a gap of 1e-12 x1 is far below a molecule at any x1 the model takes): the solids
+# met with nothing in the model to hold them apart, which a finer accuracy cannot mend. A slip
+# length of tens of x1 does it (docs/model.md, "Slip": at St 6, eps 1e-8, slip length 3 the
+# gap fell to 1e-20 before the steps underflowed).
+DRAINED_GAP = 1e-12
+
 # A film whose viscosity rises this much over the approach is reported as solidified: it flows
 # 1e4 times slower than at ambient pressure, so over a contact of O(10) x1/v0 the liquid trapped
 # at the axis moves less than 1e-3 of what the classic film moves there: a frozen ("glassy")
@@ -212,6 +219,16 @@ def _pair(result, head, x_ref_x0, outer):
         _approach_viscosity(result)
     elif coarse.status != "ok":  # its status alone: its message's advice is for a failure
         result.message = f"not extrapolated: the half grid's solve failed ({coarse.status})"
+
+
+def _drained(h_min) -> str:
+    """What a failed solve's message adds when its last accepted state had drained the film to
+    round-off (``DRAINED_GAP``): the cause, which no accuracy mends; "" otherwise."""
+    if not (h_min.size and h_min[-1] < DRAINED_GAP):
+        return ""
+    return (f"; the film had drained to round-off (smallest gap {h_min[-1]:.2g} x1) and nothing "
+            "in the model held the surfaces apart (asperities would carry such a contact; "
+            "docs/model.md, \"Slip\")")
 
 
 def energy_violation(result) -> str:
@@ -443,7 +460,8 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0):
             setattr(result, flag, None)
         result.series = _concat(blocks)
         result.message = (f"{message} (St={stokes:g}, eps={physics.eps:g}, after "
-                          f"{counters[stepper.STEPS]} steps at tau={t_c[-1] * tau_per_t:.4g})")
+                          f"{counters[stepper.STEPS]} steps at tau={t_c[-1] * tau_per_t:.4g})"
+                          f"{_drained(cols['H_min'])}")
         return result
 
     ln_x_e, resting = _depart(physics, shortcuts, cols, blocks)

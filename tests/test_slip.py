@@ -118,6 +118,32 @@ def test_a_slow_approach_rests_where_the_potential_says():
         float(slip.potential(x0, c)) - stokes, rel=1e-12)
 
 
+def test_an_approach_that_rests_reaches_its_rest_only_after_infinite_time():
+    """The approach's last sample at its rest has speed 0 and time inf. In rounding the speed
+    there came out just above 0, and the quadrature of ``dX/|V|`` towards it met a speed of
+    exactly 0: ``collide`` raised ZeroDivisionError at every preset (St 2, eps 1e-6, slip
+    length 3, found by a hostile scan); it is a rigid collision that rests, ``x_e`` where the
+    potential says."""
+    physics = Physics(St=2.0, eps=1e-6, slip_length=3.0)
+    c = slip.mobility_gap(physics)
+    path = slip.approach(physics.x_start, physics.St, c, switch=1e-3)
+    assert path.event == "rest" and path.v[-1] == 0.0 and path.t[-1] == math.inf
+    assert np.all(np.isfinite(path.t[:-1])) and np.all(np.diff(path.t[:-1]) > 0)
+    result = collide(physics, accuracy="fast")
+    assert result.status == "ok" and result.model == "rigid" and result.e_wet == 0.0
+    assert result.ln_x_e_x1 == pytest.approx(
+        slip.rest_separation(physics.x_start, 1.0, physics.St, c), rel=1e-12)
+
+
+def test_a_film_drained_to_round_off_says_why_the_solve_failed():
+    """A slip length of tens of ``x1`` drains the film to round-off and the steps underflow
+    (docs/model.md, "Slip"); the failure's message names that cause, which no accuracy mends,
+    instead of only the step's underflow."""
+    result = collide(Physics(St=10.0, eps=1e-4, slip_length=30.0), accuracy="fast")
+    assert result.status == "step_underflow"
+    assert "drained to round-off" in result.message and math.isnan(result.e_wet)
+
+
 def test_the_rigid_departure_comes_to_rest_or_hands_back():
     """A slow departure is sampled to 0.99 of the way to its rest (in ln X); a fast one hands
     back to the classic departure 30 e-folds out, where the two rest separations agree to

@@ -226,7 +226,14 @@ class RigidSlipPath:
 
 def _path(t_from, x_from, v_from, stokes, c, xs, event):
     v = velocity(xs, x_from, v_from, stokes, c)
-    t = t_from + elapsed_time(xs, x_from, v_from, stokes, c)
+    if event == "rest" and xs.size > 1 and xs[-1] < xs[0]:
+        # the approach's last sample is its rest, which the path reaches only as t -> inf: in
+        # rounding its speed there can come out just above 0, and the quadrature towards it
+        # then met a speed of exactly 0 (ZeroDivisionError at St 2, eps 1e-6, slip length 3)
+        v[-1] = 0.0
+        t = t_from + np.append(elapsed_time(xs[:-1], x_from, v_from, stokes, c), math.inf)
+    else:
+        t = t_from + elapsed_time(xs, x_from, v_from, stokes, c)
     p_axis = rigid_pressure(0.0, xs, v, c)
     w0 = np.array([axis_deflection(xi, vi, c) for xi, vi in zip(xs, v)])
     return RigidSlipPath(t, xs, v, v / xs * force_factor(xs, c), p_axis, w0, event)
