@@ -204,6 +204,22 @@ def test_a_rough_collision_that_sticks_ends_at_rest_on_its_asperities():
     assert abs(result.series["V"][-1]) < contact.REST_SPEED
 
 
+def test_a_rough_collision_at_rest_in_its_dent_ends_there():
+    """St 30 with e_dry 0.5: after a bounce the spheres come to rest with their mean planes
+    overlapping (``X < 0``: the permanent set's dent) and every gap beyond ``CONTACT_MARGIN``
+    roughnesses, the solids' energy spent: nothing parts them, and no rigid departure starts
+    from ``X <= 0``. The coupled phase ran on until its steps underflowed, at every preset (3 of
+    96 rough scenes of a fast panel, found by a hostile scan); it ends at rest, and they stick."""
+    physics = Physics(St=30.0, eps=1e-4, roughness=1.0, e_dry=0.5)
+    result = collide(physics, accuracy="fast", save_profiles=False)
+    assert result.status == "ok", result.message
+    assert result.e_wet == 0.0 and result.v_r > 0.0
+    series = result.series
+    assert series["X"][-1] <= 0.0 and abs(series["V"][-1]) < contact.REST_SPEED
+    assert series["E_s"][-1] + series["E_a"][-1] < contact.REST_ENERGY
+    assert math.exp(result.ln_x_e_x1) > contact.CONTACT_MARGIN * physics.roughness
+
+
 def test_stiffer_asperities_converge_to_the_hard_cut_off():
     """In the rigid limit the closest approach tends to the roughness as the asperities stiffen,
     and the restitution to the hard cut-off's closed form. The layer's penetration 1 - h_m/sigma

@@ -57,6 +57,12 @@ SUMMITS = 2.0 / 105.0
 CONTACT_MARGIN = 2.0
 # a film near contact whose spheres move slower than this (in v0) rests on its asperities
 REST_SPEED = 1e-6
+# ... and so does a film at rest whose mean planes overlap (X <= 0, a permanent set's dent) once
+# the solids hold less energy than the spheres' at REST_SPEED: nothing is left to part them, and
+# no rigid departure starts from X <= 0 (St 30, eps 1e-4, roughness 1, e_dry 0.5: the spheres
+# at rest in their dent, V 5e-13, the strain energy 1e-26, gaps 2.5 roughnesses: the phase ran on
+# until its steps underflowed, at every preset)
+REST_ENERGY = REST_SPEED**2
 MAX_ITERATIONS = 60
 GAP_TOL = 1e-12  # Newton tolerance of the contact gap, of sigma: far below any step tolerance
 
@@ -342,16 +348,18 @@ FREE, HOLD, REST = 0, 1, 2
 
 
 @jit
-def contact_state(h, v, phys):
+def contact_state(h, x, v, stored, phys):
     """``HOLD`` while the rigid departure cannot start yet (some gap within ``CONTACT_MARGIN``
     roughnesses and the spheres moving), ``REST`` when they are near contact and at rest
     (``|V| < REST_SPEED``: they stick on their asperities, whatever their deformation, which a
-    permanent set keeps), ``FREE`` otherwise."""
+    permanent set keeps), or at rest in a dent (``X <= 0``) with less than ``REST_ENERGY`` stored
+    in the solids (``stored``), ``FREE`` otherwise."""
     near = False
     for i in range(h.size):
         near = near or h[i] < CONTACT_MARGIN * phys[ROUGHNESS]
     if not near:
-        return FREE
+        dented_at_rest = x <= 0.0 and abs(v) < REST_SPEED and stored < REST_ENERGY
+        return REST if dented_at_rest else FREE
     return REST if abs(v) < REST_SPEED else HOLD
 
 

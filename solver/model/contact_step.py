@@ -25,7 +25,7 @@ from .state import Coupling
 CONTACT_SHARE = 0.01
 
 _E_A, _LOST, _F_A = SERIES_INDEX["E_a"], SERIES_INDEX["solid_loss"], SERIES_INDEX["F_contact"]
-_V = SERIES_INDEX["V"]
+_V, _X, _E_S = SERIES_INDEX["V"], SERIES_INDEX["X"], SERIES_INDEX["E_s"]
 
 
 @jit
@@ -186,7 +186,7 @@ def record(row, grid, h, film, phys):
         return FREE
     row[_F_A] = film_force(grid.weight, contact.pa)
     row[_E_A] = asperity_work(grid.weight, h, contact.load_scale[0], contact.h_set, phys)
-    return contact_state(h, row[_V], phys)
+    return contact_state(h, row[_X], row[_V], row[_E_S] + row[_E_A], phys)
 
 
 @hook
