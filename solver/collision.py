@@ -474,6 +474,8 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0):
         result.e_wet = _wet_restitution(physics, shortcuts, cols, x_ref_x0 * x_start)
         result.e_x0 = result.e_wet if x_ref_x0 == 1.0 else _wet_restitution(
             physics, shortcuts, cols, x_start)
+    if result.e_wet == 0.0:
+        result.message = _drawn_back(physics, cols, x_ref_x0 * x_start) or result.message
     _coupled_observables(result, cols, tau_per_t, ln_x_e, v_c[-1])
     for piece in pieces.PIECES:
         piece.observe(result, cols, t_c * tau_per_t, blocks)
@@ -512,6 +514,23 @@ def _depart(physics, shortcuts, cols, blocks):
         blocks.append(rigid_block(t_tail, x_tail, v_tail, tau_per_t, 2,
                                   lost + (v_rel**2 - v_tail**2)))
     return ln_x_e, False
+
+
+def _drawn_back(physics, cols, x_ref) -> str:
+    """The note of a result that sticks although its coupled phase carried the spheres out
+    past ``x_ref``: the film drew them back inside it before the phase ended (the suction of
+    a film that refills late), so they stick (``e_wet`` 0: ``x_e <= x_ref``; docs/model.md,
+    "Observables"); the note gives the speed they passed ``x_ref`` with, and its ``e``, which a
+    code that resolves the flow beyond ``x_ref`` without that suction would see. "" when they
+    never passed it."""
+    x_c, v_c = cols["X"], cols["V"]
+    speed = pieces.outward_crossing(x_c, v_c, x_ref)
+    if speed is None or x_c[-1] > x_ref:
+        return ""
+    e_out = rigid.restitution_of_speed(speed, physics, x_ref)
+    return (f"the spheres passed x_ref outwards at {speed:.3g} v0 (e {e_out:.3g} there), out to "
+            f"{x_c.max() / x_ref:.3g} x_ref, and the film drew them back inside it before the "
+            "coupled phase ended: they stick (e_wet 0)")
 
 
 def _wet_restitution(physics, shortcuts, cols, x_ref):

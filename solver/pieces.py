@@ -168,18 +168,21 @@ def _floor_departure(physics, x, v, t, lost):
     return x_end, -u_end, t_end, block
 
 
-def crossing_speed(x_c, v_c, x_ref):
+def outward_crossing(x_c, v_c, x_ref):
     """The separation speed ``-V`` with which the coupled phase's rows ``x_c``, ``v_c`` last cross
-    ``x_ref`` outwards, interpolated between the two rows either side; None when they do not
-    end beyond it (moving out, or turned back)."""
-    last = len(x_c) - 1
-    if x_c[last] > x_ref:
-        out = np.nonzero((x_c[1:] > x_ref) & (x_c[:-1] <= x_ref) & (v_c[1:] < 0.0))[0]
-        if out.size:
-            k = int(out[-1])
-            frac = (x_ref - x_c[k]) / (x_c[k + 1] - x_c[k])
-            return float(-(v_c[k] + frac * (v_c[k + 1] - v_c[k])))
-    return None
+    ``x_ref`` outwards, interpolated between the two rows either side; None when they never do."""
+    out = np.nonzero((x_c[1:] > x_ref) & (x_c[:-1] <= x_ref) & (v_c[1:] < 0.0))[0]
+    if not out.size:
+        return None
+    k = int(out[-1])
+    frac = (x_ref - x_c[k]) / (x_c[k + 1] - x_c[k])
+    return float(-(v_c[k] + frac * (v_c[k + 1] - v_c[k])))
+
+
+def crossing_speed(x_c, v_c, x_ref):
+    """``outward_crossing`` where the rows end beyond ``x_ref`` (moving out, or turned back);
+    None otherwise."""
+    return outward_crossing(x_c, v_c, x_ref) if x_c[-1] > x_ref else None
 
 
 def _cavity_restitution(physics, x_c, v_c, j, x_ref, cols):

@@ -416,6 +416,26 @@ def test_a_jfo_film_that_refills_after_turning_back_reads_e_wet_where_it_crossed
     assert c.e_wet <= c.v_r
 
 
+def test_a_jfo_film_that_draws_the_spheres_back_inside_x_ref_sticks_and_says_so():
+    """At St 2.871, eps 1e-2, Pi 1e-4 the JFO film carries the spheres out past x_ref (= x0) at
+    0.12 v0, out to 2.3 x0, and its void draws them back inside x_ref before it refills: the
+    coupled phase ends inside x_ref approaching, they stick (e_wet 0, x_e <= x_ref; docs/
+    model.md, "Observables"). The note gives the speed they passed x_ref with (found by a
+    hostile scan, stored as a bare 0 before). At St 3 they are not drawn back, and e_wet is
+    about that speed: the crossing speed is continuous in St, the verdict is not."""
+    c = collide(Physics(St=2.871, eps=1e-2, Pi=1e-4, cavitation="jfo"), accuracy="fast")
+    assert c.ok and c.e_wet == 0.0 and c.ln_x_e_x1 <= math.log(c.x0_over_x1)
+    coupled = c.series["phase"] == 1
+    x, v = c.series["X"][coupled], c.series["V"][coupled]
+    x_ref = c.x0_over_x1
+    assert x.max() > 2.0 * x_ref and x[-1] < x_ref and v[-1] > 0.0  # out past x_ref and back
+    k = np.nonzero((x[1:] > x_ref) & (x[:-1] <= x_ref) & (v[1:] < 0.0))[0][-1]
+    crossing = -np.interp(x_ref, x[k:k + 2], v[k:k + 2])
+    assert f"passed x_ref outwards at {crossing:.3g} v0" in c.message, c.message
+    escaped = collide(Physics(St=3.0, eps=1e-2, Pi=1e-4, cavitation="jfo"), accuracy="fast")
+    assert escaped.message == "" and crossing < escaped.e_wet < 1.5 * crossing
+
+
 @pytest.mark.parametrize("beta", [0.0, 2.0, 5.0])
 def test_e_wet_is_never_above_the_largest_separation_speed(beta):
     """With x_ref = x0 the approach speed there is 1, so e_wet is a separation speed the spheres
