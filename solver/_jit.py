@@ -18,7 +18,8 @@
 - ``filled(shape, value)`` instead of ``np.zeros``, ``np.ones`` and ``np.full`` in compiled code:
   numba compiles each of those per form of its arguments, with the allocation it calls
   (``np.empty``) in a form of its own, and a fill: 23 such compiles for the solver's calls;
-  ``filled`` allocates as the solver's own ``np.empty`` calls do (6 compiles in all).
+  ``filled`` allocates in the forms the solver's own ``np.empty`` calls take (one more, for
+  bool) and fills in place: 5 compiles.
 - ``copy_into`` instead of ``a[...] = b`` between arrays in compiled code: numba's slice
   assignment from an array carries a shape-mismatch error whose message is formatted in compiled
   code (``numba.np.arrayobj.raise_with_shape_context``), and its string machinery, linked into
