@@ -317,8 +317,10 @@ def handover_separation(physics, numerics):
 
 def rigid_head(physics, numerics) -> RigidHead:
     """The rigid approach of ``physics``: the classic closed form (rigid.py) up to
-    ``handover_separation``, or the rigid approach of the piece the plan gives one
-    (``Piece.rigid_approach``), which stops where the other pieces stop the classic one."""
+    ``handover_separation``, the film there a piece's own where it has one
+    (``Piece.start_pressure``), else the classic film's; or the rigid approach of the piece the
+    plan gives one (``Piece.rigid_approach``), which stops where the other pieces stop the
+    classic one."""
     stokes, x_start, tau_per_t = physics.St, physics.x_start, physics.tau_per_t
     own = plan(physics).approach_piece
     if own is not None:
@@ -341,9 +343,11 @@ def rigid_head(physics, numerics) -> RigidHead:
         x_head = x_start * np.exp(-np.linspace(0.0, math.log(x_start / x_switch), 60))[:-1]
         t_head, v_head = rigid_path(x_start, 1.0, 0.0, stokes, x_head)
         block = rigid_block(t_head, x_head, v_head, tau_per_t, 0, 1.0 - v_head**2)
+    own_start = [f for p in pieces.PIECES
+                 for f in (p.start_pressure(physics, x_switch, v_switch),) if f is not None]
     return RigidHead(x_switch, v_switch, t_switch, False, block,
                      rigid.approach_peaks(x_start, stokes, x_switch),
-                     lambda s: 3.0 * v_switch / (x_switch + s) ** 2)
+                     own_start[0] if own_start else lambda s: 3.0 * v_switch / (x_switch + s) ** 2)
 
 
 def _concat(blocks):

@@ -15,8 +15,8 @@ from scipy import integrate
 
 from solver import Physics
 from solver.model.liquid import (compression_energy, density, kink_departure,
-                                 kirchhoff_difference, log_viscosity, viscosity_ratio,
-                                 volume_difference)
+                                 kirchhoff_difference, log_viscosity, pressure_of_kirchhoff,
+                                 viscosity_ratio, volume_difference)
 
 
 def _phys(**kw):
@@ -157,6 +157,30 @@ def test_table_is_exact_where_its_log_is_linear_and_barus_as_a_table_is_barus():
     for a, b in ((0.2, 1.0), (-1.0, 2.0), (3.0, 3.1)):
         assert kirchhoff_difference(a, b, as_table)[0] == pytest.approx(
             kirchhoff_difference(a, b, barus)[0], rel=1e-13)
+
+
+def test_the_pressure_of_a_kirchhoff_pressure_inverts_the_transform():
+    """``pressure_of_kirchhoff`` (the start of a coupled phase on the classic approach): for
+    Barus the closed form ``P = -ln(1 - beta K)/beta``, and False beyond the ceiling ``1/beta``
+    (a glass gap); for Roelands and a table, the pressure whose Kirchhoff pressure is ``K``."""
+    beta = 3.0
+    k = np.array([0.0, 1e-6, 0.05, 0.2, 0.33, 0.999 * (1.0 / beta)])
+    out = np.empty_like(k)
+    assert pressure_of_kirchhoff(k, _phys(beta=beta), out)
+    # bisection to a few ulps of P, and the fitted integral exact for Barus: 1e-12 relative,
+    # the closed form's own rounding near the ceiling (1 - beta K ~ 1e-3) included
+    np.testing.assert_allclose(out, -np.log1p(-beta * k) / beta, rtol=1e-12, atol=1e-300)
+    # (K reaches 1/beta itself in rounding, at P ~ 12: beyond it there is no pressure)
+    assert not pressure_of_kirchhoff(np.array([0.1, 1.001 / beta]), _phys(beta=beta), out[:2])
+    for phys in (_phys(beta=2.0, viscosity_law="roelands"),
+                 _phys(viscosity_table="0:1, 0.5:3, 1.5:400, 3:2000")):
+        k = np.array([0.01, 0.1, 0.2, 0.3])  # below the table's ceiling, 0.37
+        out = np.empty_like(k)
+        assert pressure_of_kirchhoff(k, phys, out)
+        back = np.array([kirchhoff_difference(0.0, p, phys)[0] for p in out])
+        # K rises with P at 1/mu <= 1: an ulp of P moves K by at most an ulp of its own size
+        np.testing.assert_allclose(back, k, rtol=1e-13)
+        assert np.all(out >= k)  # mu >= mu0 in compression: P >= K
 
 
 def test_kink_departure_is_the_slope_jump_times_the_range():

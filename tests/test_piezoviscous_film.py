@@ -290,10 +290,16 @@ def test_a_tabulated_law_reproduces_the_law_it_tabulates():
     barus = collide(Physics(St=10.0, eps=1e-2, beta=3.0), save_profiles=False)
     two = collide(Physics(St=10.0, eps=1e-2, viscosity_table=f"0:1, 20:{math.exp(60.0)!r}"),
                   save_profiles=False)
-    for name in ("v_r", "h_m_x1", "ln_x_e_x1"):
-        # the same film; the Barus law's own rigid approach hands over elsewhere than the
-        # table's classic one: measured 6e-5 to 3.4e-4, the standard preset's accuracy
-        assert getattr(two, name) == pytest.approx(getattr(barus, name), rel=1e-3), name
+    # the same film from the same start: at eps 1e-2 both start coupled at x0, the table from the
+    # pressure whose Kirchhoff pressure is the classic film's, as the Barus closed form
+    # (pieces.py: _law_start_pressure; from the classic pressure itself, 6e-5 to 3.4e-4 apart,
+    # v_r 0.4 % at St 3). Through the turn they agree to rounding (measured 2.5e-13, 3.5e-13)
+    for name in ("v_r", "h_m_x1"):
+        assert getattr(two, name) == pytest.approx(getattr(barus, name), rel=1e-9), name
+    for name in ("ln_x_e_x1", "e_wet"):
+        # each law reads its own release (tau 19.0 against 19.2), each release with the standard
+        # preset's time error of what follows: measured 3.7e-6 and 2.1e-5
+        assert getattr(two, name) == pytest.approx(getattr(barus, name), rel=1e-4), name
 
 
 def test_with_a_floor_the_step_control_is_the_cavitating_films():

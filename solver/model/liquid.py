@@ -25,14 +25,16 @@ What the film needs from them (model/film.py):
   with the smaller ``g`` through ``expm1``, without the cancellation that ruins the reduced
   pressure ``(1 - exp(-beta P))/beta`` as an unknown once ``beta P ~ 30``;
 - ``density``, for the cells' liquid content ``rho_bar theta H``;
-- ``volume_difference`` (``Int dP / rho_bar``) and ``compression_energy``: the energy terms.
+- ``volume_difference`` (``Int dP / rho_bar``) and ``compression_energy``: the energy terms;
+- ``pressure_of_kirchhoff``, its inverse: the pressure of a rigid film at constant density,
+  whose Kirchhoff pressure is the classic film's (the coupled phase's start).
 """
 
 import math
 
 import numpy as np
 
-from .._jit import entry, leaf
+from .._jit import entry, jit, leaf
 from ..physics import (BETA, DENSITY, DENSITY_LAWS, DH_C1, DH_C2, ROELANDS_PR, ROELANDS_Z, TABLE,
                        TENSION, TENSION_CHOICES, VISCOSITY, VISCOSITY_LAWS)
 
@@ -259,6 +261,47 @@ def compression_energy(p, phys):
     b = c1 + phys[DH_C2]
     y = b * p
     return c1 / (b * b) * (math.log1p(y) - y / (1.0 + y))
+
+
+# halvings of a bracket [lo, hi] in pressure before it is a few ulps wide (pressure_of_kirchhoff)
+_BISECTIONS = 200
+# doublings of a bracket's end before the law is taken not to reach the Kirchhoff pressure
+_DOUBLINGS = 64
+
+
+@entry
+@jit
+def pressure_of_kirchhoff(k, phys, out):
+    """The pressure at each node whose Kirchhoff pressure ``Int_0^P rho_bar/mu_bar dP`` is ``k``,
+    into ``out``: with constant density the rigid film's Reynolds equation in the Kirchhoff
+    pressure is the classic one, so the rigid film of a pressure-dependent liquid has the
+    pressure whose Kirchhoff pressure is the classic ``3 V/(X + s)^2`` (the Barus closed form,
+    model/piezoviscous.py: ``rigid_pressure``, for any law). By bisection on a bracket doubled
+    from ``k`` (the Kirchhoff pressure rises with ``P``). False when some ``k`` lies beyond what
+    the law reaches (a Kirchhoff pressure with a ceiling, ``1/beta`` for Barus: a glass gap)."""
+    for i in range(k.size):
+        target = k[i]
+        lo, hi = min(target, 0.0), max(target, 0.0)
+        for _ in range(_DOUBLINGS):
+            if kirchhoff_difference(0.0, hi, phys)[0] >= target:
+                break
+            lo, hi = hi, 2.0 * hi + 1.0
+        else:
+            return False
+        for _ in range(_DOUBLINGS):
+            if kirchhoff_difference(0.0, lo, phys)[0] <= target:
+                break
+            lo, hi = 2.0 * lo - 1.0, lo
+        for _ in range(_BISECTIONS):
+            mid = 0.5 * (lo + hi)
+            if not lo < mid < hi:
+                break
+            if kirchhoff_difference(0.0, mid, phys)[0] < target:
+                lo = mid
+            else:
+                hi = mid
+        out[i] = 0.5 * (lo + hi)
+    return True
 
 
 @entry
