@@ -586,7 +586,8 @@ def filled(shape, value):
     """A new array of ``shape`` (an int or a tuple of ints) holding ``value`` everywhere, float64,
     int64 or bool as ``value`` is: ``np.full(shape, value)``. In compiled code it is numba's
     ``np.empty`` in the forms the solver's own calls take (the reason is in the module
-    docstring)."""
+    docstring), and any float is float64, any integer int64 (where numpy keeps float32 or
+    uint64)."""
     return np.full(shape, value)
 
 

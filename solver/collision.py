@@ -206,19 +206,24 @@ def _pair(result, head, x_ref_x0, outer):
     combined); the peak viscosity and ``solidified`` from the extrapolated approach pressure, as
     a single solve derives them. Where the half grid's solve fails, or raises (a defect, which
     must not take the finer solve with it), ``result`` stays the finer solve's, not
-    extrapolated, and its message says why."""
+    extrapolated, and its message says why (after a note it had, ``_noted``)."""
     half = replace(result.numerics.halved(), save_profiles=False)
     try:
         coarse = _coupled(result.physics, result.accuracy, half, head, x_ref_x0)
         check_energy(read_far(coarse, outer))
     except Exception as exc:  # noqa: BLE001 - the finer result is kept; the defect is named
-        result.message = (f"not extrapolated: the half grid's solve raised "
-                          f"{type(exc).__name__}: {exc}")
+        _noted(result, f"not extrapolated: the half grid's solve raised "
+                       f"{type(exc).__name__}: {exc}")
         return
     if extrapolation.combine(result, coarse):
         _approach_viscosity(result)
     elif coarse.status != "ok":  # its status alone: its message's advice is for a failure
-        result.message = f"not extrapolated: the half grid's solve failed ({coarse.status})"
+        _noted(result, f"not extrapolated: the half grid's solve failed ({coarse.status})")
+
+
+def _noted(result, note):
+    """``note`` added to an ok result's message, after the one it has (``_drawn_back``'s)."""
+    result.message = f"{result.message}; {note}" if result.message else note
 
 
 def _drained(h_min) -> str:

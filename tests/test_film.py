@@ -198,8 +198,8 @@ def test_compiled_linear_algebra_matches_numpy():
 def test_matmul_is_numbas_product_to_the_bit():
     """A rough film's contact multiplies two matrices with ``linalg.matmul`` (BLAS dgemm called as
     numba's ``a @ b`` calls it) instead of numba's product: the same sums, so every number is
-    the same, for the shapes the contact makes (a few held cells against N + 1 columns) and
-    square ones."""
+    the same, for the shapes the contact makes (N rows, a few held cells, N + 1 columns) and
+    square ones (with one row or column numba takes a matrix-vector product instead)."""
     import numba
 
     product = numba.njit(lambda a, b: a @ b)
@@ -209,6 +209,13 @@ def test_matmul_is_numbas_product_to_the_bit():
         out = np.empty((rows, cols))
         matmul(a, b, out)
         assert np.array_equal(out, product(a, b))
+    # BLAS would read and write past the arrays: a wrong shape or layout is refused (a review
+    # wrote past `out` and the process aborted at exit)
+    a, b = rng.standard_normal((6, 8)), rng.standard_normal((8, 5))
+    for args in ((a, b, np.empty((2, 2))), (a, b[:4], np.empty((6, 5))),
+                 (a[::2], b, np.empty((3, 5))), (a, np.asfortranarray(b), np.empty((6, 5)))):
+        with pytest.raises(ValueError, match="shapes or layouts"):
+            matmul(*args)
 
 
 def test_filled_allocates_what_np_full_does_in_compiled_code():

@@ -135,11 +135,16 @@ def matvec(a, x, out):
 
 @jit
 def matmul(a, b, out):
-    """``out = a @ b`` (all C-ordered; a (n, k), b (k, m), out (n, m), k > 0) by BLAS ``dgemm``,
-    called as numba's ``a @ b`` calls it (its C-ordered product is the Fortran-ordered ``b^T
-    a^T``: the same arguments, the same sums). numba's product compiled its own implementation
-    with four array allocations, about 0.6 s of a cold compile (3 %), for one product in a
-    rough film's contact (model/contact.py)."""
+    """``out = a @ b`` (all C-contiguous; a (n, k), b (k, m), out (n, m), k > 0) by BLAS
+    ``dgemm``, called as numba's ``a @ b`` calls it for n and m above 1 (its C-ordered product is
+    the Fortran-ordered ``b^T a^T``: the same arguments, the same sums; with one row or column
+    numba takes a matrix-vector product instead). numba's product compiled its own
+    implementation with four array allocations, about 0.6 s of a cold compile (3 %), for one
+    product in a rough film's contact (model/contact.py). Other shapes or layouts raise
+    ValueError (BLAS would read and write past the arrays)."""
+    if (a.shape[1] != b.shape[0] or out.shape[0] != a.shape[0] or out.shape[1] != b.shape[1]
+            or not (a.flags.c_contiguous and b.flags.c_contiguous and out.flags.c_contiguous)):
+        raise ValueError("matmul: the arrays' shapes or layouts do not match")
     rows, inner, cols = _int32_cell(a.shape[0]), _int32_cell(a.shape[1]), _int32_cell(b.shape[1])
     _dgemm(_char_cell(_NO_TRANSPOSE), _char_cell(_NO_TRANSPOSE), cols, rows, inner,
            _double_cell(1.0), _data(b), cols, _data(a), inner, _double_cell(0.0), _data(out), cols)
