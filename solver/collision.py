@@ -350,9 +350,10 @@ def rigid_head(physics, numerics) -> RigidHead:
         block = rigid_block(t_head, x_head, v_head, tau_per_t, 0, 1.0 - v_head**2)
     own_start = [f for p in pieces.PIECES
                  for f in (p.start_pressure(physics, x_switch, v_switch),) if f is not None]
+    classic_start = lambda s: 3.0 * v_switch / (x_switch + s) ** 2  # noqa: E731
     return RigidHead(x_switch, v_switch, t_switch, False, block,
                      rigid.approach_peaks(x_start, stokes, x_switch),
-                     own_start[0] if own_start else lambda s: 3.0 * v_switch / (x_switch + s) ** 2)
+                     own_start[0] if own_start else classic_start)
 
 
 def _concat(blocks):
