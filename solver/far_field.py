@@ -125,7 +125,7 @@ class OuterFlow:
     density_ratio
         ``phi``: the fluid mass the particle displaces over its mass, ``rho_f / rho_p`` (two
         spheres: ``rho_f V_sphere / (2 m)``, ``m`` the reduced mass; "pair": ``rho_f V1 / (2 m)``
-        with sphere 1's volume), in [0, 1e6]; 0: no added mass (a dimensionless run has no
+        with sphere 1's volume, the smaller sphere's in a scene), in [0, 1e6]; 0: no added mass (a dimensionless run has no
         densities).
     radius_ratio, mass_ratio
         ``a2/a1`` and ``m2/m1`` of the "pair" geometry (finite, > 0); 1 for the others, which do
