@@ -326,6 +326,9 @@ def test_scene_physics_is_its_dimensionless_groups(table):
     ({"v0": "fast"}, "v0: cannot read"),
     ({"x0": "1 um", "x0_over_a": 0.01}, "either x0"),
     ({"body1": {"wall": True, "material": "glass"}, "body2": {"wall": True, "material": "glass"}}, "both plane walls"),
+    # e_dry's own range, whichever side it is broken on (0 was refused with "(0, inf)")
+    ({"e_dry": 0}, r"e_dry = 0 is outside its valid range \(0, 1\]"),
+    ({"e_dry": 1.5}, r"e_dry = 1.5 is outside its valid range \(0, 1\]"),
 ])
 def test_bad_scene_names_the_field(table, change, field):
     data = sandstone()

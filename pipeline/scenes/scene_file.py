@@ -23,6 +23,9 @@ _LENGTH = FieldSpec("[length]", "50 um", hi_open=False, si_unit="m")  # radius: 
 _SPEED = FieldSpec("[length] / [time]", "10 cm/s", si_unit="m/s")
 _GAP = FieldSpec("[length]", "500 nm", si_unit="m")
 _RATIO = FieldSpec("", "0.01")
+# the pair's dry coefficient of restitution: (0, 1], named in every refusal (e_dry = 0 was
+# refused by _RATIO's own range, "(0, inf)", which 1.5 is in)
+_E_DRY = FieldSpec("", "0.9", 0.0, 1.0, hi_open=False)
 _PRESSURE = FieldSpec("[pressure]", "101.325 kPa", si_unit="Pa")
 
 _TOP_KEYS = ("title", "v0", "approach_speed", "x0", "x0_over_a", "outer_start", "outer_start_over_a", "x_ref",
@@ -304,10 +307,7 @@ def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
         e_dry_source = f"the pair {materials[0]}/{materials[1]}: [pairs.{pair.name}] of the " \
             "materials table, whose source ehd scene --list-materials shows"
     if "e_dry" in data:
-        e_dry = to_si(data["e_dry"], _RATIO, "e_dry")
-        if not 0.0 < e_dry <= 1.0:
-            raise SceneError(f"e_dry = {data['e_dry']!r} is outside its valid range (0, 1] (the "
-                             "pair's dry coefficient of restitution)")
+        e_dry = to_si(data["e_dry"], _E_DRY, "e_dry")
         if not any(b.solid.roughness for b in (body1, body2)):
             # smooth surfaces never touch: the given e_dry would silently do nothing
             raise SceneError(f"e_dry = {data['e_dry']!r} acts only where rough surfaces touch, "
