@@ -91,6 +91,8 @@ from numba.core.runtime import rtsys
 from numba.extending import overload
 
 FASTMATH = {"nsz", "arcp", "contract", "afn"}
+# numba's flags that leave out an inner function's two wrappers and its machine code
+_WITHOUT_MACHINE_CODE = ("no_cpython_wrapper", "no_cfunc_wrapper", "no_compile")
 
 
 def _source_hash() -> str:
@@ -403,7 +405,7 @@ class _InnerLibrary(AnalysisPass):
             library._verify_declare_only_symbols = _declarations_expected
             library.add_linking_library = functools.partial(_link_inner, library)
             library._finalize_final_module = functools.partial(_without_machine_code, library)
-            for flag in ("no_cpython_wrapper", "no_cfunc_wrapper", "no_compile"):
+            for flag in _WITHOUT_MACHINE_CODE:
                 setattr(state.flags, flag, True)
         return False
 
@@ -477,7 +479,7 @@ class _PythonCall:
         self.signature = signature  # the argument types
         self._locals = dict(locals)
         self._flags = flags.copy()
-        for flag in ("no_cpython_wrapper", "no_cfunc_wrapper", "no_compile"):
+        for flag in _WITHOUT_MACHINE_CODE:
             setattr(self._flags, flag, False)
         self._twin = None
         self._lock = threading.Lock()
@@ -537,7 +539,7 @@ _INNER_LIBRARIES = all(hasattr(codegen.CPUCodeLibrary, name) for name in (
     and hasattr(numba_dispatcher.Dispatcher, "add_overload")
     and hasattr(numba_dispatcher._DispatcherBase, "_insert")
     and all(hasattr(codegen.JITCPUCodegen, name) for name in ("set_env", "_create_empty_module"))
-    and {"no_cpython_wrapper", "no_cfunc_wrapper", "no_compile"} <= set(compiler.Flags.options))
+    and set(_WITHOUT_MACHINE_CODE) <= set(compiler.Flags.options))
 if _INNER_LIBRARIES:
     numba_dispatcher.Dispatcher.add_overload = _added_for_compiled_callers
 
@@ -593,6 +595,8 @@ def filled(shape, value):
 
 @overload(filled)
 def _filled(shape, value):
+    # a float takes np.empty's default dtype, as the solver's own float allocations do (an
+    # explicit float64 would be another form of np.empty to compile)
     kind = numba.types.unliteral(value)
     if isinstance(kind, numba.types.Float):
         def impl(shape, value):

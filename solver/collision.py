@@ -15,6 +15,7 @@ out, which gives the equilibrium separation in closed form.
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import replace
@@ -350,10 +351,10 @@ def rigid_head(physics, numerics) -> RigidHead:
         block = rigid_block(t_head, x_head, v_head, tau_per_t, 0, 1.0 - v_head**2)
     own_start = [f for p in pieces.PIECES
                  for f in (p.start_pressure(physics, x_switch, v_switch),) if f is not None]
-    classic_start = lambda s: 3.0 * v_switch / (x_switch + s) ** 2  # noqa: E731
     return RigidHead(x_switch, v_switch, t_switch, False, block,
                      rigid.approach_peaks(x_start, stokes, x_switch),
-                     own_start[0] if own_start else classic_start)
+                     own_start[0] if own_start else functools.partial(rigid.film_pressure,
+                                                                      x=x_switch, v=v_switch))
 
 
 def _concat(blocks):

@@ -15,6 +15,7 @@ pipeline/scenes/pieces.py. docs/model.md, "How to add a term", lists the steps.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Callable
@@ -119,7 +120,7 @@ def _barus_approach(physics, numerics, x_stop) -> RigidHead:
         # the start x0 itself lies inside the glass gap (beta > x0^2/3, e.g. 13 at eps 1e-2):
         # no rigid Barus film exists there; the coupled phase starts from the classic
         # pressure, the Kirchhoff pressure of that state, as with the other laws
-        pressure = lambda s: 3.0 * v / (x + s) ** 2  # noqa: E731
+        pressure = functools.partial(rigid.film_pressure, x=x, v=v)
         peaks = rigid.approach_peaks(x_start, stokes, x_start)
     return RigidHead(x, v, path.t_end, rests, block, peaks, pressure)
 
@@ -137,7 +138,7 @@ def _law_start_pressure(physics, x, v):
     phys = physics.as_array()
 
     def pressure(s):
-        classic = 3.0 * v / (x + np.asarray(s, dtype=float)) ** 2
+        classic = rigid.film_pressure(np.asarray(s, dtype=float), x, v)
         out = np.empty_like(classic)
         return out if liquid.pressure_of_kirchhoff(classic, phys, out) else classic
 

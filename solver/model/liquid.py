@@ -276,22 +276,21 @@ def pressure_of_kirchhoff(k, phys, out):
     into ``out``: with constant density the rigid film's Reynolds equation in the Kirchhoff
     pressure is the classic one, so the rigid film of a pressure-dependent liquid has the
     pressure whose Kirchhoff pressure is the classic ``3 V/(X + s)^2`` (the Barus closed form,
-    model/piezoviscous.py: ``rigid_pressure``, for any law). By bisection on a bracket doubled
-    from ``k`` (the Kirchhoff pressure rises with ``P``). False when some ``k`` lies beyond what
-    the law reaches (a Kirchhoff pressure with a ceiling, ``1/beta`` for Barus: a glass gap)."""
+    model/piezoviscous.py: ``rigid_pressure``, for any law). By bisection on ``[0, hi]``, ``hi``
+    doubled from ``k`` (the Kirchhoff pressure rises with ``P``, from 0 at 0). False when some
+    ``k`` is negative (a film in tension: not an approach's) or lies beyond what the law reaches
+    (a Kirchhoff pressure with a ceiling, ``1/beta`` for Barus: a glass gap)."""
     for i in range(k.size):
         target = k[i]
-        lo, hi = min(target, 0.0), max(target, 0.0)
+        if target < 0.0:
+            return False
+        lo, hi = 0.0, target
         for _ in range(_DOUBLINGS):
             if kirchhoff_difference(0.0, hi, phys)[0] >= target:
                 break
             lo, hi = hi, 2.0 * hi + 1.0
         else:
             return False
-        for _ in range(_DOUBLINGS):
-            if kirchhoff_difference(0.0, lo, phys)[0] <= target:
-                break
-            lo, hi = 2.0 * lo - 1.0, lo
         for _ in range(_BISECTIONS):
             mid = 0.5 * (lo + hi)
             if not lo < mid < hi:

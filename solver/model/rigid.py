@@ -140,6 +140,12 @@ def restitution_of_speed(speed, physics, x_ref):
     return speed / (impact_stokes(physics.St, physics.x_start, x_ref) / physics.St)
 
 
+def film_pressure(s, x, v):
+    """The classic rigid film's pressure ``3 V/(X + s)^2`` at ``s = R^2/2`` (the coupled phase's
+    start on the classic approach)."""
+    return 3.0 * v / (x + s) ** 2
+
+
 def deformation_ratio(x, v):
     """Leading-order central deformation over separation, ``W(0)/X``, for the rigid pressure."""
     return HANDOVER_COEFF * v * np.asarray(x, dtype=float) ** -2.5

@@ -224,12 +224,12 @@ class RigidSlipPath:
     event: str
 
 
-def _path(t_from, x_from, v_from, stokes, c, xs, event):
+def _path(t_from, x_from, v_from, stokes, c, xs, event, ends_at_rest=False):
     v = velocity(xs, x_from, v_from, stokes, c)
-    if event == "rest" and xs.size > 1 and xs[-1] < xs[0]:
-        # the approach's last sample is its rest, which the path reaches only as t -> inf: in
-        # rounding its speed there can come out just above 0, and the quadrature towards it
-        # then met a speed of exactly 0 (ZeroDivisionError at St 2, eps 1e-6, slip length 3)
+    if ends_at_rest:
+        # the last sample is the rest, which the path reaches only as t -> inf: in rounding its
+        # speed there can come out just above 0, and the quadrature towards it then met a speed
+        # of exactly 0 (ZeroDivisionError at St 2, eps 1e-6, slip length 3)
         v[-1] = 0.0
         t = t_from + np.append(elapsed_time(xs[:-1], x_from, v_from, stokes, c), math.inf)
     else:
@@ -266,7 +266,7 @@ def approach(x_start, stokes, c, switch, x_stop=0.0, samples=60) -> RigidSlipPat
                 break
             ln_x = nxt
     xs = x_start * np.exp(np.linspace(0.0, ln_x - math.log(x_start), samples))
-    return _path(0.0, x_start, 1.0, stokes, c, xs, event)
+    return _path(0.0, x_start, 1.0, stokes, c, xs, event, ends_at_rest=event == "rest")
 
 
 def departure(x_from, v_from, t_from, stokes, c, samples=41) -> RigidSlipPath:
