@@ -61,6 +61,11 @@ DIMPLE_DEPTH = 1e-3  # x1 units: a central gap this much above the minimum count
 # gap fell to 1e-20 before the steps underflowed).
 DRAINED_GAP = 1e-12
 
+# How far out (over the radius a) a film may carry the spheres before drawing them back from
+# there is outside the model (``_pulled_back_from_afar``): the lubrication film is the leading
+# order in X/a, so beyond 0.1 a its neglected terms are 10 % of it
+LUBRICATION_REACH = 0.1
+
 # A film whose viscosity rises this much over the approach is reported as solidified: it flows
 # 1e4 times slower than at ambient pressure, so over a contact of O(10) x1/v0 the liquid trapped
 # at the axis moves less than 1e-3 of what the classic film moves there: a frozen ("glassy")
@@ -196,6 +201,7 @@ def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 
                 _pair(result, head, x_ref_x0, outer)
         read_far(result, outer)
         check_energy(result)
+        _pulled_back_from_afar(result)
     result.wall_s = time.perf_counter() - wall
     return result
 
@@ -542,6 +548,27 @@ def _drawn_back(physics, cols, x_ref) -> str:
     return (f"the spheres passed x_ref outwards at {speed:.3g} v0 (e {e_out:.3g} there), out to "
             f"{x_c.max() / x_ref:.3g} x_ref, and the film drew them back inside it before the "
             "coupled phase ended: they stick (e_wet 0)")
+
+
+def _pulled_back_from_afar(result):
+    """Adds to the note of an ok result drawn back inside ``x_ref`` (``_drawn_back``) how far out
+    the coupled phase carried the spheres, over the radius ``a`` (the outer flow's ``x0/a``
+    places ``x0``), when that is beyond ``LUBRICATION_REACH``: the pull-back came from where the
+    lubrication premise ``X << a`` fails, so whether they stick is outside the model (a film that
+    refills late, at St 2, eps 1e-2, Pi 1e-10, carries them out to 3.6 ``a`` with ``x0 = 0.01 a``;
+    docs/model.md, "Observables")."""
+    if not (result.ok and result.e_wet == 0.0):
+        return
+    coupled = result.series["phase"] == 1
+    x_c, v_c = result.series["X"][coupled], result.series["V"][coupled]
+    x_ref = result.x_ref_x0 * result.x0_over_x1
+    if not x_c.size or x_c[-1] > x_ref or pieces.outward_crossing(x_c, v_c, x_ref) is None:
+        return
+    reach = x_c.max() / result.x0_over_x1 * result.x0_over_a
+    if reach > LUBRICATION_REACH:
+        _noted(result, f"they were drawn back from X = {reach:.3g} a (x0 = {result.x0_over_a:g} a), "
+                       "beyond the lubrication premise X << a: whether they stick is outside the "
+                       "model")
 
 
 def _wet_restitution(physics, shortcuts, cols, x_ref):

@@ -17,6 +17,7 @@ import pytest
 
 from solver import Physics, collide
 from solver.collision import scene_grid
+from solver.far_field import OuterFlow
 from solver.pieces import cavity_reach
 from solver.model import cavitation
 from solver.model.film import (cavity_edge, constrain, face_fluxes, film_force, jacobian,
@@ -434,6 +435,22 @@ def test_a_jfo_film_that_draws_the_spheres_back_inside_x_ref_sticks_and_says_so(
     assert f"passed x_ref outwards at {crossing:.3g} v0" in c.message, c.message
     escaped = collide(Physics(St=3.0, eps=1e-2, Pi=1e-4, cavitation="jfo"), accuracy="fast")
     assert escaped.message == "" and crossing < escaped.e_wet < 1.5 * crossing
+
+
+def test_a_pull_back_from_beyond_the_lubrication_premise_says_so():
+    """At St 2, eps 1e-2, Pi 1e-10 the JFO film carries the spheres out to 365 x0 before it
+    refills and draws them back: 3.65 a with the default x0 = 0.01 a, where X << a fails, and
+    the note says so. The reach is the outer flow's reading (x0/a): with x0 = 1e-4 a it is
+    0.0365 a, within LUBRICATION_REACH (0.1 a), and the solve is the same."""
+    physics = Physics(St=2.0, eps=1e-2, Pi=1e-10, cavitation="jfo")
+    c = collide(physics, accuracy="fast")
+    coupled = c.series["phase"] == 1
+    reach = c.series["X"][coupled].max() / c.x0_over_x1 * c.x0_over_a
+    assert c.ok and c.e_wet == 0.0 and reach > 1.0, (reach, c.message)
+    assert f"drawn back from X = {reach:.3g} a (x0 = 0.01 a)" in c.message, c.message
+    near = collide(physics, accuracy="fast", outer=OuterFlow(x0_over_a=1e-4))
+    assert near.ok and near.e_wet == 0.0 and "drew them back" in near.message
+    assert "lubrication premise" not in near.message, near.message
 
 
 @pytest.mark.parametrize("beta", [0.0, 2.0, 5.0])
