@@ -1228,6 +1228,11 @@ SCENE_CASES = [
     ("radius-subnormal-text", dict(radius="'1e-320 m'"), "subnormal"),
     ("radius-absurd", dict(radius="1e-40"), "valid range"),
     ("v0-absurd", dict(v0="'1e40 m/s'"), "valid range"),
+    # a number among the units, which pint multiplies in (200 um, 500 mm/s, 25 um were solved)
+    ("radius-stray-number", dict(radius="'100 um 2'"), "number among its units"),
+    ("v0-stray-number", dict(v0="'10 cm/s 5'"), "number among its units"),
+    ("v0-times-number", dict(v0="'10 cm/s * 2'"), "number among its units"),
+    ("radius-over-number", dict(radius="'100 um / 4'"), "number among its units"),
 ]
 
 

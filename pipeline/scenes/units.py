@@ -7,7 +7,8 @@ checked against the dimension the field needs, and converted to SI. Every error 
 
 A string is read as a *quantity*, never evaluated as an expression: it must be a number followed
 by a unit expression (``QUANTITY``: letters, digits, ``* / ^ ( ) .`` and spaces), which is then
-handed to pint; anything else (``'__import__("os")'``, quotes, brackets, commas) is refused before
+handed to pint, and pint's magnitude must be that number (a number among the units, as in
+``'100 um 2'``, which pint would multiply in, is refused); anything else (``'__import__("os")'``, quotes, brackets, commas) is refused before
 pint sees it, and any failure inside pint is one line naming the field. A value whose magnitude in
 SI is subnormal or absurd (nonzero and below ``TINY`` or above ``HUGE``) is refused with the
 field's range: no length of 1e-320 m reaches the solver to underflow there.
@@ -21,7 +22,10 @@ from functools import lru_cache
 
 __all__ = ["UnitError", "FieldSpec", "to_si", "format_quantity", "TINY", "HUGE", "QUANTITY"]
 
-# a number, then a unit expression; what pint is given to parse
+# a number, then a unit expression; what pint is given to parse (a number inside the unit
+# expression, as in '100 um 2' or '10 cm/s * 2', pint multiplies in: refused by ``to_si``, which
+# checks that pint's magnitude is the leading number)
+LEADING_NUMBER = re.compile(r"\s*[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
 QUANTITY = re.compile(r"\s*[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?"
                       r"(\s*[A-Za-z0-9/(\u00b5\u03bc\u00b0\u2126%][A-Za-z0-9_\u00b5\u03bc\u00b0\u2126%\s*/^().-]*)?\s*")
 # nonzero SI magnitudes outside [TINY, HUGE] are no physical input of this solver (the smallest
@@ -110,6 +114,11 @@ def to_si(value, spec: FieldSpec, where: str) -> float:
                             f"write e.g. '{spec.example}'") from None
         if not isinstance(q, ureg.Quantity):  # a bare number string such as "5"
             q = ureg.Quantity(float(q))
+        typed = float(LEADING_NUMBER.match(text).group(0))
+        if q.magnitude != typed:  # pint multiplied in a number from the units: '100 um 2'
+            raise UnitError(f"{where}: {value!r} has a number among its units (pint reads it "
+                            f"as {q.magnitude:g} {q.units:~}); write one number, then the units, "
+                            f"e.g. '{spec.example}'")
         expected = ureg.Quantity(1.0, spec.si_unit or "") if spec.dimension else None
         if spec.dimension:
             if q.dimensionality != expected.dimensionality:
