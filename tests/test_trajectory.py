@@ -231,6 +231,28 @@ def test_cli_bad_release_exits_2_with_one_line(args, needle, tmp_path):
     assert not (tmp_path / "t.csv").exists()
 
 
+def test_cli_trajectory_never_replaces_what_it_did_not_write(tmp_path):
+    """--trajectory over the scene file itself replaced it with the CSV (exit 0; a hostile scan),
+    as it would any file or a device: refused before the solve, the file unchanged. Its own CSV
+    of an earlier run is replaced."""
+    import shutil
+
+    scene = tmp_path / "s.toml"
+    shutil.copy(GLYCEROL, scene)
+    before = scene.read_bytes()
+    for target in (scene, tmp_path / "empty", ""):
+        if target:
+            target.touch()
+        out = _cli(str(scene), "--trajectory", str(target), "--accuracy", "fast", "--no-range")
+        lines = out.stderr.strip().splitlines()
+        assert out.returncode == 2 and len(lines) == 1 and "--trajectory" in lines[0], out.stderr
+    assert scene.read_bytes() == before
+    own = tmp_path / "t.csv"
+    own.write_text("t_s,gap_m,speed_m_per_s,phase\n")
+    out = _cli(str(scene), "--trajectory", str(own), "--accuracy", "fast", "--no-range")
+    assert out.returncode in (0, 1) and len(own.read_text().splitlines()) > 10, out.stderr
+
+
 def test_cli_trajectory_of_a_bouncing_sphere(tmp_path):
     # Gondret et al.'s St 152 run settling from 40 a: the CSV (t_s, gap_m, ...), the figure and
     # the JSON keys of the contract; the arriving speed is the scene's v0

@@ -213,7 +213,7 @@ def trajectory_csv(tr) -> str:
     rate, negative on the approach)."""
     names = sorted(tr.phases, key=tr.phases.get)
     starts = [tr.phases[n] for n in names]
-    rows = ["t_s,gap_m,speed_m_per_s,phase"]
+    rows = [CSV_HEADER]
     phase = 0
     for k, (t, x, u) in enumerate(zip(tr.t, tr.gap, tr.speed)):
         while phase + 1 < len(starts) and k >= starts[phase + 1]:
@@ -222,9 +222,22 @@ def trajectory_csv(tr) -> str:
     return "\n".join(rows) + "\n"
 
 
+CSV_HEADER = "t_s,gap_m,speed_m_per_s,phase"  # the first line of a trajectory's CSV
+
+
+def _written_by_trajectory(path) -> bool:
+    """Whether the regular file at ``path`` starts as a trajectory's CSV does (``CSV_HEADER``)."""
+    try:
+        with open(path, "rb") as f:
+            return f.read(len(CSV_HEADER) + 1) == (CSV_HEADER + "\n").encode()
+    except OSError:
+        return False
+
+
 def check_trajectory_path(path) -> None:
-    """PathError before any solve when ``--trajectory FILE`` cannot be written (a missing or
-    read-only folder, or a folder where the file should be)."""
+    """PathError before any solve when ``--trajectory FILE`` cannot be written (no name, a missing
+    or read-only folder, a folder where the file should be), or names something that is not an
+    earlier trajectory's CSV (a scene file, a device, a link: replaced, it would be lost)."""
     import os
     from pathlib import Path
 
@@ -232,6 +245,8 @@ def check_trajectory_path(path) -> None:
 
     if path is None:
         return
+    if not str(path).strip():
+        raise PathError("--trajectory: the file name is empty; give the CSV file to write")
     parent = Path(path).parent
     if not parent.is_dir():
         raise PathError(f"--trajectory {path}: the directory {str(parent)!r} does not exist")
@@ -239,6 +254,11 @@ def check_trajectory_path(path) -> None:
         raise PathError(f"--trajectory {path}: the directory {str(parent)!r} is not writable")
     if Path(path).is_dir():
         raise PathError(f"--trajectory {path}: is a directory, not a file")
+    if os.path.lexists(path) and (os.path.islink(path) or not Path(path).is_file()
+                                  or not _written_by_trajectory(path)):
+        raise PathError(f"--trajectory {path}: exists and is not an earlier trajectory's CSV (a "
+                        "scene file, someone else's file, a device or a link), so it is not "
+                        "replaced: give a new path, or move it away yourself")
 
 
 def write_trajectory(whole, args, failed) -> dict:
