@@ -848,6 +848,10 @@ def test_a_three_axis_store_end_to_end(tmp_path, capsys, monkeypatch):
     x, y = ax.get_lines()[0].get_data()  # the first curve: the largest eps, St_c at each Pi
     assert list(x) == [0.001, 0.01, 0.1]
     assert list(y) == [r["St_c"] for r in rows if r["eps"] == 1e-2]
+    # no St_c at any Pi (one St: nothing brackets it): the St_c figure says so (it raised
+    # matplotlib's "cannot be log-scaled" on saving, a hostile scan)
+    paths, rendered = figures.update_figures(ds3.isel(St=[0]), tmp_path / "figs_one")
+    assert rendered and "critical_stokes_vs_Pi.png" in {p.name for p in paths}
     # a store without St or eps has no plane: figures refused with one line
     ds_flat = ds3.isel(eps=0).drop_vars("eps")
     ds_flat.attrs = {**ds3.attrs, "fixed_physics": {}}

@@ -784,7 +784,15 @@ def _axis_critical_stokes(spec, cube, extra):
     ax.plot([], [], color="0.3", ls="--", lw=1.0, label=spec.label(spec.classic))
     ax.axhline(EXPERIMENT_ST_C, color="k", ls=":", lw=1.0,
                label=r"experiments: no rebound below $St \approx 10$")
-    if spec.log:
+    shown = [float(v) for v in cube[axis].values if math.isfinite(v) and (v > 0 or not spec.log)]
+    if not any(math.isfinite(r[axis]) for r in rows):  # no curve: the axis' values still shown
+        ax.text(0.5, 0.5, "no St_c in this store off the classic film: at each of its values\n"
+                f"of ${spec.symbol}$ every scene sticks, or every one rebounds (or is not done)",
+                transform=ax.transAxes, ha="center", va="center", fontsize=8, color="0.3")
+        if shown:
+            ax.set_xlim(min(shown) / (2.0 if spec.log else 1.0) - (0.0 if spec.log else 1.0),
+                        max(shown) * (2.0 if spec.log else 1.0) + (0.0 if spec.log else 1.0))
+    if spec.log and shown:
         ax.set_xscale("log")
     ax.set_xlabel(spec.axis_label)
     ax.set_ylabel(r"critical Stokes number $St_c$")
