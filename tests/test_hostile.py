@@ -164,6 +164,9 @@ CASES = [
      "grid.eps"),
     # --- ehd sweep: the store path
     ("sweep-store-empty", NO_SETUP, ["sweep", "s.toml", "--store", ""], 2, "empty path"),
+    # a folder named by its place: Path.with_name raised ValueError (exit 70)
+    ("sweep-store-dot", NO_SETUP, ["sweep", "s.toml", "--store", "."], 2, "by its place"),
+    ("sweep-store-root", NO_SETUP, ["sweep", "s.toml", "--store", "/"], 2, "by its place"),
     ("sweep-store-blank", NO_SETUP, ["sweep", "s.toml", "--store", "  "], 2, "empty path"),
     ("sweep-store-is-file", _write("f.zarr", "x"), ["sweep", "s.toml", "--store", "f.zarr"], 2,
      "not a directory"),
@@ -267,6 +270,9 @@ CASES = [
     # --- ehd status
     ("status-store-missing", NO_SETUP, ["status", "none.zarr"], 2, "no sweep store"),
     ("status-store-empty", NO_SETUP, ["status", ""], 2, "empty path"),
+    ("status-store-dot", NO_SETUP, ["status", "."], 2, "by its place"),
+    ("figures-store-dot", NO_SETUP, ["figures", "."], 2, "by its place"),
+    ("export-dem-store-dot", NO_SETUP, ["export-dem", "."], 2, "by its place"),
     ("status-store-not-zarr", _mkdir("plain.zarr"), ["status", "plain.zarr"], 2, "no sweep store"),
     ("status-zarr-json-garbage", _write("s.zarr/zarr.json", "{"), ["status", "s.zarr"], 2,
      "cannot be opened"),
@@ -298,6 +304,16 @@ def test_bad_input_gives_one_line_and_changes_nothing(ws, capsys, setup, argv, c
     assert keyword in errors[0], err
     assert tree_hash(ws / "s.zarr") == before  # nothing stored was changed
     assert CALLS == []  # and nothing was computed
+
+
+@pytest.mark.parametrize("make", [lambda p: p.write_text("x"), lambda p: p.mkdir()],
+                         ids=["file", "folder-that-is-no-store"])
+def test_a_refused_store_leaves_no_lock(ws, capsys, make):
+    """--store naming a file, or a folder that is no store, is refused (exit 2); its lock file,
+    made before the check, was left behind (a hostile scan)."""
+    make(ws / "taken")
+    got, _, err = ehd(capsys, "sweep", "s.toml", "--store", "taken")
+    assert got == 2 and not (ws / "taken.lock").exists(), err
 
 
 def test_the_catalogue_size():

@@ -123,7 +123,11 @@ def opening_store(store: str, open_fn,
     that is none says so, with ``fix``; any other unreadable one "cannot be opened as an ehd
     sweep store"; an ``EhdError`` (a damaged store: exit 5) passes unchanged."""
     from ..errors import EhdError, UsageError
+    from .store import unnamed
 
+    if unnamed(store):
+        raise UsageError(f"{store!r} names a folder by its place ('.', '..', '/'), not a sweep "
+                         f"store; {fix}")
     try:
         return open_fn(store)
     except EhdError:

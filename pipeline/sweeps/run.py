@@ -258,10 +258,15 @@ def check_store_name(path, label: str = "store") -> None:
 
     from ..cli_shared import check_name_length
     from .journal import _journal_path
-    from .store import _lock_path, _old_path, _tmp_path
+    from ..errors import PathError
+    from .store import _lock_path, _old_path, _tmp_path, unnamed
 
     if not str(path).strip():
         return  # the store says "empty path" itself
+    if unnamed(path):
+        raise PathError(f"{label} {path}: a folder named by its place ('.', '..', '/') cannot be "
+                        "a sweep store (its lock and journal are named after it); give the "
+                        "store's own name, e.g. results.zarr")
     path = Path(path)
     check_name_length(label, path, [made(path) for made in (_lock_path, _journal_path,
                                                             _old_path, _tmp_path)])

@@ -66,6 +66,12 @@ class StoreBusy(EhdError, RuntimeError):
     """Another process is writing the store."""
 
 
+def unnamed(path) -> bool:
+    """Whether ``path`` names a folder by its place (``.``, ``..``, ``/``): never a store, whose
+    lock, journal and copies are named after it."""
+    return Path(path).name in ("", "..")
+
+
 def _lock_path(path: Path) -> Path:
     path = Path(os.path.realpath(path))
     return path.with_name(path.name + ".lock")
@@ -314,15 +320,17 @@ class SweepStore:
         path = path if path is not None else sweep.store
         self = cls(path, sweep.cache_key(), flush_seconds, worker_key=sweep.worker_key(),
                    fixed=sweep.fixed)
+        new_lock = not os.path.lexists(_lock_path(self.path))
         new_store = not self.path.exists()
         self._acquire_lock()
         try:
             try:
                 self._prepare(sweep, add_sweep)
             except BaseException:
-                if new_store and not self.path.exists():
-                    # nothing was made (a full disk, a mismatch): no lock file of ours is left
-                    # either (unlinked while we hold it: no other sweep can be waiting on it)
+                if new_lock and not (new_store and self.path.exists()):
+                    # nothing was made (a full disk, a mismatch), or what was there is refused
+                    # (a file, a folder that is no store): no lock file of ours is left either
+                    # (unlinked while we hold it: no other sweep can be waiting on it)
                     _lock_path(self.path).unlink(missing_ok=True)
                 raise
             try:
