@@ -139,6 +139,46 @@ def test_solver_doc_ehd_run_sample_is_what_ehd_run_prints(capsys):
         assert math.isclose(w, h, rel_tol=5e-3, abs_tol=1e-12), (k, want, have)
 
 
+def _same_numbers(want: str, have: str) -> bool:
+    """Two printed lines alike, word by word, their numbers within the tolerance of the sample
+    test above (another CPU's round-off, below the standard preset's target error)."""
+    a, b = want.split(), have.split()
+    if len(a) != len(b):
+        return False
+    for w, h in zip(a, b):
+        try:
+            if not math.isclose(float(w), float(h), rel_tol=5e-3, abs_tol=1e-12):
+                return False
+        except ValueError:
+            if w != h:
+                return False
+    return True
+
+
+@pytest.mark.parametrize("command", ["ehd run --St 10 --eps 0.01",
+                                     "ehd restitution examples/glass_beads_water.toml --n 5 "
+                                     "--accuracy fast"])
+def test_readme_samples_are_what_the_commands_print(capsys, monkeypatch, command):
+    """Every line the README shows under ``$ <command>`` (``...`` leaves lines out) is a line
+    the command prints, in that order (its numbers had drifted from an older solver)."""
+    from pipeline.cli import main
+
+    monkeypatch.chdir(REPO)
+    assert main(command.split()[1:]) == 0
+    printed = capsys.readouterr().out.splitlines()
+    sample = [line for line in _doc_block(f"$ {command}\n", "README.md") if line != "..."]
+    assert len(sample) >= 4
+    at = 0
+    for line in sample:
+        found = next((k for k in range(at, len(printed)) if _same_numbers(line, printed[k])),
+                     None)
+        assert found is not None, (line, printed)
+        at = found + 1
+    if command.startswith("ehd run"):  # and exactly docs/solver.md's sample of the same run
+        solver_doc = _doc_block(f"$ {command}\n")
+        assert all(line in solver_doc for line in sample if line.strip() != "..."), sample
+
+
 def _json_keys():
     from solver import JSON_KEYS
 
@@ -457,3 +497,15 @@ def test_the_scene_json_table_has_every_key():
     table = table[:table.index("\n## ")]
     listed = set(re.findall(r"`(\w+)`", table))
     assert not set(RESULT_KEYS) - listed, set(RESULT_KEYS) - listed
+
+
+def test_the_store_variables_table_has_every_variable():
+    """docs/pipeline.md, "Variables" lists every variable a sweep store holds (``e_far`` and
+    ``v_outer_start`` were missing; a hostile scan)."""
+    from pipeline.sweeps.layout import VARIABLES
+
+    text = (REPO / "docs" / "pipeline.md").read_text()
+    table = text[text.index("### Variables"):]
+    table = table[:table.index("\n#")]
+    listed = set(re.findall(r"`(\w+)`", table))
+    assert not set(VARIABLES) - listed, set(VARIABLES) - listed
