@@ -357,7 +357,10 @@ def _interrupted(name: str, terminated: bool = False) -> int:
     _quiet_dask()
     _flush_quietly()
     how = "terminated (SIGTERM)" if terminated else "interrupted"
-    _say(f"{name}: {how}; everything finished so far is kept")
+    if name == "ehd sweep":  # its journal keeps every finished scene
+        _say(f"{name}: {how}; everything finished so far is kept (run it again to resume)")
+    else:  # no other command keeps a partial result
+        _say(f"{name}: {how} before it finished; run it again")
     return EXIT_TERMINATED if terminated else EXIT_INTERRUPTED
 
 

@@ -17,9 +17,9 @@ Exit codes of every ``ehd`` command (docs/pipeline.md, "Exit codes"):
 | 5 | damaged store: ``status`` found damaged cells (unreadable, replaced or missing chunks), coordinates or metadata (listed), ``figures`` refuses to draw them, ``sweep`` refuses what it cannot repair (metadata, the manifest, a link, FIFO or device inside the store, a journal that is not a regular file or too large) |
 | 70 | internal error: a bug (traceback printed; please report it) |
 | 74 | an output could not be written: disk full or another I/O error (the line names the path and the free space; nothing partial is left behind), or stdout closed or full (also for ``--version``/``--help``) |
-| 130 | interrupted (Ctrl-C): every scene finished so far is kept |
+| 130 | interrupted (Ctrl-C): a sweep keeps every scene finished so far |
 | 141 | the reader of stdout went away (``ehd ... | head``) |
-| 143 | terminated (SIGTERM, e.g. ``kill`` or a batch system's time limit): every scene finished so far is kept |
+| 143 | terminated (SIGTERM, e.g. ``kill`` or a batch system's time limit): as Ctrl-C |
 
 No project imports here (stdlib only, imported lazily): every module may import this one.
 """

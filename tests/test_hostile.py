@@ -174,8 +174,12 @@ CASES = [
      "not a directory"),
     ("sweep-store-not-zarr", _mkdir("plain.zarr"), ["sweep", "s.toml", "--store", "plain.zarr"],
      2, "not a zarr store"),
-    ("sweep-store-zarr-json-garbage", _write("s.zarr/zarr.json", "{"), ["sweep", "s.toml"], 2,
-     "cannot be opened"),
+    # a store a sweep wrote (its manifest) whose zarr.json is not JSON: damaged (exit 5, as a
+    # truncated variable's zarr.json; it was 2); without a manifest, no store of ours (2)
+    ("sweep-store-zarr-json-garbage", _write("s.zarr/zarr.json", "{"), ["sweep", "s.toml"],
+     EXIT_DAMAGED, "is damaged"),
+    ("sweep-store-zarr-json-garbage-no-manifest", _write("p.zarr/zarr.json", "{"),
+     ["sweep", "s.toml", "--store", "p.zarr"], 2, "cannot be opened"),
     ("sweep-store-other-schema", _schema, ["sweep", "s.toml"], 2, "schema"),
     ("sweep-store-other-numerics", _other_numerics, ["sweep", "num.toml"], 2, "never mix"),
     ("sweep-store-other-sweep-file", _other_sweep, ["sweep", "other.toml"], 2, "--add-sweep"),
@@ -274,8 +278,8 @@ CASES = [
     ("figures-store-dot", NO_SETUP, ["figures", "."], 2, "by its place"),
     ("export-dem-store-dot", NO_SETUP, ["export-dem", "."], 2, "by its place"),
     ("status-store-not-zarr", _mkdir("plain.zarr"), ["status", "plain.zarr"], 2, "no sweep store"),
-    ("status-zarr-json-garbage", _write("s.zarr/zarr.json", "{"), ["status", "s.zarr"], 2,
-     "cannot be opened"),
+    ("status-zarr-json-garbage", _write("s.zarr/zarr.json", "{"), ["status", "s.zarr"],
+     EXIT_DAMAGED, "is damaged"),
     ("status-truncated-chunk", _truncate("s.zarr/v_r/c/1/0"), ["status", "s.zarr"],
      EXIT_DAMAGED, "damaged"),
     ("status-deleted-chunk", _remove("s.zarr/v_r/c/1/0"), ["status", "s.zarr"], EXIT_DAMAGED,
@@ -622,7 +626,7 @@ def test_ctrl_c_inside_compiled_code_is_an_interrupt_not_a_bug(monkeypatch, caps
     assert cli.main(["run", "--St", "5", "--eps", "0.01"]) == EXIT_INTERRUPTED
     err = capsys.readouterr().err
     assert "Traceback" not in err and err.strip().splitlines() == [
-        "ehd run: interrupted; everything finished so far is kept"]
+        "ehd run: interrupted before it finished; run it again"]
 
 
 REAL_CTRL_C = textwrap.dedent("""
@@ -660,7 +664,7 @@ def test_a_real_ctrl_c_during_the_compiled_solve_is_exit_130_one_line(tmp_path):
     out, err = proc.communicate(timeout=120)
     assert proc.returncode == EXIT_INTERRUPTED, (proc.returncode, err)
     assert "Traceback" not in err
-    assert err.strip().splitlines()[-1] == "ehd run: interrupted; everything finished so far is kept"
+    assert err.strip().splitlines()[-1] == "ehd run: interrupted before it finished; run it again"
 
 
 # ==== issue 19: nothing wrong is ever stored or shown ============================================

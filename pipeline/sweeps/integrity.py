@@ -168,6 +168,9 @@ def read_root(path) -> dict:
     except BadFile as exc:
         raise StoreDamaged(f"store {shown!r} is damaged: {exc}; {FIX}") from None
     except (UnicodeDecodeError, json.JSONDecodeError, OSError) as exc:
+        if os.path.lexists(path / MANIFEST_NAME):  # a sweep wrote it: a damaged store (exit 5)
+            raise StoreDamaged(f"store {shown!r} is damaged: its zarr.json is not readable JSON "
+                               f"({type(exc).__name__}); {FIX}") from None
         raise UsageError(f"{shown!r} cannot be opened as an ehd sweep store (its zarr.json is "
                          f"not readable JSON: {type(exc).__name__}); {FIX}") from None
     if not isinstance(root, dict) or root.get("node_type") != "group":
