@@ -280,6 +280,15 @@ COMMANDS = {
 COMMAND_MODULES = tuple(dict.fromkeys(module for module, _ in COMMANDS.values()))
 
 
+class _OneLine(argparse.ArgumentParser):
+    """argparse's parser whose usage error is one line naming the problem and where the fix is
+    (argparse prints the whole usage first: 18 lines for ``ehd run --St abc``), exit 2. Every
+    command's parser is one too (``add_subparsers`` makes its parsers of this class)."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (the flags: {self.prog} --help)\n")
+
+
 class _OnlyChosen:
     """The sub-parsers seen by a module's ``register``: only the chosen command is built (with
     the registry's help line); the module's other commands go to a parser that is dropped."""
@@ -291,7 +300,8 @@ class _OnlyChosen:
         if name != self._chosen:
             return argparse.ArgumentParser(add_help=False)
         kwargs["help"] = COMMANDS[name][1]
-        return self._sub.add_parser(name, **kwargs)
+        self.parser = self._sub.add_parser(name, **kwargs)
+        return self.parser
 
 
 class _Version(argparse.Action):
@@ -337,16 +347,19 @@ def _parser(argv=None) -> argparse.ArgumentParser:
     ``_parser()`` without ``argv`` builds none in full (``ehd --help``)."""
     import importlib
 
-    parser = argparse.ArgumentParser(
+    parser = _OneLine(
         prog="ehd", description="Elastohydrodynamic collision of two elastic spheres in a viscous "
         "fluid. Every command: ehd COMMAND --help. Example files: ehd examples DIR.")
     parser.add_argument("--version", action=_Version,
                         help="print the package and solver version and exit")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     chosen = _chosen_command(sys.argv[1:] if argv is None else argv)
+    parser.chosen = None  # the chosen command's parser, built in full
     for name, (module, help_line) in COMMANDS.items():
         if name == chosen:
-            importlib.import_module(module).register(_OnlyChosen(sub, name))
+            only = _OnlyChosen(sub, name)
+            importlib.import_module(module).register(only)
+            parser.chosen = getattr(only, "parser", None)
         else:
             sub.add_parser(name, help=help_line, add_help=False)
     return parser
@@ -497,7 +510,11 @@ def _parse(argv, stdout_closed: bool):
     stdout. Their output (argparse prints it to stdout, then exits 0) is flushed here, so a
     full stdout is exit 74 like any command's (``_StdoutLost``)."""
     try:
-        return _parser(argv).parse_args(argv)
+        parser = _parser(argv)
+        args, unknown = parser.parse_known_args(argv)
+        if unknown:  # named by the command's parser: "ehd run: error: ...", not "ehd: error"
+            (parser.chosen or parser).error(f"unrecognized arguments: {' '.join(unknown)}")
+        return args
     except SystemExit as exc:
         if exc.code not in (0, None):  # a usage error: argparse said it on stderr
             raise

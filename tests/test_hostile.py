@@ -310,6 +310,23 @@ def test_bad_input_gives_one_line_and_changes_nothing(ws, capsys, setup, argv, c
     assert CALLS == []  # and nothing was computed
 
 
+@pytest.mark.parametrize("argv, words", [
+    (["run", "--St", "abc", "--eps", "0.01"], "ehd run: error: argument --St: invalid float"),
+    (["sweep", "s.toml", "--workers", "0"], "ehd sweep: error: argument --workers"),
+    (["run", "--St", "5", "--eps", "0.01", "--bogus"], "ehd run: error: unrecognized arguments"),
+    (["run"], "ehd run: error: the following arguments are required"),
+    ([], "ehd: error: the following arguments are required: COMMAND"),
+])
+def test_a_usage_error_is_one_line_naming_the_command(ws, capsys, argv, words):
+    """argparse printed the whole usage before its error (18 lines for a bad --St), and an
+    unknown flag of a command as "ehd: error" (a hostile scan): one line, exit 2, the command's
+    name and where its flags are listed."""
+    got, _, err = ehd(capsys, *argv)
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert got == 2 and len(lines) == 1 and lines[0].startswith(words), err
+    assert "--help" in lines[0]
+
+
 @pytest.mark.parametrize("make", [lambda p: p.write_text("x"), lambda p: p.mkdir()],
                          ids=["file", "folder-that-is-no-store"])
 def test_a_refused_store_leaves_no_lock(ws, capsys, make):
