@@ -167,6 +167,9 @@ def cmd_run(args) -> int:
             paths = plot_scene(result, args.plot)
         if not args.json:
             print(f"figures: {', '.join(str(p) for p in paths if p.suffix == '.png')}")
+    elif args.plot:
+        print(f"ehd run: no figures in {args.plot}: the scene failed ({d['status']})",
+              file=sys.stderr)
     return EXIT_SCENE_FAILED if failed else 0
 
 

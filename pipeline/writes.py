@@ -29,9 +29,13 @@ __all__ = ["writing", "atomic_path", "temporary_paths", "write_all", "guarded_di
 
 def write_error(exc: OSError, what: str, path=None) -> WriteError:
     """The one line of a failed write of ``what`` (e.g. ``--save r.nc``)."""
+    import errno
+
     where = path if path is not None else (exc.filename or what)
-    return WriteError(f"{what}: cannot write {describe_os_error(exc, where)}; free some space "
-                      "or choose another path (nothing partial was left behind)")
+    fix = "free some space or choose another path" if exc.errno in (errno.ENOSPC, errno.EDQUOT) \
+        else "choose another path"
+    return WriteError(f"{what}: cannot write {describe_os_error(exc, where)}; {fix} (nothing "
+                      "partial was left behind)")
 
 
 def _remove(path) -> None:

@@ -199,6 +199,13 @@ CASES = [
     ("sweep-workers-1000", NO_SETUP, ["sweep", "s.toml", "--workers", "1000"], 2, "more than"),
     ("sweep-workers-0", NO_SETUP, ["sweep", "s.toml", "--workers", "0"], 2, "--workers"),
     ("sweep-workers-text", NO_SETUP, ["sweep", "s.toml", "--workers", "many"], 2, "--workers"),
+    # options that would do nothing (ignored before)
+    ("sweep-serial-workers", NO_SETUP, ["sweep", "s.toml", "--executor", "serial", "--workers",
+                                        "2"], 2, "serial sweep runs in this process alone"),
+    ("sweep-wait-workers-local", NO_SETUP, ["sweep", "s.toml", "--wait-workers", "5"], 2,
+     "acts only with --scheduler"),
+    ("sweep-connect-timeout-local", NO_SETUP, ["sweep", "s.toml", "--connect-timeout", "5"], 2,
+     "acts only with --scheduler"),
     # --- ehd run: output paths and physics (all before any solve)
     ("run-save-missing-dir", NO_SETUP,
      ["run", "--St", "5", "--eps", "0.01", "--save", "/nonexistent/d/x.nc"], 2, "does not exist"),
@@ -325,6 +332,15 @@ def test_a_usage_error_is_one_line_naming_the_command(ws, capsys, argv, words):
     lines = [line for line in err.splitlines() if line.strip()]
     assert got == 2 and len(lines) == 1 and lines[0].startswith(words), err
     assert "--help" in lines[0]
+
+
+def test_a_failed_scene_with_plot_says_why_there_is_no_figure(ws, capsys):
+    """ehd run --plot of a scene that fails drew nothing and said nothing of it (a hostile
+    scan): one line names the folder and the failure; exit 1 as for any failed scene."""
+    got, out, err = ehd(capsys, "run", "--St", "5", "--eps", "0.01", "--max-steps", "11",
+                        "--plot", "figs")
+    assert got == 1 and "max_steps" in out
+    assert err.strip() == "ehd run: no figures in figs: the scene failed (max_steps)", err
 
 
 @pytest.mark.parametrize("make", [lambda p: p.write_text("x"), lambda p: p.mkdir()],

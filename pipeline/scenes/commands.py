@@ -316,6 +316,9 @@ def cmd_scene(args) -> int:
                                scales=si_scales(scene))
         if not args.json:
             print(f"figures: {', '.join(str(p) for p in paths if p.suffix == '.png')}")
+    elif args.plot:
+        print(f"ehd scene: no figures in {args.plot}: the scene failed ({d['status']})",
+              file=sys.stderr)
     if failed:
         return EXIT_SCENE_FAILED
     if args.strict and d["warnings"]:

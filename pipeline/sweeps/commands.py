@@ -86,12 +86,28 @@ def register(sub) -> None:
     p.set_defaults(func=cmd_figures)
 
 
+def _check_inert_options(args) -> None:
+    """UsageError for an option that would do nothing (ignored before: a hostile scan)."""
+    from ..errors import UsageError
+
+    if args.executor == "serial" and args.workers is not None:
+        raise UsageError("--workers with --executor serial: a serial sweep runs in this process "
+                         "alone; drop --workers, or choose --executor threads or processes")
+    remote = args.scheduler is not None or args.scheduler_file is not None
+    for flag, value in (("--wait-workers", args.wait_workers),
+                        ("--connect-timeout", args.connect_timeout)):
+        if value is not None and not remote:
+            raise UsageError(f"{flag} acts only with --scheduler or --scheduler-file (a running "
+                             "dask scheduler); drop it for a local sweep")
+
+
 def cmd_sweep(args) -> int:
     from ..shipped import resolve_sweep
     from .config import load_sweep
     from .run import run_sweep
     from .runners import DEFAULT_RUNNER
 
+    _check_inert_options(args)
     sweep = load_sweep(resolve_sweep(args.sweep_file))  # ConfigError: one line, exit 2 (pipeline/errors.py)
     summary = run_sweep(sweep, store=args.store, runner=args.executor or DEFAULT_RUNNER,
                         workers=args.workers, address=args.scheduler,
