@@ -178,6 +178,10 @@ CASES = [
     # truncated variable's zarr.json; it was 2); without a manifest, no store of ours (2)
     ("sweep-store-zarr-json-garbage", _write("s.zarr/zarr.json", "{"), ["sweep", "s.toml"],
      EXIT_DAMAGED, "is damaged"),
+    ("sweep-store-plain-zarr", _write("pz.zarr/zarr.json", '{"zarr_format": 3, "node_type": '
+                                      '"group", "attributes": {}}'),
+     ["sweep", "s.toml", "--store", "pz.zarr"], 2, "is a zarr store but not an ehd sweep store; "
+                                                  "choose"),
     ("sweep-store-zarr-json-garbage-no-manifest", _write("p.zarr/zarr.json", "{"),
      ["sweep", "s.toml", "--store", "p.zarr"], 2, "cannot be opened"),
     ("sweep-store-other-schema", _schema, ["sweep", "s.toml"], 2, "schema"),

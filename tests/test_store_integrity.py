@@ -308,7 +308,7 @@ def test_a_bad_journal_record_is_skipped_counted_and_computed_again(ws, capsys, 
     edit(journal)
     code, out, err = ehd(capsys, "status", "s.zarr")
     assert code == 0 and "1 " in out and "bad lines skipped" in out, out + err
-    assert "finished scenes of an interrupted run" in out  # the other record is still good
+    assert "finished scenes not yet in the store" in out  # the other record is still good
     code, out, err = ehd(capsys, "sweep", "s.toml", "--executor", "serial")
     assert code == 0 and "bad lines skipped" in out, out + err
     assert CALLS == [(edited["St"], edited["eps"])]  # the edited scene only, computed again

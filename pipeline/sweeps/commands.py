@@ -195,8 +195,8 @@ def cmd_status(args) -> int:
     print(f"  not run   {int((status == 0).sum()):6d}")
     pending = pending_journal(args.store)
     if pending:
-        print(f"  journal   {pending:6d}   finished scenes of an interrupted run, merged by the "
-              "next ehd sweep")
+        print(f"  journal   {pending:6d}   finished scenes not yet in the store (a running "
+              "sweep merges them within seconds; after an interrupted one, the next ehd sweep)")
     if skipped:
         print(f"  journal   {skipped:6d}   bad lines skipped (their scenes run again)")
     if len(damage):

@@ -428,6 +428,8 @@ class SweepStore:
             self._load()
         except EhdError:  # the integrity check's own line (schema, damaged metadata)
             raise
+        except FileNotFoundError as exc:  # the integrity check's: a zarr store, none of ours
+            raise StoreMismatch(f"{exc}; choose another --store") from None
         except (ValueError, KeyError, OSError) as exc:  # e.g. a zarr store without consolidation
             raise StoreMismatch(f"{self.shown!r} cannot be opened as an ehd sweep store "
                                 f"({type(exc).__name__}: {exc}); choose another --store") from None
