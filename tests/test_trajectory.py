@@ -253,6 +253,26 @@ def test_cli_trajectory_never_replaces_what_it_did_not_write(tmp_path):
     assert out.returncode in (0, 1) and len(own.read_text().splitlines()) > 10, out.stderr
 
 
+def test_cli_trajectory_report_is_printed_before_a_full_disk(tmp_path, capsys, monkeypatch):
+    """The CSV is written after the report: a full disk (exit 74, one line) loses no number
+    computed (the report came only after the write, and was lost; a hostile scan)."""
+    import errno
+
+    import pipeline.writes as writes
+    from pipeline.cli import main
+    from pipeline.errors import EXIT_WRITE
+
+    def full(contents, what):
+        raise writes.write_error(OSError(errno.ENOSPC, "No space left on device"), what)
+
+    monkeypatch.setattr(writes, "write_all", full)
+    code = main(["scene", GLYCEROL, "--trajectory", str(tmp_path / "t.csv"), "--accuracy",
+                 "fast", "--no-range"])
+    out, err = capsys.readouterr()
+    assert code == EXIT_WRITE and "trajectory: released at" in out and "e_wet" in out, err
+    assert len(err.strip().splitlines()) == 1 and "No space left" in err
+
+
 def test_cli_trajectory_of_a_bouncing_sphere(tmp_path):
     # Gondret et al.'s St 152 run settling from 40 a: the CSV (t_s, gap_m, ...), the figure and
     # the JSON keys of the contract; the arriving speed is the scene's v0

@@ -293,9 +293,9 @@ def cmd_scene(args) -> int:
         d.update(status="error", message=reason)
         failed = True
     if whole:
-        from .trajectory import write_trajectory
+        from .trajectory import trajectory_keys
 
-        d.update(write_trajectory(whole, args, failed))
+        d.update(trajectory_keys(whole[1]))
     if args.json:
         print(json.dumps(d))
         for w in d["warnings"]:
@@ -306,6 +306,10 @@ def cmd_scene(args) -> int:
             from .trajectory import trajectory_summary
 
             print(trajectory_summary(d, args.trajectory))
+    if whole:  # after the report: a failed write (a full disk) loses no number computed
+        from .trajectory import write_trajectory
+
+        write_trajectory(whole, args, failed)
     if args.plot and not failed:
         from ..plots.scene_plots import plot_scene, si_scales
 

@@ -261,9 +261,9 @@ def check_trajectory_path(path) -> None:
                         "replaced: give a new path, or move it away yourself")
 
 
-def write_trajectory(whole, args, failed) -> dict:
-    """Write the CSV (``--trajectory``) and the figure (``--plot``) of a computed trajectory;
-    return its JSON keys (``trajectory_keys``)."""
+def write_trajectory(whole, args, failed) -> None:
+    """Write the CSV (``--trajectory``) and the figure (``--plot``) of a computed trajectory (its
+    JSON keys: ``trajectory_keys``)."""
     tr, read, timings = whole
     if args.trajectory is not None:
         from ..writes import write_all
@@ -275,7 +275,6 @@ def write_trajectory(whole, args, failed) -> dict:
 
         with guarded_dir(args.plot, f"--plot {args.plot}"):
             plot_trajectory(tr, args.plot, reading=read)
-    return trajectory_keys(read)
 
 
 def trajectory_summary(d: dict, path=None) -> str:
