@@ -566,9 +566,9 @@ def _pulled_back_from_afar(result):
         return
     reach = x_c.max() / result.x0_over_x1 * result.x0_over_a
     if reach > LUBRICATION_REACH:
-        _noted(result, f"they were drawn back from X = {reach:.3g} a (x0 = {result.x0_over_a:g} a), "
-                       "beyond the lubrication premise X << a: whether they stick is outside the "
-                       "model")
+        _noted(result, f"they were drawn back from X = {reach:.3g} a (x0 = "
+                       f"{result.x0_over_a:g} a), beyond the lubrication premise X << a: whether "
+                       "they stick is outside the model")
 
 
 def _wet_restitution(physics, shortcuts, cols, x_ref):

@@ -8,8 +8,9 @@ checked against the dimension the field needs, and converted to SI. Every error 
 A string is read as a *quantity*, never evaluated as an expression: it must be a number followed
 by a unit expression (``QUANTITY``: letters, digits, ``* / ^ ( ) .`` and spaces), which is then
 handed to pint, and pint's magnitude must be that number (a number among the units, as in
-``'100 um 2'``, which pint would multiply in, is refused); anything else (``'__import__("os")'``, quotes, brackets, commas) is refused before
-pint sees it, and any failure inside pint is one line naming the field. A value whose magnitude in
+``'100 um 2'``, which pint would multiply in, is refused); anything else
+(``'__import__("os")'``, quotes, brackets, commas) is refused before pint sees it, and any
+failure inside pint is one line naming the field. A value whose magnitude in
 SI is subnormal or absurd (nonzero and below ``TINY`` or above ``HUGE``) is refused with the
 field's range: no length of 1e-320 m reaches the solver to underflow there.
 """

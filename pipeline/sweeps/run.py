@@ -257,8 +257,8 @@ def check_store_name(path, label: str = "store") -> None:
     from pathlib import Path
 
     from ..cli_shared import check_name_length
-    from .journal import _journal_path
     from ..errors import PathError
+    from .journal import _journal_path
     from .store import _lock_path, _old_path, _tmp_path, unnamed
 
     if not str(path).strip():
