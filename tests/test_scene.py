@@ -606,3 +606,33 @@ source = "own measurement"
         bad = write(tmp_path, f"[pairs.odd]\n{body}\n", "bad_pairs.toml")
         with pytest.raises(MaterialError, match=message):
             load_table([bad], user_files=False)
+
+
+# ---- the Python API as examples/scene_in_python.py uses it (a hostile scan) --------------------
+def test_v0_given_by_dataclasses_replace_is_read_and_checked():
+    """``dataclasses.replace(scene, v0=...)``: a string with units is read as the scene file
+    reads it; a bool (solved as 1 m/s), a negative speed (named as a negative St), NaN or None
+    are refused naming v0."""
+    import dataclasses
+
+    from pipeline.scenes.commands import load_scene
+
+    scene = load_scene(str(EXAMPLES / "glass_beads_water.toml"), {})
+    assert dataclasses.replace(scene, v0="20 cm/s").v0 == pytest.approx(0.2, rel=1e-15)
+    assert dataclasses.replace(scene, v0=1).v0 == 1.0
+    for bad in (True, -0.1, math.nan, None):
+        with pytest.raises(ValueError, match=r"^v0 = .*m/s"):
+            dataclasses.replace(scene, v0=bad)
+
+
+def test_run_scene_of_spheres_the_outer_flow_stops_says_so():
+    """An approach speed the outer flow stops before x0 (v0 0): run_scene raised
+    ZeroDivisionError; it names the case and the report that describes it."""
+    from pipeline.scenes.commands import load_scene
+    from pipeline.scenes.run import stopped_result
+
+    scene = load_scene(str(EXAMPLES / "glass_beads_water.toml"), {"approach_speed": "1 mm/s"})
+    assert scene.stops_outside
+    with pytest.raises(ValueError, match="stops the spheres before x0.*stopped_result"):
+        run_scene(scene, accuracy="fast")
+    assert stopped_result(scene)["status"] == "ok"

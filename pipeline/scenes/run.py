@@ -246,6 +246,10 @@ def run_scene(scene: Scene, accuracy: str = "standard", sensitivity_solves: bool
 
     from ..environment import compile_notice
 
+    if scene.stops_outside:  # no film collision to solve (a ZeroDivisionError before)
+        raise ValueError(f"the outer flow stops the spheres before x0 (approach speed "
+                         f"{scene.approach_speed:.4g} m/s): they stick without a film collision; "
+                         "stopped_result(scene) gives the report ehd scene prints for it")
     compile_notice()  # one line when the solver is about to compile (a silent minute otherwise)
     outer = scene.outer_flow()
     auto = [p for p in PIECES if getattr(scene, p.field) == "auto"]

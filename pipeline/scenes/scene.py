@@ -28,6 +28,7 @@ Building a scene from a file is in :mod:`pipeline.scenes.scene_file`, the validi
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 from solver.physics import Physics, codes
@@ -130,6 +131,23 @@ class Scene:
         # a forced law the fluid has no constants for is refused here, before anything is solved
         self._viscosity_law(self.viscosity_law)
         self._density_law(self.density_law)
+        # v0 as dataclasses.replace may give it (examples/scene_in_python.py): a string with
+        # units read as the scene file's, a number of m/s; 0 only where the outer flow stops
+        # the spheres (a bool was solved as 1 m/s, a negative speed was named as a negative St)
+        v0 = self.v0
+        if isinstance(v0, str):
+            from .scene_file import _SPEED
+            from .units import to_si
+
+            object.__setattr__(self, "v0", to_si(v0, _SPEED, "v0"))
+        elif isinstance(v0, bool) or not isinstance(v0, numbers.Real) or not (
+                math.isfinite(v0) and v0 >= 0.0):
+            from .units import UnitError
+
+            raise UnitError(f"v0 = {v0!r}: the impact speed at x0 is a number of m/s (SI) or a "
+                            "string with units ('10 cm/s'), finite and > 0")
+        else:
+            object.__setattr__(self, "v0", float(v0))
 
     @property
     def stops_outside(self) -> bool:
