@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import functools
 import math
+import numbers
 import time
 from dataclasses import replace
 
@@ -187,9 +188,11 @@ def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 
     elif eps is not None:
         raise TypeError("collide(physics, ...): eps is part of the Physics; do not pass it twice")
     numerics = resolve(accuracy, **overrides)
-    if not (math.isfinite(x_ref_x0) and x_ref_x0 >= 1.0):
-        raise ValueError(f"x_ref_x0 = {x_ref_x0!r}: the reference separation must be finite and "
-                         "at least the start x0 (x_ref_x0 >= 1)")
+    if isinstance(x_ref_x0, (bool, np.bool_)) or not isinstance(x_ref_x0, numbers.Real) or not (
+            math.isfinite(x_ref_x0) and x_ref_x0 >= 1.0):
+        raise ValueError(f"x_ref_x0 = {x_ref_x0!r}: the reference separation must be a finite "
+                         "number, at least the start x0 (x_ref_x0 >= 1)")
+    x_ref_x0 = float(x_ref_x0)  # an int or numpy scalar is stored as the float it means
     wall = time.perf_counter()
     with deferred_interrupt():  # Ctrl-C or SIGTERM inside compiled code: taken on return
         head = rigid_head(physics, numerics)

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import functools
 import math
+import numbers
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -38,6 +39,14 @@ X0_OVER_A = 0.01  # the scene layer's default near-field start (docs/scenes.md)
 X_REF_OVER_A = 0.1  # where e_far reads the speeds by default (docs/model.md says why)
 START_OVER_A = 1.0  # where the outer approach starts by default
 MAX_OVER_A = 100.0  # the series converges anywhere; beyond 100 a the wall term is below 1 %
+# The outer series' cost grows as (x0/a)^-1/2 (e_far of St 30: 0.18 s at x0 = 1e-6 a, 2.1 s at
+# 1e-8, 16 s at 1e-10, minutes at 1e-12, then an allocation beyond memory): the nearest start
+# taken. A scene's eps check keeps its x0 far above it.
+MIN_X0_OVER_A = 1e-8
+# The "pair" geometry's radius ratio a2/a1 within [1/PAIR_RATIO_MAX, PAIR_RATIO_MAX]: its series
+# cost 1.3 s at 100, 9 s at 1e3, 4 min at 1e4 and did not converge at 1e6; beyond 1e3 the larger
+# sphere is a wall to the outer flow (e_far of St 30 from the wall's: 3.3e-4 at 100, 3.4e-5 at 1e3)
+PAIR_RATIO_MAX = 1e3
 
 _GAUSS = np.polynomial.legendre.leggauss(16)  # per panel of width <= 1/2 in ln(x/a)
 PANEL = 0.5  # 16 nodes per half unit of ln x: converged to 1e-12 (tests/test_far_field.py)
@@ -115,7 +124,7 @@ class OuterFlow:
         (two free spheres of any radii and masses, in their relative motion at zero momentum:
         ``outer_flow.pair_resistance``, ``pair_added_mass``).
     x0_over_a
-        The near-field start ``x0/a`` (the collision's ``x0``), in (0, 1].
+        The near-field start ``x0/a`` (the collision's ``x0``), in ``[MIN_X0_OVER_A, 1]``.
     x_ref_over_a
         Where ``e_far`` reads the approach and departure speeds, in ``[x0_over_a,
         start_over_a]``.
@@ -128,8 +137,8 @@ class OuterFlow:
         with sphere 1's volume, the smaller sphere's in a scene), in [0, 1e6]; 0: no added mass (a dimensionless run has no
         densities).
     radius_ratio, mass_ratio
-        ``a2/a1`` and ``m2/m1`` of the "pair" geometry (finite, > 0); 1 for the others, which do
-        not read them.
+        ``a2/a1`` and ``m2/m1`` of the "pair" geometry (finite, > 0; the radii within
+        ``PAIR_RATIO_MAX`` of each other); 1 for the others, which do not read them.
     """
 
     geometry: str = "wall"
@@ -147,13 +156,14 @@ class OuterFlow:
         for name in ("x0_over_a", "x_ref_over_a", "start_over_a", "density_ratio",
                      "radius_ratio", "mass_ratio"):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) \
+            if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real) \
                     or not math.isfinite(value):
                 raise ValueError(f"{name} = {value!r}: must be a finite number")
             object.__setattr__(self, name, float(value))
-        if not 0.0 < self.x0_over_a <= 1.0:
+        if not MIN_X0_OVER_A <= self.x0_over_a <= 1.0:
             raise ValueError(f"x0_over_a = {self.x0_over_a:g}: the near-field start must be in "
-                             "(0, 1] (x0/a)")
+                             f"[{MIN_X0_OVER_A:g}, 1] (x0/a; nearer, the outer series takes "
+                             "minutes to hours)")
         if not self.x0_over_a < self.start_over_a <= MAX_OVER_A:
             raise ValueError(f"outer_start_over_a = {self.start_over_a:g}: the outer start must "
                              f"lie beyond the near-field start, in ({self.x0_over_a:g}, "
@@ -169,6 +179,11 @@ class OuterFlow:
             value = getattr(self, name)
             if self.geometry == "pair" and not value > 0.0:
                 raise ValueError(f"{name} = {value:g}: must be > 0 (a2/a1, m2/m1)")
+            if self.geometry == "pair" and name == "radius_ratio" and not (
+                    1.0 / PAIR_RATIO_MAX <= value <= PAIR_RATIO_MAX):
+                raise ValueError(f"radius_ratio = {value:g}: the pair's radii may differ by at "
+                                 f"most {PAIR_RATIO_MAX:g}x; beyond, the larger sphere is a wall "
+                                 "to the outer flow: use geometry 'wall'")
             if self.geometry != "pair" and value != 1.0:
                 raise ValueError(f"{name} = {value:g}: only the 'pair' outer geometry has one "
                                  "(the others are 1)")

@@ -75,7 +75,7 @@ class Group:
                 raise ValueError(f"{label} must be one of {list(self.choices)}, got {value!r}")
             return value
         try:
-            if isinstance(value, (bool, str, bytes)):  # "5" is refused like True
+            if isinstance(value, (bool, np.bool_, str, bytes)):  # "5" is refused like True
                 raise TypeError
             v = float(value)
         except (TypeError, ValueError):

@@ -449,3 +449,39 @@ def test_history_restitution_from_far_outer_starts():
     dying = collide(10.0, 1e-3)
     assert ff.history_restitution(dying, ff.OuterFlow(start_over_a=100.0,
                                                       density_ratio=5.0)) == 0.0
+
+
+# ---- inputs the outer flow cannot serve, and numpy scalars (a hostile scan) --------------------
+def test_inputs_beyond_the_outer_series_reach_are_refused():
+    """x0/a below MIN_X0_OVER_A took minutes (1e-12: 244 s) or raised MemoryError (1e-20); a
+    pair whose radii differ by over PAIR_RATIO_MAX took minutes (1e4) or raised
+    FloatingPointError (1e6): refused with their ranges, and the wall named for the pair."""
+    from solver.far_field import MIN_X0_OVER_A, PAIR_RATIO_MAX, OuterFlow
+
+    for tiny in (MIN_X0_OVER_A / 10, 1e-20):
+        with pytest.raises(ValueError, match=r"x0_over_a = .*\[1e-08, 1\]"):
+            OuterFlow(x0_over_a=tiny)
+    for ratio in (PAIR_RATIO_MAX * 10, 1.0 / (PAIR_RATIO_MAX * 10), 1e6):
+        with pytest.raises(ValueError, match="radius_ratio .* use geometry 'wall'"):
+            OuterFlow(geometry="pair", radius_ratio=ratio, mass_ratio=1.0)
+    OuterFlow(x0_over_a=MIN_X0_OVER_A)  # the ends themselves are taken
+    OuterFlow(geometry="pair", radius_ratio=PAIR_RATIO_MAX, mass_ratio=1e9)
+
+
+def test_numpy_scalars_are_numbers_and_bools_are_not():
+    """np.float32(0.01) was refused as "must be a finite number" (Physics takes it); a numpy
+    bool is refused in OuterFlow, Physics and collide's x_ref_x0 as Python's bool is."""
+    from solver import Physics, collide
+    from solver.far_field import OuterFlow
+
+    assert OuterFlow(x0_over_a=np.float32(0.01)).x0_over_a == float(np.float32(0.01))
+    assert OuterFlow(start_over_a=np.int64(2)).start_over_a == 2.0
+    with pytest.raises(ValueError, match="x0_over_a"):
+        OuterFlow(x0_over_a=np.bool_(True))
+    with pytest.raises(ValueError, match="St"):
+        Physics(St=np.bool_(True), eps=0.01)
+    for bad in (True, np.bool_(True), "2", None):
+        with pytest.raises(ValueError, match="x_ref_x0"):
+            collide(5.0, 0.01, accuracy="fast", x_ref_x0=bad)
+    c = collide(5.0, 0.01, accuracy="fast", x_ref_x0=np.int64(2))
+    assert type(c.x_ref_x0) is float and c.to_dict()["x_ref_x0"] == 2.0

@@ -636,3 +636,22 @@ def test_run_scene_of_spheres_the_outer_flow_stops_says_so():
     with pytest.raises(ValueError, match="stops the spheres before x0.*stopped_result"):
         run_scene(scene, accuracy="fast")
     assert stopped_result(scene)["status"] == "ok"
+
+
+def test_a_sphere_over_a_thousand_times_larger_is_a_wall_to_the_outer_flow():
+    """10 um against 10 cm (listed either way): the pair's series took 110 s (10 m: did not
+    converge); the larger sphere is a wall to the outer flow (e_far of St 30 3.4e-5 from the
+    pair's at 1e3, solver/far_field.py PAIR_RATIO_MAX), the added mass the small sphere's."""
+    from pipeline.scenes.commands import load_scene
+    from solver.far_field import PAIR_RATIO_MAX
+
+    path = str(EXAMPLES / "glass_beads_water.toml")
+    for first, second in (("10 um", "10 cm"), ("10 cm", "10 um")):
+        scene = load_scene(path, {"radius1": first, "radius2": second})
+        outer = scene.outer_flow()
+        assert scene.outer_geometry == "wall" and outer.geometry == "wall"
+        small = min(scene.body1, scene.body2, key=lambda b: b.radius)
+        phi = scene.fluid.density * 4.0 / 3.0 * math.pi * small.radius**3 / scene.reduced_mass
+        assert outer.density_ratio == pytest.approx(phi, rel=1e-12)
+    near = load_scene(path, {"radius1": "10 um", "radius2": f"{PAIR_RATIO_MAX * 5} um"})
+    assert near.outer_geometry == "pair"

@@ -374,12 +374,19 @@ class Scene:
     @property
     def outer_geometry(self) -> str | None:
         """``"wall"``, ``"spheres"`` (two equal radii and masses) or ``"pair"`` (two free spheres
-        of any radii and masses, solver/model/outer_flow.py ``pair_resistance``)."""
+        of any radii and masses, solver/model/outer_flow.py ``pair_resistance``); a sphere over
+        ``far_field.PAIR_RATIO_MAX`` times the other's radius is a wall to the outer flow (its
+        series took minutes at 1e4 and did not converge at 1e6)."""
         if self.body2.wall:
             return "wall"
         if math.isclose(self.body1.radius, self.body2.radius, rel_tol=1e-9) and math.isclose(
                 self.body1.mass, self.body2.mass, rel_tol=1e-9):
             return "spheres"
+        from solver.far_field import PAIR_RATIO_MAX
+
+        small, large = sorted((self.body1.radius, self.body2.radius))
+        if large > PAIR_RATIO_MAX * small:  # to the outer flow the larger sphere is a wall
+            return "wall"
         return "pair"
 
     @property
@@ -417,7 +424,7 @@ class Scene:
             return 0.0
         first, second = self._outer_bodies
         volume = 4.0 / 3.0 * math.pi * first.radius**3
-        share = 1.0 if second.wall else 0.5
+        share = 1.0 if self.outer_geometry == "wall" else 0.5
         return rho_f * volume * share / self.reduced_mass
 
     def outer_flow(self):

@@ -58,6 +58,8 @@ def _outer(scene, law):
         raise SceneError("the trajectory needs the fluid's density (fluid.density, e.g. "
                          "'998 kg/m^3'): buoyancy, added mass and the drag's Reynolds number")
     geometry = scene.outer_geometry
+    if geometry == "wall" and not b2.wall:  # a sphere so much larger it is a wall: it stays
+        b1, b2 = scene._outer_bodies
     return Outer(geometry, b1.radius, b1.mass, b2.radius, b2.mass, scene.fluid.density,
                  scene.fluid.viscosity, STANDARD_GRAVITY, law)
 
