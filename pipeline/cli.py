@@ -114,7 +114,8 @@ def add_outer_flags(p) -> None:
     g.add_argument("--outer-geometry", choices=("wall", "spheres"), default="wall",
                    help="sphere and plane wall, or two equal spheres; default wall")
     g.add_argument("--x0-over-a", type=float, default=ff.X0_OVER_A, metavar="X0_OVER_A",
-                   help=f"the near-field start x0/a, in (0, 1]; default {ff.X0_OVER_A:g}")
+                   help=f"the near-field start x0/a, in [{ff.MIN_X0_OVER_A:g}, 1]; default "
+                        f"{ff.X0_OVER_A:g}")
     g.add_argument("--x-ref-over-a", type=float, default=ff.X_REF_OVER_A, metavar="X_REF_OVER_A",
                    help="where e_far reads approach and departure speeds, x_ref/a, in "
                         f"[x0/a, outer start]; default {ff.X_REF_OVER_A:g}")
