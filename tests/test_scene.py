@@ -655,3 +655,25 @@ def test_a_sphere_over_a_thousand_times_larger_is_a_wall_to_the_outer_flow():
         assert outer.density_ratio == pytest.approx(phi, rel=1e-12)
     near = load_scene(path, {"radius1": "10 um", "radius2": f"{PAIR_RATIO_MAX * 5} um"})
     assert near.outer_geometry == "pair"
+
+
+def test_load_scene_names_an_unknown_field_and_takes_one_materials_file():
+    """A bare KeyError for an unknown field, and a materials path taken character by character
+    ("materials file 'e' not found"; a hostile scan)."""
+    from pipeline.scenes.commands import load_scene
+    from pipeline.scenes.materials import MaterialError
+
+    path = str(EXAMPLES / "glass_beads_water.toml")
+    with pytest.raises(ValueError, match="unknown scene field 'v00' \\(did you mean 'v0'\\?\\)"):
+        load_scene(path, {"v00": "1 m/s"})
+    with pytest.raises(MaterialError, match="'nowhere.toml' not found"):
+        load_scene(path, materials="nowhere.toml")
+
+
+def test_settling_two_equal_spheres_is_refused_for_the_right_reason():
+    """Glass beads in water: the message said "needs body1 denser than the fluid", but glass is
+    denser; two equal spheres have no weight relative to each other."""
+    from pipeline.scenes.commands import load_scene
+
+    with pytest.raises(ValueError, match="two equal spheres fall together"):
+        load_scene(str(EXAMPLES / "glass_beads_water.toml"), {"approach_speed": "settling"})

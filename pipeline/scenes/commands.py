@@ -67,8 +67,11 @@ def load_scene(path=None, flags: dict | None = None, materials=(), *, user_files
         With a message naming the field (SceneError, UnitError, MaterialError).
     """
     from .materials import load_table
+    from .scene import SceneError
     from .scene_file import scene_from_dict
 
+    if isinstance(materials, (str, bytes)) or hasattr(materials, "__fspath__"):
+        materials = (materials,)  # one file, not its name's characters
     data = _read_scene_file(path) if path else {}
     given = [k for k in _ONE_SPEED if (flags or {}).get(k) not in (None, False)]
     if len(given) == 2:
@@ -82,6 +85,13 @@ def load_scene(path=None, flags: dict | None = None, materials=(), *, user_files
             body["wall"] = True
             body.pop("radius", None)
             continue
+        if dest not in _FLAG_FIELDS:
+            from difflib import get_close_matches
+
+            near = get_close_matches(str(dest), list(_FLAG_FIELDS) + ["wall2"], n=1)
+            raise SceneError(f"unknown scene field {dest!r}"
+                             + (f" (did you mean {near[0]!r}?)" if near else "")
+                             + f"; the fields: {', '.join(sorted(_FLAG_FIELDS))}, wall2")
         section, key = _FLAG_FIELDS[dest]
         if key in _ONE_SPEED:  # a speed given as a flag replaces the file's other speed
             data.pop(_ONE_SPEED[key], None)

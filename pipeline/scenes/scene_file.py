@@ -315,7 +315,8 @@ def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
                              "= '0.3 um', --roughness1), or leave e_dry out")
         e_dry_source = "the scene's e_dry"
     scene = Scene(title=title, body1=body1, body2=body2, fluid=fluid,
-                  v0=approach if v0 is None else v0, x0=x0,
+                  # a stand-in speed until at_settling or at_approach_speed maps the approach
+                  v0=(1.0 if approach == "settling" else approach) if v0 is None else v0, x0=x0,
                   ambient_pressure=ambient, cavitation_pressure=p_cav,
                   cavitation_pressure_source=how, cavitation=cavitation,
                   outer_start=outer_start, x_ref=x_ref, **laws,

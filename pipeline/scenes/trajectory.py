@@ -115,6 +115,10 @@ def settling_arrival(scene) -> tuple:
     outer = _outer(scene, law)
     terminal = _terminal(outer)
     if not terminal > 0.0:
+        if scene.outer_geometry == "spheres":  # a weight, but no relative one
+            raise SceneError("approach_speed = 'settling' needs one body to settle onto the "
+                             "other: two equal spheres fall together, never closer (a wall, "
+                             "or unequal spheres, settle): give the approach speed itself")
         raise SceneError("approach_speed = 'settling' needs body1 denser than the fluid (it "
                          "would rise, not settle): give the approach speed itself")
     if scene.stokes_of(terminal) < QUASI_STEADY_BELOW:
