@@ -522,8 +522,11 @@ def test_scene_e_dry_without_roughness_is_exit_2(capsys, monkeypatch):
     (lambda tmp: ["s.zarr", "--density-ratio", "1e300"], "--density-ratio"),
     (lambda tmp: ["s.zarr", "--density-ratio", "nan"], "--density-ratio"),
     (lambda tmp: ["s.zarr", "--density-ratio", "-1"], "--density-ratio"),
+    # a flag for the other kind of input, which it ignored (a hostile scan)
+    (lambda tmp: ["s.zarr", "--n", "5"], "--n acts on a scene file"),
+    (lambda tmp: [str(EXAMPLE), "--density-ratio", "0.4"], "--density-ratio acts on a store"),
 ], ids=["folder", "empty", "n-negative", "n-zero", "density-ratio-huge", "density-ratio-nan",
-        "density-ratio-negative"])
+        "density-ratio-negative", "n-on-a-store", "density-ratio-on-a-scene"])
 def test_export_dem_user_errors_are_exit_2(ws, tmp_path, capsys, make, keyword):
     folder = tmp_path / "plain"
     folder.mkdir()

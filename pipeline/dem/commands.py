@@ -193,14 +193,23 @@ def cmd_export_dem(args) -> int:
     check_accuracy(args.accuracy)
     fit_range = _fit_range(args)
     _check_kind(args.kind)
-    _check_density_ratio(args.density_ratio)
-    if args.n < 1:
-        raise UsageError(f"--n {args.n}: give a whole number of speeds >= 1")
     if not args.path.strip():
         raise UsageError("STORE_OR_SCENE: empty path; give a sweep store (.zarr) or a scene file")
     path = Path(args.path)
     if not path.exists():
         raise UsageError(f"{args.path}: no such store or scene file")
+    # each flag for one kind of input: given with the other, it would do nothing
+    if path.is_dir() and args.n is not None:
+        raise UsageError(f"--n acts on a scene file's speeds; {args.path} is a store, whose "
+                         "scenes are its rows: drop --n")
+    if not path.is_dir() and args.density_ratio is not None:
+        raise UsageError(f"--density-ratio acts on a store (a scene file has its densities); "
+                         f"drop it for {args.path}")
+    args.density_ratio = 0.0 if args.density_ratio is None else args.density_ratio
+    args.n = 13 if args.n is None else args.n
+    _check_density_ratio(args.density_ratio)
+    if args.n < 1:
+        raise UsageError(f"--n {args.n}: give a whole number of speeds >= 1")
     if path.is_dir():
         from pipeline import open_results
         from pipeline.sweeps.commands import opening_store
@@ -332,9 +341,9 @@ def register(sub) -> None:
                                           "YADE settings")
     p.add_argument("path", metavar="STORE_OR_SCENE", help="a sweep store (.zarr) or a scene file")
     p.add_argument("--out", default="dem_export", help="output folder (default dem_export)")
-    p.add_argument("--density-ratio", type=float, default=0.0,
+    p.add_argument("--density-ratio", type=float, default=None,
                    help="stores only: rho_f/rho_p for Legendre's St_L (default 0)")
-    p.add_argument("--n", type=int, default=13,
+    p.add_argument("--n", type=int, default=None,
                    help="scenes only: speeds, log-spaced from 0.1 to 10 v0 (default 13)")
     p.add_argument("--fit-range", nargs=2, type=float, default=None, metavar=("LO", "HI"),
                    help="fit and calibrate only on rows with LO <= St <= HI (our St, at v0: where "
