@@ -179,6 +179,24 @@ def _check_kind(kind: str) -> None:
                          "YADE without fluid coupling; cfd-dem: resolved CFD-DEM)")
 
 
+def _check_input_flags(args, store: bool) -> None:
+    """``--n`` (a scene file's speeds) and ``--density-ratio`` (a store's) checked, their defaults
+    set; each refused with the other kind of input, where it would do nothing."""
+    from pipeline.cli import UsageError
+
+    if store and args.n is not None:
+        raise UsageError(f"--n acts on a scene file's speeds; {args.path} is a store, whose "
+                         "scenes are its rows: drop --n")
+    if not store and args.density_ratio is not None:
+        raise UsageError(f"--density-ratio acts on a store (a scene file has its densities); "
+                         f"drop it for {args.path}")
+    args.density_ratio = 0.0 if args.density_ratio is None else args.density_ratio
+    args.n = 13 if args.n is None else args.n
+    _check_density_ratio(args.density_ratio)
+    if args.n < 1:
+        raise UsageError(f"--n {args.n}: give a whole number of speeds >= 1")
+
+
 def cmd_export_dem(args) -> int:
     from pipeline.cli import UsageError, check_output_dir
     from pipeline.cli_shared import check_accuracy
@@ -198,18 +216,7 @@ def cmd_export_dem(args) -> int:
     path = Path(args.path)
     if not path.exists():
         raise UsageError(f"{args.path}: no such store or scene file")
-    # each flag for one kind of input: given with the other, it would do nothing
-    if path.is_dir() and args.n is not None:
-        raise UsageError(f"--n acts on a scene file's speeds; {args.path} is a store, whose "
-                         "scenes are its rows: drop --n")
-    if not path.is_dir() and args.density_ratio is not None:
-        raise UsageError(f"--density-ratio acts on a store (a scene file has its densities); "
-                         f"drop it for {args.path}")
-    args.density_ratio = 0.0 if args.density_ratio is None else args.density_ratio
-    args.n = 13 if args.n is None else args.n
-    _check_density_ratio(args.density_ratio)
-    if args.n < 1:
-        raise UsageError(f"--n {args.n}: give a whole number of speeds >= 1")
+    _check_input_flags(args, path.is_dir())
     if path.is_dir():
         from pipeline import open_results
         from pipeline.sweeps.commands import opening_store
