@@ -89,7 +89,8 @@ DEM_KINDS = {
         "coupling)", "no fluid force in the code: the contact law carries the whole loss the "
         "fluid causes, both speeds read at the reading distance x_ref (e_far, the outer flow's "
         "Stokes resistance and added mass from x_ref to x0 and back included); the law sees the "
-        "approach speed at x_ref (v_ref_m_s), which the particle keeps down to contact there"),
+        "approach speed at x_ref (the export's v_ref_m_s), which the particle keeps down to "
+        "contact there"),
     "cfd-dem": DemKind(
         "cfd-dem", "e_wet", "v0_m_s", None, "resolved CFD-DEM",
         "the CFD computes the fluid force on the particle down to near contact (x0), so the "
