@@ -509,3 +509,38 @@ def test_the_store_variables_table_has_every_variable():
     table = table[:table.index("\n#")]
     listed = set(re.findall(r"`(\w+)`", table))
     assert not set(VARIABLES) - listed, set(VARIABLES) - listed
+
+
+def _scenes_doc_section(heading: str) -> str:
+    text = (REPO / "docs" / "scenes.md").read_text()
+    section = text[text.index(heading):]
+    return section[:section.index("\n## ", 1)]
+
+
+def test_the_scene_docs_list_every_material_check_flag_and_input():
+    """docs/scenes.md names every shipped material and fluid, every validity check, every flag
+    of ``ehd scene`` and every key of the JSON ``inputs``: four lists had fallen behind the code
+    (delrin, nylon, four liquids; the roughness check; --asperity-contact, --e-dry;
+    roughness_m, approach_speed_source; a documentation check)."""
+    from pipeline.cli_shared import add_numerics_flags
+    from pipeline.scenes.checks import THRESHOLDS
+    from pipeline.scenes.commands import load_scene
+    from pipeline.scenes.materials import load_table
+
+    text = (REPO / "docs" / "scenes.md").read_text()
+    named = set(re.findall(r"`([\w.-]+)`", text))
+    table = load_table(user_files=False)
+    shipped = set(table.solids) | set(table.fluids)
+    assert not shipped - named, shipped - named
+    rows = set(re.findall(r"^\| `(\w+)`", text, re.M))  # the first column of its tables
+    assert not set(THRESHOLDS) - rows, set(THRESHOLDS) - rows
+    numerics = argparse.ArgumentParser()
+    add_numerics_flags(numerics)  # "the numerical flags of ehd run apply too"
+    flags = {o for a in _subparser("scene")._actions for o in a.option_strings
+             if o.startswith("--")} - {o for a in numerics._actions for o in a.option_strings}
+    flags = {f for f in flags if not (f.endswith("2") and f[:-1] + "1" in flags)}  # "...2"
+    mentioned = set(re.findall(r"(--[a-z][\w-]*)", text))
+    assert not flags - mentioned - {"--help"}, flags - mentioned
+    inputs = load_scene(str(REPO / "examples" / "glass_beads_water.toml"), {}).inputs()
+    keys = set(inputs) | set(inputs["body1"]) | set(inputs["fluid"])
+    assert not keys - named, keys - named

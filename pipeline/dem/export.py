@@ -653,7 +653,8 @@ def export_files(rows: list[dict], source: str, *, fit_range=None, density_ratio
         if "liggghts" in s:
             files.update(_snippets(name, grp, s, store, density_ratio))
         if progress and len(groups) > 1:
-            progress(f"group {name} ({k + 1}/{len(groups)}) fitted and calibrated, "
+            done = "fitted and calibrated" if "liggghts" in s else "not fitted (see its note)"
+            progress(f"group {name} ({k + 1}/{len(groups)}) {done}, "
                      f"{time.perf_counter() - t0:.1f} s")
     buf = _csv_text(rows)
     return {"restitution.csv": buf,

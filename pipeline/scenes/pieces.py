@@ -180,8 +180,9 @@ PIECES = (
                       "approach), or forced on / off", choices=ROUGHNESS_CHOICES,
                       group="contact of the solids"),
             SceneFlag("--e-dry", "e_dry",
-                      "dry coefficient of restitution of the pair, in (0, 1] (default 1: "
-                      "elastic; acts only where the asperities touch)",
+                      "dry coefficient of restitution of the pair, in (0, 1] (default: the "
+                      "pair's from the materials table's [pairs], else 1, elastic; acts only "
+                      "where the asperities touch)",
                       group="contact of the solids")),
         variants=_stiffness_variants),
 )
