@@ -48,6 +48,13 @@ MIN_X0_OVER_A = 1e-8
 # sphere is a wall to the outer flow (e_far of St 30 from the wall's: 3.3e-4 at 100, 3.4e-5 at 1e3)
 PAIR_RATIO_MAX = 1e3
 
+
+def pair_within_reach(radius_ratio: float) -> bool:
+    """Whether the "pair" geometry takes ``a2/a1`` (``PAIR_RATIO_MAX``; a ratio that rounding put
+    a few ulps beyond, as ``1 mm / 1 um``, is taken)."""
+    limit = PAIR_RATIO_MAX * (1.0 + 1e-12)
+    return 1.0 / limit <= radius_ratio <= limit
+
 _GAUSS = np.polynomial.legendre.leggauss(16)  # per panel of width <= 1/2 in ln(x/a)
 PANEL = 0.5  # 16 nodes per half unit of ln x: converged to 1e-12 (tests/test_far_field.py)
 
@@ -179,8 +186,8 @@ class OuterFlow:
             value = getattr(self, name)
             if self.geometry == "pair" and not value > 0.0:
                 raise ValueError(f"{name} = {value:g}: must be > 0 (a2/a1, m2/m1)")
-            if self.geometry == "pair" and name == "radius_ratio" and not (
-                    1.0 / PAIR_RATIO_MAX <= value <= PAIR_RATIO_MAX):
+            if self.geometry == "pair" and name == "radius_ratio" and not pair_within_reach(
+                    value):
                 raise ValueError(f"radius_ratio = {value:g}: the pair's radii may differ by at "
                                  f"most {PAIR_RATIO_MAX:g}x; beyond, the larger sphere is a wall "
                                  "to the outer flow: use geometry 'wall'")

@@ -464,8 +464,10 @@ def test_inputs_beyond_the_outer_series_reach_are_refused():
     for ratio in (PAIR_RATIO_MAX * 10, 1.0 / (PAIR_RATIO_MAX * 10), 1e6):
         with pytest.raises(ValueError, match="radius_ratio .* use geometry 'wall'"):
             OuterFlow(geometry="pair", radius_ratio=ratio, mass_ratio=1.0)
-    OuterFlow(x0_over_a=MIN_X0_OVER_A)  # the ends themselves are taken
+    OuterFlow(x0_over_a=MIN_X0_OVER_A)  # the ends themselves are taken, and so is 1 mm / 1 um
     OuterFlow(geometry="pair", radius_ratio=PAIR_RATIO_MAX, mass_ratio=1e9)
+    assert 1e-3 / 1e-6 > PAIR_RATIO_MAX  # 1000.0000000000001: refused by the first mend
+    OuterFlow(geometry="pair", radius_ratio=1e-3 / 1e-6, mass_ratio=1e9)
 
 
 def test_numpy_scalars_are_numbers_and_bools_are_not():

@@ -285,9 +285,11 @@ CASES = [
     # --- ehd status
     ("status-store-missing", NO_SETUP, ["status", "none.zarr"], 2, "no sweep store"),
     ("status-store-empty", NO_SETUP, ["status", ""], 2, "empty path"),
-    ("status-store-dot", NO_SETUP, ["status", "."], 2, "by its place"),
-    ("figures-store-dot", NO_SETUP, ["figures", "."], 2, "by its place"),
-    ("export-dem-store-dot", NO_SETUP, ["export-dem", "."], 2, "by its place"),
+    # '.' is read by its real name ('.' inside a store reads it); the root is no store
+    ("status-store-dot", NO_SETUP, ["status", "."], 2, "no sweep store at"),
+    ("status-store-root", NO_SETUP, ["status", "/"], 2, "the root folder"),
+    ("figures-store-root", NO_SETUP, ["figures", "/"], 2, "the root folder"),
+    ("export-dem-store-root", NO_SETUP, ["export-dem", "/"], 2, "the root folder"),
     ("status-store-not-zarr", _mkdir("plain.zarr"), ["status", "plain.zarr"], 2, "no sweep store"),
     ("status-zarr-json-garbage", _write("s.zarr/zarr.json", "{"), ["status", "s.zarr"],
      EXIT_DAMAGED, "is damaged"),

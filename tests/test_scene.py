@@ -610,18 +610,22 @@ source = "own measurement"
 
 # ---- the Python API as examples/scene_in_python.py uses it (a hostile scan) --------------------
 def test_v0_given_by_dataclasses_replace_is_read_and_checked():
-    """``dataclasses.replace(scene, v0=...)``: a string with units is read as the scene file
-    reads it; a bool (solved as 1 m/s), a negative speed (named as a negative St), NaN or None
-    are refused naming v0."""
+    """``dataclasses.replace(scene, v0=...)``: read and checked as the scene file's v0 (a string
+    with units, a number of m/s in its range); a bool (solved as 1 m/s), a negative speed
+    (named as a negative St), NaN or None are refused naming v0; 0 is a stopped scene's."""
     import dataclasses
 
     from pipeline.scenes.commands import load_scene
 
+    import numpy as np
+
     scene = load_scene(str(EXAMPLES / "glass_beads_water.toml"), {})
     assert dataclasses.replace(scene, v0="20 cm/s").v0 == pytest.approx(0.2, rel=1e-15)
     assert dataclasses.replace(scene, v0=1).v0 == 1.0
-    for bad in (True, -0.1, math.nan, None):
-        with pytest.raises(ValueError, match=r"^v0 = .*m/s"):
+    assert dataclasses.replace(scene, v0=np.int64(1)).v0 == 1.0
+    assert dataclasses.replace(scene, v0=0).v0 == 0.0  # a scene the outer flow stops
+    for bad in (True, -0.1, math.nan, None, 1e40):  # as the scene file's v0 is checked
+        with pytest.raises(ValueError, match=r"^v0"):
             dataclasses.replace(scene, v0=bad)
 
 
@@ -655,6 +659,8 @@ def test_a_sphere_over_a_thousand_times_larger_is_a_wall_to_the_outer_flow():
         assert outer.density_ratio == pytest.approx(phi, rel=1e-12)
     near = load_scene(path, {"radius1": "10 um", "radius2": f"{PAIR_RATIO_MAX * 5} um"})
     assert near.outer_geometry == "pair"
+    edge = load_scene(path, {"radius1": "1 mm", "radius2": "1 um"})  # 1000 up to rounding
+    assert edge.outer_geometry == "pair" and edge.outer_flow().geometry == "pair"
 
 
 def test_load_scene_names_an_unknown_field_and_takes_one_materials_file():

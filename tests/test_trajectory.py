@@ -240,17 +240,20 @@ def test_cli_trajectory_never_replaces_what_it_did_not_write(tmp_path):
     scene = tmp_path / "s.toml"
     shutil.copy(GLYCEROL, scene)
     before = scene.read_bytes()
-    for target in (scene, tmp_path / "empty", ""):
-        if target:
-            target.touch()
+    (tmp_path / "other.csv").write_text("t,x\n1,2\n")
+    for target in (scene, tmp_path / "other.csv", ""):
         out = _cli(str(scene), "--trajectory", str(target), "--accuracy", "fast", "--no-range")
         lines = out.stderr.strip().splitlines()
         assert out.returncode == 2 and len(lines) == 1 and "--trajectory" in lines[0], out.stderr
     assert scene.read_bytes() == before
-    own = tmp_path / "t.csv"
-    own.write_text("t_s,gap_m,speed_m_per_s,phase\n")
-    out = _cli(str(scene), "--trajectory", str(own), "--accuracy", "fast", "--no-range")
-    assert out.returncode in (0, 1) and len(own.read_text().splitlines()) > 10, out.stderr
+    # its own CSV (either line end) and an empty file (as mktemp makes) are replaced
+    for own, text in (("t.csv", "t_s,gap_m,speed_m_per_s,phase\n"),
+                      ("crlf.csv", "t_s,gap_m,speed_m_per_s,phase\r\n"), ("empty.csv", "")):
+        (tmp_path / own).write_text(text, newline="")
+        out = _cli(str(scene), "--trajectory", str(tmp_path / own), "--accuracy", "fast",
+                   "--no-range")
+        assert out.returncode in (0, 1), out.stderr
+        assert len((tmp_path / own).read_text().splitlines()) > 10
 
 
 def test_cli_trajectory_report_is_printed_before_a_full_disk(tmp_path, capsys, monkeypatch):

@@ -134,20 +134,13 @@ class Scene:
         # v0 as dataclasses.replace may give it (examples/scene_in_python.py): a string with
         # units read as the scene file's, a number of m/s; 0 only where the outer flow stops
         # the spheres (a bool was solved as 1 m/s, a negative speed was named as a negative St)
-        v0 = self.v0
-        if isinstance(v0, str):
+        if not (isinstance(self.v0, numbers.Real) and self.v0 == 0.0):  # 0: a stopped scene
             from .scene_file import _SPEED
             from .units import to_si
 
-            object.__setattr__(self, "v0", to_si(v0, _SPEED, "v0"))
-        elif isinstance(v0, bool) or not isinstance(v0, numbers.Real) or not (
-                math.isfinite(v0) and v0 >= 0.0):
-            from .units import UnitError
-
-            raise UnitError(f"v0 = {v0!r}: the impact speed at x0 is a number of m/s (SI) or a "
-                            "string with units ('10 cm/s'), finite and > 0")
+            object.__setattr__(self, "v0", to_si(self.v0, _SPEED, "v0"))
         else:
-            object.__setattr__(self, "v0", float(v0))
+            object.__setattr__(self, "v0", 0.0)
 
     @property
     def stops_outside(self) -> bool:
@@ -382,10 +375,10 @@ class Scene:
         if math.isclose(self.body1.radius, self.body2.radius, rel_tol=1e-9) and math.isclose(
                 self.body1.mass, self.body2.mass, rel_tol=1e-9):
             return "spheres"
-        from solver.far_field import PAIR_RATIO_MAX
+        from solver.far_field import pair_within_reach
 
-        small, large = sorted((self.body1.radius, self.body2.radius))
-        if large > PAIR_RATIO_MAX * small:  # to the outer flow the larger sphere is a wall
+        first, second = self._outer_bodies
+        if not pair_within_reach(second.radius / first.radius):  # the larger sphere: a wall
             return "wall"
         return "pair"
 

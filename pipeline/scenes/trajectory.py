@@ -58,8 +58,8 @@ def _outer(scene, law):
         raise SceneError("the trajectory needs the fluid's density (fluid.density, e.g. "
                          "'998 kg/m^3'): buoyancy, added mass and the drag's Reynolds number")
     geometry = scene.outer_geometry
-    if geometry == "wall" and not b2.wall:  # a sphere so much larger it is a wall: it stays
-        b1, b2 = scene._outer_bodies
+    if geometry == "wall" and not b2.wall:  # both spheres fall: their weights stay a pair's
+        geometry = "pair"                   # (outer_geometry's wall is e_far's reading only)
     return Outer(geometry, b1.radius, b1.mass, b2.radius, b2.mass, scene.fluid.density,
                  scene.fluid.viscosity, STANDARD_GRAVITY, law)
 
@@ -232,12 +232,14 @@ CSV_HEADER = "t_s,gap_m,speed_m_per_s,phase"  # the first line of a trajectory's
 
 
 def _written_by_trajectory(path) -> bool:
-    """Whether the regular file at ``path`` starts as a trajectory's CSV does (``CSV_HEADER``)."""
+    """Whether the regular file at ``path`` is empty (nothing to lose) or starts as a
+    trajectory's CSV does (``CSV_HEADER``, its line ended either way)."""
     try:
         with open(path, "rb") as f:
-            return f.read(len(CSV_HEADER) + 1) == (CSV_HEADER + "\n").encode()
+            start = f.read(len(CSV_HEADER) + 2)
     except OSError:
         return False
+    return not start or start.splitlines()[0] == CSV_HEADER.encode()
 
 
 def check_trajectory_path(path) -> None:

@@ -18,6 +18,7 @@ field's range: no length of 1e-320 m reaches the solver to underflow there.
 from __future__ import annotations
 
 import math
+import numbers
 import re
 from functools import lru_cache
 
@@ -93,7 +94,7 @@ def to_si(value, spec: FieldSpec, where: str) -> float:
     where : str
         Field name used in messages, e.g. ``"body1.radius"``.
     """
-    if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+    if isinstance(value, bool) or not isinstance(value, (numbers.Real, str)):  # numpy's too
         raise UnitError(f"{where}: expected a number (SI) or a string with units such as "
                         f"'{spec.example}', got {value!r}")
     if isinstance(value, str):
@@ -116,7 +117,9 @@ def to_si(value, spec: FieldSpec, where: str) -> float:
         if not isinstance(q, ureg.Quantity):  # a bare number string such as "5"
             q = ureg.Quantity(float(q))
         typed = float(LEADING_NUMBER.match(text).group(0))
-        if q.magnitude != typed:  # pint multiplied in a number from the units: '100 um 2'
+        # pint multiplied in a number from the units ('100 um 2'); to round-off, as pint keeps
+        # an integer past 2**53 exact where float() rounds it
+        if not math.isclose(float(q.magnitude), typed, rel_tol=1e-12):
             raise UnitError(f"{where}: {value!r} has a number among its units (pint reads it "
                             f"as {q.magnitude:g} {q.units:~}); write one number, then the units, "
                             f"e.g. '{spec.example}'")
