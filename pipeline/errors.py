@@ -153,6 +153,15 @@ def interrupt_cause(exc: BaseException | None):
     return None
 
 
+def did_you_mean(name: str, known) -> str:
+    """`` (did you mean 'x'?)`` with the known name nearest ``name`` where one is close (a typo),
+    else ""."""
+    import difflib
+
+    near = difflib.get_close_matches(str(name), list(known), n=1)
+    return f" (did you mean {near[0]!r}?)" if near else ""
+
+
 def describe_os_error(exc: OSError, path) -> str:
     """``'<path>': <reason>`` for a failed write, with the free space of its file system when
     the disk is full (ENOSPC, EDQUOT)."""

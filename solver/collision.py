@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import functools
 import math
-import numbers
 import time
 from dataclasses import replace
 
@@ -29,7 +28,7 @@ from .integration import stepper
 from .integration.grid import reference_grid, scaled_grid
 from .model import liquid, rigid
 from .observables import OBSERVABLES, SERIES, STATUS, failure_message
-from .physics import Physics
+from .physics import Physics, is_real_number
 from . import pieces
 from .result import JSON_KEYS, SOLVER_VERSION, Collision
 from .rigid_phases import KEPT, RigidHead, rigid_block, rigid_path
@@ -188,8 +187,7 @@ def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 
     elif eps is not None:
         raise TypeError("collide(physics, ...): eps is part of the Physics; do not pass it twice")
     numerics = resolve(accuracy, **overrides)
-    if isinstance(x_ref_x0, (bool, np.bool_)) or not isinstance(x_ref_x0, numbers.Real) or not (
-            math.isfinite(x_ref_x0) and x_ref_x0 >= 1.0):
+    if not (is_real_number(x_ref_x0) and math.isfinite(x_ref_x0) and x_ref_x0 >= 1.0):
         raise ValueError(f"x_ref_x0 = {x_ref_x0!r}: the reference separation must be a finite "
                          "number, at least the start x0 (x_ref_x0 >= 1)")
     x_ref_x0 = float(x_ref_x0)  # an int or numpy scalar is stored as the float it means
@@ -543,14 +541,19 @@ def _drawn_back(physics, cols, x_ref) -> str:
     "Observables"); the note gives the speed they passed ``x_ref`` with, and its ``e``, which a
     code that resolves the flow beyond ``x_ref`` without that suction would see. "" when they
     never passed it."""
-    x_c, v_c = cols["X"], cols["V"]
-    speed = pieces.outward_crossing(x_c, v_c, x_ref)
-    if speed is None or x_c[-1] > x_ref:
+    speed = _drawn_back_speed(cols["X"], cols["V"], x_ref)
+    if speed is None:
         return ""
     e_out = rigid.restitution_of_speed(speed, physics, x_ref)
     return (f"the spheres passed x_ref outwards at {speed:.3g} v0 (e {e_out:.3g} there), out to "
-            f"{x_c.max() / x_ref:.3g} x_ref, and the film drew them back inside it before the "
-            "coupled phase ended: they stick (e_wet 0)")
+            f"{cols['X'].max() / x_ref:.3g} x_ref, and the film drew them back inside it before "
+            "the coupled phase ended: they stick (e_wet 0)")
+
+
+def _drawn_back_speed(x_c, v_c, x_ref):
+    """The speed with which the coupled phase's rows ``x_c``, ``v_c`` last passed ``x_ref``
+    outwards when they end back inside it (drawn back), else None."""
+    return None if x_c[-1] > x_ref else pieces.outward_crossing(x_c, v_c, x_ref)
 
 
 def _pulled_back_from_afar(result):
@@ -564,8 +567,7 @@ def _pulled_back_from_afar(result):
         return
     coupled = result.series["phase"] == 1
     x_c, v_c = result.series["X"][coupled], result.series["V"][coupled]
-    x_ref = result.x_ref_x0 * result.x0_over_x1
-    if not x_c.size or x_c[-1] > x_ref or pieces.outward_crossing(x_c, v_c, x_ref) is None:
+    if not x_c.size or _drawn_back_speed(x_c, v_c, result.x_ref_x0 * result.x0_over_x1) is None:
         return
     reach = x_c.max() / result.x0_over_x1 * result.x0_over_a
     if reach > LUBRICATION_REACH:

@@ -25,12 +25,12 @@ from __future__ import annotations
 
 import functools
 import math
-import numbers
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
 from .model import outer_flow
+from .physics import is_real_number
 
 __all__ = ["OuterFlow", "DEFAULT", "resistance_integral", "handover_defect", "far_restitution",
            "history_coefficient", "history_restitution", "outer_tables", "OuterTables"]
@@ -163,8 +163,7 @@ class OuterFlow:
         for name in ("x0_over_a", "x_ref_over_a", "start_over_a", "density_ratio",
                      "radius_ratio", "mass_ratio"):
             value = getattr(self, name)
-            if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real) \
-                    or not math.isfinite(value):
+            if not (is_real_number(value) and math.isfinite(value)):
                 raise ValueError(f"{name} = {value!r}: must be a finite number")
             object.__setattr__(self, name, float(value))
         if not MIN_X0_OVER_A <= self.x0_over_a <= 1.0:

@@ -16,6 +16,7 @@ value must not recompile anything.
 from __future__ import annotations
 
 import math
+import numbers
 import textwrap
 from dataclasses import asdict, dataclass, field, make_dataclass, replace
 
@@ -89,6 +90,12 @@ class Group:
             raise ValueError(f"{label} = {value!r} is outside its valid range "
                              f"{lb}{self.lo:g}, {self.hi:g}]")
         return v
+
+
+def is_real_number(value) -> bool:
+    """Whether ``value`` is a real number as an input takes one: a Python or numpy int or float,
+    never a bool (Python's or numpy's)."""
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 
 
 def parse_table(text, label="viscosity_table"):

@@ -86,12 +86,11 @@ def load_scene(path=None, flags: dict | None = None, materials=(), *, user_files
             body.pop("radius", None)
             continue
         if dest not in _FLAG_FIELDS:
-            from difflib import get_close_matches
+            from ..errors import did_you_mean
 
-            near = get_close_matches(str(dest), list(_FLAG_FIELDS) + ["wall2"], n=1)
-            raise SceneError(f"unknown scene field {dest!r}"
-                             + (f" (did you mean {near[0]!r}?)" if near else "")
-                             + f"; the fields: {', '.join(sorted(_FLAG_FIELDS))}, wall2")
+            known = [*_FLAG_FIELDS, "wall2"]
+            raise SceneError(f"unknown scene field {dest!r}{did_you_mean(dest, known)}; the "
+                             f"fields: {', '.join(sorted(known))}")
         section, key = _FLAG_FIELDS[dest]
         if key in _ONE_SPEED:  # a speed given as a flag replaces the file's other speed
             data.pop(_ONE_SPEED[key], None)

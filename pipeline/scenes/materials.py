@@ -246,11 +246,10 @@ def _parse_entry(kind, name, raw, where):
 def unknown_name(kind: str, name: str, known, where: str) -> MaterialError:
     """The one line for an unknown material or fluid ``name``: the nearest known name where one
     is close (a typo), then all of them."""
-    import difflib
+    from ..errors import did_you_mean
 
-    near = difflib.get_close_matches(name, list(known), n=1)
-    hint = f" (did you mean {near[0]!r}?)" if near else ""
-    return MaterialError(f"{where}: unknown {kind} {name!r}{hint}; known {kind}s: {sorted(known)} "
+    return MaterialError(f"{where}: unknown {kind} {name!r}{did_you_mean(name, known)}; known "
+                         f"{kind}s: {sorted(known)} "
                          "(add your own with --materials FILE)")
 
 

@@ -18,9 +18,10 @@ field's range: no length of 1e-320 m reaches the solver to underflow there.
 from __future__ import annotations
 
 import math
-import numbers
 import re
 from functools import lru_cache
+
+from solver.physics import is_real_number
 
 __all__ = ["UnitError", "FieldSpec", "to_si", "format_quantity", "TINY", "HUGE", "QUANTITY"]
 
@@ -94,7 +95,7 @@ def to_si(value, spec: FieldSpec, where: str) -> float:
     where : str
         Field name used in messages, e.g. ``"body1.radius"``.
     """
-    if isinstance(value, bool) or not isinstance(value, (numbers.Real, str)):  # numpy's too
+    if not (is_real_number(value) or isinstance(value, str)):
         raise UnitError(f"{where}: expected a number (SI) or a string with units such as "
                         f"'{spec.example}', got {value!r}")
     if isinstance(value, str):
