@@ -676,6 +676,27 @@ def test_load_scene_names_an_unknown_field_and_takes_one_materials_file():
         load_scene(path, materials="nowhere.toml")
 
 
+@pytest.mark.parametrize("body2, release", [
+    ({"material2": "glass", "radius2": "100 um"}, {"approach_speed": "settling"}),
+    ({"material2": "steel", "radius2": "1 mm"}, {"approach_speed": "settling"}),
+    ({"material2": "glass", "radius2": "0.8 mm"}, {"v0": "0.1 m/s", "trajectory": "t.csv"}),
+])
+def test_two_free_unequal_spheres_settling_is_refused(body2, release, tmp_path, capsys):
+    """Settling and the whole trajectory of two free spheres of different sizes or densities:
+    refused (exit 2, one line) instead of solved with the pair's zero-momentum relative weight,
+    which gave two glass spheres no approach at all ("needs body1 denser than the fluid") and
+    steel onto glass 0.19x their relative settling speed, with exit 0."""
+    flags = {"material1": "glass", "radius1": "1 mm", "fluid": "water", **body2, **release}
+    argv = ["scene"]
+    for key, value in flags.items():
+        argv += [f"--{key.replace('_', '-')}", str(tmp_path / value) if key == "trajectory"
+                 else value]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "two free spheres of different sizes or densities" in err[0]
+    assert "--wall" in err[0] and not (tmp_path / "t.csv").exists()
+
+
 def test_settling_two_equal_spheres_is_refused_for_the_right_reason():
     """Glass beads in water: the message said "needs body1 denser than the fluid", but glass is
     denser; two equal spheres have no weight relative to each other."""

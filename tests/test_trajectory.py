@@ -332,6 +332,21 @@ def test_two_spheres_arrive_with_v0_from_the_outer_start(radius2, density2):
     assert ended == "gap" and -u[-1] == pytest.approx(v0, rel=1e-6)
 
 
+def test_two_free_unequal_spheres_under_gravity_are_refused():
+    """Two free spheres of different sizes or densities settle at different speeds through their
+    different drags; the pair's zero-momentum relative motion leaves that out (its relative
+    weight gave 0.19x the relative settling speed of 1 mm steel and glass spheres in glycerol,
+    and none for two glass spheres of different sizes): refused, with gravity only."""
+    a1, m1 = _sphere()
+    for radius2, density2 in [(0.5e-3, 2500.0), (1e-3, 7800.0)]:
+        a2, m2 = _sphere(radius2, density2)
+        with pytest.raises(ValueError, match="two free spheres of different sizes or densities"):
+            tj.Outer("pair", a1, m1, a2, m2, 1000.0, 1e-3, G, "stokes")
+        assert tj.Outer("pair", a1, m1, a2, m2, 1000.0, 1e-3, 0.0, "stokes").weight == 0.0
+    # two equal spheres fall together: no weight between them, with gravity or without
+    assert tj.Outer("spheres", a1, m1, a1, m1, 1000.0, 1e-3, G, "stokes").weight == 0.0
+
+
 def test_a_short_drop_reaches_x0_without_leaving_the_tables():
     """A sphere dropped from rest 0.3 a above the wall (a trial stage of the integrator stepped
     to a gap below 0, where ln x is undefined: 'math domain error') reaches x0 = 0.01 a, slower

@@ -51,7 +51,9 @@ def trajectory_asked(args) -> bool:
 
 
 def _outer(scene, law):
-    from solver.trajectory import Outer
+    """The outer motion of ``scene`` under gravity with the drag law ``law``; two free spheres of
+    different sizes or densities are refused (solver/trajectory.py: ``PAIR_UNDER_GRAVITY``)."""
+    from solver.trajectory import PAIR_UNDER_GRAVITY, Outer
 
     b1, b2 = scene.body1, scene.body2
     if scene.fluid.density is None:
@@ -60,6 +62,10 @@ def _outer(scene, law):
     geometry = scene.outer_geometry
     if geometry == "wall" and not b2.wall:  # both spheres fall: their weights stay a pair's
         geometry = "pair"                   # (outer_geometry's wall is e_far's reading only)
+    if geometry == "pair":
+        raise SceneError(f"{PAIR_UNDER_GRAVITY}: make body 2 a wall (--wall), or give the "
+                         "approach speed itself (approach_speed or v0) without --trajectory "
+                         "and the release flags")
     return Outer(geometry, b1.radius, b1.mass, b2.radius, b2.mass, scene.fluid.density,
                  scene.fluid.viscosity, STANDARD_GRAVITY, law)
 
@@ -117,8 +123,8 @@ def settling_arrival(scene) -> tuple:
     if not terminal > 0.0:
         if scene.outer_geometry == "spheres":  # a weight, but no relative one
             raise SceneError("approach_speed = 'settling' needs one body to settle onto the "
-                             "other: two equal spheres fall together, never closer (a wall, "
-                             "or unequal spheres, settle): give the approach speed itself")
+                             "other: two equal spheres fall together, never closer (a sphere "
+                             "settles onto a wall): give the approach speed itself")
         raise SceneError("approach_speed = 'settling' needs body1 denser than the fluid (it "
                          "would rise, not settle): give the approach speed itself")
     if scene.stokes_of(terminal) < QUASI_STEADY_BELOW:
