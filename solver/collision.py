@@ -480,6 +480,7 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0):
         result.message = (f"{message} (St={stokes:g}, eps={physics.eps:g}, after "
                           f"{counters[stepper.STEPS]} steps at tau={t_c[-1] * tau_per_t:.4g})"
                           f"{_drained(cols['H_min'])}")
+        _premise_first(result, cols)
         return result
 
     ln_x_e, resting = _depart(physics, shortcuts, cols, blocks)
@@ -498,11 +499,29 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0):
     for piece in pieces.PIECES:
         piece.observe(result, cols, t_c * tau_per_t, blocks)
     include_rigid_peaks(result, head.peaks)
-    if result.start_strain_energy > START_STRAIN_LIMIT:
-        result.status = "start_deformed"
-        result.message = failure_message("start_deformed", ratio=result.start_strain_energy,
-                                         limit=START_STRAIN_LIMIT)
+    _premise_first(result, cols)
     return result
+
+
+def _premise_first(result, cols):
+    """Status ``start_deformed`` where the start already breaks the model's premise
+    (``START_STRAIN_LIMIT``), whether the solve went on to an end or failed: a failure is then
+    no numerical one that a finer preset would mend (St 1e-12, eps 1e-2 had reported
+    ``max_steps`` after 50000 steps; St 1e-300 ``step_underflow``). A failed solve's
+    observables stay withheld, and its message says how it ended."""
+    result.start_strain_energy = _start_strain(cols)
+    if not result.start_strain_energy > START_STRAIN_LIMIT:
+        return
+    premise = failure_message("start_deformed", ratio=result.start_strain_energy,
+                              limit=START_STRAIN_LIMIT)
+    if result.status != "ok":
+        premise += f"; the solve then ended: {result.message}"
+    result.status, result.message = "start_deformed", premise
+
+
+def _start_strain(cols):
+    """The strain energy where the coupled phase starts, of the kinetic energy there."""
+    return float(cols["E_s"][0] / cols["E_k"][0])
 
 
 def _depart(physics, shortcuts, cols, blocks):
@@ -714,4 +733,3 @@ def _coupled_observables(result, cols, tau_per_t, ln_x_e, v_rel):
     total = cols["E_k"] + cols["E_s"] + cols["E_c"] + cols["E_a"] + cols["dissipated"] \
         + cols["void_work"] + cols["solid_loss"]
     result.energy_error = float(np.max(np.abs(total - total[0])))
-    result.start_strain_energy = float(cols["E_s"][0] / cols["E_k"][0])

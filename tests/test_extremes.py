@@ -37,6 +37,22 @@ def test_corners_and_edges(stokes, eps):
         assert c.start_strain_energy <= START_STRAIN_LIMIT
 
 
+@pytest.mark.parametrize("stokes", [1e-12, 1e-300])
+def test_a_start_that_breaks_the_premise_says_so_when_the_solve_fails_too(stokes):
+    """St far below eps: the start stores 3.08 eps/St of the kinetic energy as strain, and the
+    solve fails (1e-12: the step budget; 1e-300: the steps underflow). The status is the
+    premise's, which no preset mends (it was max_steps / step_underflow), the observables stay
+    withheld, and the message says how the solve ended."""
+    c = collide(stokes, 1e-2, accuracy="fast")
+    assert c.status == "start_deformed" and "eps is not small" in c.message
+    assert "the solve then ended:" in c.message
+    # E_s/E_k at the start: 9 pi^3 eps / (64 sqrt(2) St) (docs/model.md, "Small deformation");
+    # the grid's strain energy is 8e-4 below the closed form at fast (3.0806 against 3.0832)
+    closed_form = 9.0 * math.pi**3 / (64.0 * math.sqrt(2.0)) * 1e-2 / stokes
+    assert c.start_strain_energy == pytest.approx(closed_form, rel=2e-3)
+    assert math.isnan(c.v_r) and math.isnan(c.e_wet)
+
+
 def _threshold_stokes(eps, switch):
     """St at which the rigid path's largest W/X (docs/model.md, "Small deformation") just reaches the hand-over."""
     def log_peak(stokes):
