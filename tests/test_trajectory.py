@@ -254,6 +254,8 @@ def test_cli_trajectory_never_replaces_what_it_did_not_write(tmp_path):
                    "--no-range")
         assert out.returncode in (0, 1), out.stderr
         assert len((tmp_path / own).read_text().splitlines()) > 10
+        # the report's last trajectory line names the CSV once it is written
+        assert f"  written to {tmp_path / own}" in out.stdout.splitlines()
 
 
 def test_cli_trajectory_report_is_printed_before_a_full_disk(tmp_path, capsys, monkeypatch):
@@ -274,6 +276,7 @@ def test_cli_trajectory_report_is_printed_before_a_full_disk(tmp_path, capsys, m
     out, err = capsys.readouterr()
     assert code == EXIT_WRITE and "trajectory: released at" in out and "e_wet" in out, err
     assert len(err.strip().splitlines()) == 1 and "No space left" in err
+    assert "written to" not in out  # the CSV was not written: no line says it was
 
 
 def test_cli_trajectory_of_a_bouncing_sphere(tmp_path):
@@ -307,8 +310,9 @@ def test_report_lines_of_a_trajectory():
          "drag_law": "schiller-naumann", "arrival_speed_m_per_s": 0.536, "e_observed": 0.819,
          "observed_speed_out_m_per_s": 0.456, "observed_speed_in_m_per_s": 0.556,
          "observed_reading_gap_m": 1.5e-4, "rebound_height_m": 9.3e-3}
-    text = trajectory_summary(d, "t.csv")
-    assert "e_observed = 0.8190" in text and "(settling)" in text and "written to t.csv" in text
+    text = trajectory_summary(d)
+    assert "e_observed = 0.8190" in text and "(settling)" in text
+    assert "written to" not in text  # said once the CSV is written (cmd_scene)
     assert "top of the first bounce 0.0093 m" in text
 
 

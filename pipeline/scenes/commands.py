@@ -314,11 +314,13 @@ def cmd_scene(args) -> int:
         if whole:
             from .trajectory import trajectory_summary
 
-            print(trajectory_summary(d, args.trajectory))
+            print(trajectory_summary(d))
     if whole:  # after the report: a failed write (a full disk) loses no number computed
         from .trajectory import write_trajectory
 
         write_trajectory(whole, args, failed)
+        if args.trajectory is not None and not args.json:
+            print(f"  written to {args.trajectory}")
     if args.plot and not failed:
         from ..plots.scene_plots import plot_scene, si_scales
 

@@ -291,8 +291,9 @@ def write_trajectory(whole, args, failed) -> None:
             plot_trajectory(tr, args.plot, reading=read)
 
 
-def trajectory_summary(d: dict, path=None) -> str:
-    """The report's lines on the trajectory (``d`` the JSON object with ``trajectory_keys``)."""
+def trajectory_summary(d: dict) -> str:
+    """The report's lines on the trajectory (``d`` the JSON object with ``trajectory_keys``); the
+    line naming the CSV follows its write (``cmd_scene``)."""
     def num(v, spec):
         return "-" if v is None else format(v, spec)
 
@@ -306,6 +307,4 @@ def trajectory_summary(d: dict, path=None) -> str:
              f"{num(d['observed_speed_in_m_per_s'], '.4g')} m/s at "
              f"{num(d['observed_reading_gap_m'], '.3g')} m), top of the first bounce "
              f"{num(d['rebound_height_m'], '.4g')} m"]
-    if path is not None:
-        lines.append(f"  written to {path}")
     return "\n".join(lines)
