@@ -13,15 +13,16 @@ rigid and move along their line of centres; the gap ``x`` (surface to surface) a
 weight along the line of centres towards contact (``(m1 - rho_f V1) g`` for a sphere above a
 wall; 0 for two equal spheres, which fall together). Two free spheres of different sizes or
 densities under gravity are refused (``PAIR_UNDER_GRAVITY``): they settle at different speeds
-through their different drags, so the pair's centre of mass moves and drags their relative
-motion, which the zero-momentum frame of the pair leaves out (its relative weight
-``m g rho_f (1/rho_2 - 1/rho_1)`` gave 0.19x the difference of the two settling speeds of 1 mm
-steel and glass spheres in glycerol, and 0 for two glass spheres of any sizes). The resistance joins the exact Stokes resistance ``R_stokes(x)``
-(wall or pair, outer_flow), which holds near contact where the gap's flow is viscous (its
-Reynolds number is ``Re x/a``), to the isolated spheres' drag at their Reynolds numbers: its
-far-field limit ``R_far`` (each sphere's Stokes drag, ``(a1 s1^2 + a2 s2^2)/a``, ``s_i = m/m_i``)
-is replaced by ``R_isolated = (a1 s1^2 f(Re1) + a2 s2^2 f(Re2))/a`` with ``f`` the drag law's
-correction (model/drag.py) and ``Re_i = rho_f |u_i| 2 a_i / mu``. The energy
+through their different drags, so the pair's centre of mass moves and its drag couples into
+their relative motion, which the zero-momentum frame of the pair leaves out (its relative weight
+``m g rho_f (1/rho_2 - 1/rho_1)`` gave 0.19x the difference of the settling speeds of steel and
+glass spheres of 1 mm diameter in glycerol, and 0 for two glass spheres of any sizes). The
+resistance joins the exact Stokes resistance ``R_stokes(x)`` (wall or pair, outer_flow), which
+holds near contact where the gap's flow is viscous (its Reynolds number is ``Re x/a``), to the
+isolated spheres' drag at their Reynolds numbers: its far-field limit ``R_far`` (each sphere's
+Stokes drag, ``(a1 s1^2 + a2 s2^2)/a``, ``s_i = m/m_i``) is replaced by
+``R_isolated = (a1 s1^2 f(Re1) + a2 s2^2 f(Re2))/a`` with ``f`` the drag law's correction
+(model/drag.py) and ``Re_i = rho_f |u_i| 2 a_i / mu``. The energy
 ``E = M U^2/2 + W x`` then falls by the drag's work alone, ``dE/dt = -6 pi mu a R U^2``.
 
 At ``x0`` the near field (``collide``, unchanged) takes over with ``v0`` the arriving speed and
