@@ -11,13 +11,13 @@ rigid and move along their line of centres; the gap ``x`` (surface to surface) a
 
 ``m``, ``a`` the reduced mass and radius, ``C`` the added mass (outer_flow), ``W`` the buoyant
 weight along the line of centres towards contact (``(m1 - rho_f V1) g`` for a sphere above a
-wall; 0 for two equal spheres, which fall together). Two free spheres of different sizes or
-densities under gravity are refused (``PAIR_UNDER_GRAVITY``): they settle at different speeds
-through their different drags, so the pair's centre of mass moves and its drag couples into
-their relative motion, which the zero-momentum frame of the pair leaves out (its relative weight
-``m g rho_f (1/rho_2 - 1/rho_1)`` gave 0.19x the difference of the settling speeds of steel and
-glass spheres of 1 mm diameter in glycerol, and 0 for two glass spheres of any sizes). The
-resistance joins the exact Stokes resistance ``R_stokes(x)`` (wall or pair, outer_flow), which
+wall). Two free spheres under gravity are refused (``TWO_SPHERES_UNDER_GRAVITY``): both fall,
+unequal ones each at its own speed through its own drag, so the pair's centre of mass moves and
+its drag couples into their relative motion, which the zero-momentum frame of the pair leaves
+out (its relative weight ``m g rho_f (1/rho_2 - 1/rho_1)`` gave 0.19x the difference of the
+settling speeds of steel and glass spheres of 1 mm diameter in glycerol, and 0 for two glass
+spheres of any sizes); equal ones fall together, and a drag law beyond Stokes' at their relative
+speed is not the drag of their common fall. The resistance joins the exact Stokes resistance ``R_stokes(x)`` (wall or pair, outer_flow), which
 holds near contact where the gap's flow is viscous (its Reynolds number is ``Re x/a``), to the
 isolated spheres' drag at their Reynolds numbers: its far-field limit ``R_far`` (each sphere's
 Stokes drag, ``(a1 s1^2 + a2 s2^2)/a``, ``s_i = m/m_i``) is replaced by
@@ -42,16 +42,16 @@ from . import far_field
 from .model import drag, outer_flow
 
 __all__ = ["Outer", "Trajectory", "motion", "terminal_speed", "trajectory", "NEAR_FIELD_BUDGET",
-           "PAIR_UNDER_GRAVITY", "check_release", "frames", "fitted_speed",
+           "TWO_SPHERES_UNDER_GRAVITY", "check_release", "frames", "fitted_speed",
            "observed_restitution"]
 
 RTOL = 1e-9  # the outer phase's integrator tolerance (DOP853): 1e-7 in the arrival speed
 SUBSTEPS = 16  # samples per integrator step in the returned trajectory
 MIN_GAP_OVER_A = 1e-3  # the resistance and added-mass tables' range (far_field.OuterTables)
-PAIR_UNDER_GRAVITY = (
-    "gravity with two free spheres of different sizes or densities is not modelled: they settle "
-    "at different speeds through their different drags, which the pair's relative motion at "
-    "zero momentum leaves out (docs/model.md, 'Outer flow: the whole trajectory')")
+TWO_SPHERES_UNDER_GRAVITY = (
+    "gravity with two free spheres is not modelled: both fall, equal ones together and never "
+    "closer, unequal ones each at its own speed through a drag that the pair's relative motion "
+    "leaves out (docs/model.md, 'Outer flow: the whole trajectory')")
 GEOMETRIES = (None, *outer_flow.GEOMETRIES)  # None: an isolated sphere (no wall, no partner)
 
 
@@ -64,7 +64,7 @@ class Outer:
         sphere: ``radius2``, ``mass2`` ignored; its gap is only a coordinate).
     gravity
         ``g`` [m/s^2] along the line of centres, towards contact (0: none; sphere 1 above); 0
-        for ``"pair"`` (``PAIR_UNDER_GRAVITY``).
+        for two spheres, ``"spheres"`` and ``"pair"`` (``TWO_SPHERES_UNDER_GRAVITY``).
     drag_law
         A name of model/drag.DRAG_LAWS.
     """
@@ -83,8 +83,8 @@ class Outer:
         if self.geometry not in GEOMETRIES:
             raise ValueError(f"geometry = {self.geometry!r}: must be one of {GEOMETRIES}")
         drag.correction(self.drag_law, 0.0)  # the law's name
-        if self.geometry == "pair" and self.gravity != 0.0:
-            raise ValueError(PAIR_UNDER_GRAVITY)
+        if self.geometry in ("spheres", "pair") and self.gravity != 0.0:
+            raise ValueError(TWO_SPHERES_UNDER_GRAVITY)
         solo = self.geometry in (None, "wall")
         s1 = 1.0 if solo else self.mass2 / (self.mass1 + self.mass2)
         s2 = 0.0 if solo else self.mass1 / (self.mass1 + self.mass2)

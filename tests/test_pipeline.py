@@ -536,6 +536,20 @@ def test_a_scene_failed_only_by_its_neighbours_crash_is_run_again_alone():
 
 
 # ---- command line -------------------------------------------------------------------------------
+def test_a_sweep_of_start_deformed_scenes_does_not_advise_a_retry(tmp_path, capsys):
+    """start_deformed is the model's premise (eps not small for St), the same on every retry:
+    the summary says so instead of advising --retry-failed (it advised it for every failure).
+    St 0.01 and 0.02 at eps 1e-2 start with 3.08 eps/St = 3.1 and 1.5 of their kinetic energy as
+    strain, above the 0.1 limit."""
+    from pipeline.cli import main
+
+    path = tmp_path / "deformed.toml"
+    path.write_text(sweep_text([0.01, 0.02], [1e-2], store=str(tmp_path / "d.zarr")))
+    assert main(["sweep", str(path), "--executor", "serial"]) == 3
+    out = capsys.readouterr().out
+    assert "2 of the failed are start_deformed" in out and "--retry-failed" not in out
+
+
 def test_cli_sweep_status_and_exit_codes(tmp_path, capsys):
     from pipeline.cli import main
 

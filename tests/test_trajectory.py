@@ -312,7 +312,8 @@ def test_report_lines_of_a_trajectory():
          "observed_reading_gap_m": 1.5e-4, "rebound_height_m": 9.3e-3}
     text = trajectory_summary(d)
     assert "e_observed = 0.8190" in text and "(settling)" in text
-    assert "written to" not in text  # said once the CSV is written (cmd_scene)
+    assert "written to" not in text  # ehd scene says it once the CSV is written
+    assert trajectory_summary(d, "t.csv").endswith("\n  written to t.csv")
     assert "top of the first bounce 0.0093 m" in text
 
 
@@ -336,19 +337,20 @@ def test_two_spheres_arrive_with_v0_from_the_outer_start(radius2, density2):
     assert ended == "gap" and -u[-1] == pytest.approx(v0, rel=1e-6)
 
 
-def test_two_free_unequal_spheres_under_gravity_are_refused():
-    """Two free spheres of different sizes or densities settle at different speeds through their
-    different drags; the pair's zero-momentum relative motion leaves that out (its relative
-    weight gave 0.19x the relative settling speed of 1 mm steel and glass spheres in glycerol,
-    and none for two glass spheres of different sizes): refused, with gravity only."""
+def test_two_free_spheres_under_gravity_are_refused():
+    """Two free spheres both fall: unequal ones each at its own speed through its own drag, which
+    the pair's zero-momentum relative motion leaves out (its relative weight gave 0.19x the
+    relative settling speed of 1 mm steel and glass spheres in glycerol, and none for two glass
+    spheres of different sizes); equal ones together, where a drag law beyond Stokes' at their
+    relative speed is not that of their fall. Refused with gravity, under either geometry's
+    name (unequal bodies named "spheres" were taken); without gravity both stay."""
     a1, m1 = _sphere()
-    for radius2, density2 in [(0.5e-3, 2500.0), (1e-3, 7800.0)]:
+    for geometry, radius2, density2 in [("pair", 0.5e-3, 2500.0), ("pair", 1e-3, 7800.0),
+                                        ("spheres", 1e-3, 2500.0), ("spheres", 0.5e-3, 7800.0)]:
         a2, m2 = _sphere(radius2, density2)
-        with pytest.raises(ValueError, match="two free spheres of different sizes or densities"):
-            tj.Outer("pair", a1, m1, a2, m2, 1000.0, 1e-3, G, "stokes")
-        assert tj.Outer("pair", a1, m1, a2, m2, 1000.0, 1e-3, 0.0, "stokes").weight == 0.0
-    # two equal spheres fall together: no weight between them, with gravity or without
-    assert tj.Outer("spheres", a1, m1, a1, m1, 1000.0, 1e-3, G, "stokes").weight == 0.0
+        with pytest.raises(ValueError, match="gravity with two free spheres is not modelled"):
+            tj.Outer(geometry, a1, m1, a2, m2, 1000.0, 1e-3, G, "stokes")
+        assert tj.Outer(geometry, a1, m1, a2, m2, 1000.0, 1e-3, 0.0, "stokes").weight == 0.0
 
 
 def test_a_short_drop_reaches_x0_without_leaving_the_tables():

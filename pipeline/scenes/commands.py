@@ -319,8 +319,6 @@ def cmd_scene(args) -> int:
         from .trajectory import write_trajectory
 
         write_trajectory(whole, args, failed)
-        if args.trajectory is not None and not args.json:
-            print(f"  written to {args.trajectory}")
     if args.plot and not failed:
         from ..plots.scene_plots import plot_scene, si_scales
 

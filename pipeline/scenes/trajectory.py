@@ -51,22 +51,19 @@ def trajectory_asked(args) -> bool:
 
 
 def _outer(scene, law):
-    """The outer motion of ``scene`` under gravity with the drag law ``law``; two free spheres of
-    different sizes or densities are refused (solver/trajectory.py: ``PAIR_UNDER_GRAVITY``)."""
-    from solver.trajectory import PAIR_UNDER_GRAVITY, Outer
+    """The outer motion of ``scene`` under gravity with the drag law ``law``: a sphere onto a wall
+    (two free spheres are refused: solver/trajectory.py, ``TWO_SPHERES_UNDER_GRAVITY``)."""
+    from solver.trajectory import TWO_SPHERES_UNDER_GRAVITY, Outer
 
     b1, b2 = scene.body1, scene.body2
     if scene.fluid.density is None:
         raise SceneError("the trajectory needs the fluid's density (fluid.density, e.g. "
                          "'998 kg/m^3'): buoyancy, added mass and the drag's Reynolds number")
-    geometry = scene.outer_geometry
-    if geometry == "wall" and not b2.wall:  # both spheres fall: their weights stay a pair's
-        geometry = "pair"                   # (outer_geometry's wall is e_far's reading only)
-    if geometry == "pair":
-        raise SceneError(f"{PAIR_UNDER_GRAVITY}: make body 2 a wall (--wall), or give the "
-                         "approach speed itself (approach_speed or v0) without --trajectory "
+    if not b2.wall:  # a sphere 1000x the other's is a wall to e_far only: here both would fall
+        raise SceneError(f"{TWO_SPHERES_UNDER_GRAVITY}: make body 2 a wall (--wall), or give "
+                         "the approach speed itself (approach_speed or v0) without --trajectory "
                          "and the release flags")
-    return Outer(geometry, b1.radius, b1.mass, b2.radius, b2.mass, scene.fluid.density,
+    return Outer("wall", b1.radius, b1.mass, b2.radius, b2.mass, scene.fluid.density,
                  scene.fluid.viscosity, STANDARD_GRAVITY, law)
 
 
@@ -121,10 +118,6 @@ def settling_arrival(scene) -> tuple:
     outer = _outer(scene, law)
     terminal = _terminal(outer)
     if not terminal > 0.0:
-        if scene.outer_geometry == "spheres":  # a weight, but no relative one
-            raise SceneError("approach_speed = 'settling' needs one body to settle onto the "
-                             "other: two equal spheres fall together, never closer (a sphere "
-                             "settles onto a wall): give the approach speed itself")
         raise SceneError("approach_speed = 'settling' needs body1 denser than the fluid (it "
                          "would rise, not settle): give the approach speed itself")
     if scene.stokes_of(terminal) < QUASI_STEADY_BELOW:
@@ -276,13 +269,16 @@ def check_trajectory_path(path) -> None:
 
 
 def write_trajectory(whole, args, failed) -> None:
-    """Write the CSV (``--trajectory``) and the figure (``--plot``) of a computed trajectory (its
-    JSON keys: ``trajectory_keys``)."""
+    """Write the CSV (``--trajectory``; the text report's line naming it follows its write, so a
+    failed write, or a failed figure after it, never follows a line that is not true) and the
+    figure (``--plot``) of a computed trajectory (its JSON keys: ``trajectory_keys``)."""
     tr, read, timings = whole
     if args.trajectory is not None:
         from ..writes import write_all
 
         write_all({args.trajectory: trajectory_csv(tr)}, "--trajectory")
+        if not args.json:  # the report's line on it, once it is written
+            print(f"  written to {args.trajectory}")
     if args.plot and not failed:
         from ..plots.trajectory_plot import plot_trajectory
         from ..writes import guarded_dir
@@ -291,9 +287,10 @@ def write_trajectory(whole, args, failed) -> None:
             plot_trajectory(tr, args.plot, reading=read)
 
 
-def trajectory_summary(d: dict) -> str:
-    """The report's lines on the trajectory (``d`` the JSON object with ``trajectory_keys``); the
-    line naming the CSV follows its write (``cmd_scene``)."""
+def trajectory_summary(d: dict, path=None) -> str:
+    """The report's lines on the trajectory (``d`` the JSON object with ``trajectory_keys``), and
+    one naming the CSV at ``path`` if given: ``ehd scene`` leaves it out and says it once the CSV
+    is written (``write_trajectory``)."""
     def num(v, spec):
         return "-" if v is None else format(v, spec)
 
@@ -307,4 +304,6 @@ def trajectory_summary(d: dict) -> str:
              f"{num(d['observed_speed_in_m_per_s'], '.4g')} m/s at "
              f"{num(d['observed_reading_gap_m'], '.3g')} m), top of the first bounce "
              f"{num(d['rebound_height_m'], '.4g')} m"]
+    if path is not None:
+        lines.append(f"  written to {path}")
     return "\n".join(lines)

@@ -47,6 +47,7 @@ class Summary:
     computed_failed: int = 0
     done: int = 0  # stored as ok
     failed: int = 0  # stored as failed (this run or before)
+    premise_failed: int = 0  # of those, start_deformed: the model's premise, the same on a retry
     not_run: int = 0  # still missing (an interrupted run)
     repaired: int = 0  # damaged cells found when the store was opened (recomputed if in the grid)
     repaired_coords: tuple = ()  # damaged coordinates rewritten from the store's copy
@@ -91,7 +92,10 @@ class Summary:
             lines.append(f"  failed: {format_physics(physics)} {status}: {message}")
         if self.failed > len(self.failures):
             lines.append(f"  ... {self.failed - len(self.failures)} more (ehd status {self.store})")
-        if self.failed:
+        if self.premise_failed:
+            lines.append(f"  {self.premise_failed} of the failed are start_deformed: eps is not "
+                         "small for their St, the model's premise (a retry gives the same)")
+        if self.failed > self.premise_failed:
             lines.append("  rerun only the failed scenes with --retry-failed")
         return "\n".join(lines)
 
@@ -359,6 +363,7 @@ def _count(summary: Summary, st, cells) -> None:
     messages = st.ds["message"].values[index]
     summary.done = int(np.sum(status == STATUS_CODES["ok"]))
     summary.failed = int(np.sum(status >= 2))
+    summary.premise_failed = int(np.sum(status == STATUS_CODES["start_deformed"]))
     summary.not_run = int(np.sum(status == 0))
     summary.rigid = int(np.sum((status == STATUS_CODES["ok"]) & (model == MODEL_CODES["rigid"])))
     for k in np.nonzero(status >= 2)[0][:20]:
