@@ -224,7 +224,9 @@ class OuterFlow:
         """The approach speed at the outer start over ``v0``: what arrives at ``x0`` with
         ``v0``, ``(s0 + J(x0, start)/St) / s(start)``."""
         s0 = self.mass_factor(self.x0_over_a)
-        return (s0 + self.integral(self.start_over_a) / stokes) / self.mass_factor(self.start_over_a)
+        # a float's division: inf, without numpy's overflow warning, where St is a denormal
+        return ((s0 + float(self.integral(self.start_over_a)) / stokes)
+                / self.mass_factor(self.start_over_a))
 
     def arrival_speed(self, stokes_start: float) -> float:
         """The speed at ``x0`` over the approach speed ``V`` at the outer start, the inverse of

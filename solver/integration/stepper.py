@@ -816,8 +816,8 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
         if counters[STEPS] >= control.max_steps:
             status = MAX_STEPS
             break
-        if dt < control.dt_min:
-            status = STEP_UNDERFLOW
+        if not dt > control.dt_min:  # also where dt_min underflowed to 0 and the halved dt
+            status = STEP_UNDERFLOW   # reached it (St 5e-324 looped for ever), or dt is NaN
             break
         k = min(hist.order[0], n_hist)
         b = _coefficients(dt, t, k, a)
