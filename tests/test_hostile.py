@@ -1441,3 +1441,67 @@ def test_main_leaves_the_sigterm_handler_as_it_found_it(capsys):
     before = signal.getsignal(signal.SIGTERM)
     assert ehd(capsys, "info")[0] == 0
     assert signal.getsignal(signal.SIGTERM) is before
+
+
+# ---- ehd restitution along paths that leave the model's range (a helper's scan) --------------
+STEEL = REPO / "examples" / "steel_ball_glass_wall_glycerol.toml"
+
+
+def test_restitution_threshold_keeps_the_path_where_a_point_is_refused(tmp_path, capsys):
+    """A path whose smallest size leaves the model (eps 0.215 > 0.1) is skipped in the table; the
+    threshold solved the whole path again, met the refusal and ended with exit 2, --out and
+    --plot not written. It now reads the path's solved points and bisects between them."""
+    out, fig = tmp_path / "out", tmp_path / "fig"
+    code = main(["restitution", str(STEEL), "--vary", "radius", "--from", "0.01", "--to", "10",
+                 "--n", "4", "--threshold", "--accuracy", "fast", "--out", str(out),
+                 "--plot", str(fig)])
+    text = capsys.readouterr().out
+    assert code == 0 and "skipped: radius x 0.01: eps = 0.215" in text
+    assert text.count("St_c = ") == 2 and (out / "restitution.csv").is_file()
+    assert (fig / "restitution.png").is_file()
+
+
+def test_restitution_threshold_on_a_path_run_downwards(capsys):
+    """--from above --to: the table ran from 10 down to 0.1 with one change from rebound to
+    stick, and the threshold said the spheres alternate; the factors are now taken in order."""
+    args = ["restitution", str(EXAMPLE), "--n", "5", "--threshold", "--accuracy", "fast"]
+    assert main(args + ["--from", "0.1", "--to", "10"]) == 0
+    up = [line for line in capsys.readouterr().out.splitlines() if "St_c = " in line]
+    assert main(args + ["--from", "10", "--to", "0.1"]) == 0
+    down = [line for line in capsys.readouterr().out.splitlines() if "St_c = " in line]
+    assert len(up) == 2 and up == down
+
+
+def test_restitution_names_only_the_points_it_solved(capsys):
+    """--n 1 solved x 0.1 alone and said the spheres stick at every v0 from 0.1 to 10 (they
+    rebound at 10)."""
+    assert main(["restitution", str(EXAMPLE), "--n", "1", "--threshold", "--accuracy",
+                 "fast"]) == 0
+    text = capsys.readouterr().out
+    assert "stick at v0 x 0.1;" in text and "from 0.1 to 10" not in text
+
+
+@pytest.mark.parametrize("flags", [["--n", "10000000000"], ["--n", "0"]])
+def test_restitution_refuses_a_path_of_impossible_length(flags, capsys):
+    """10^10 points raised numpy's memory error (exit 70) before the first solve."""
+    assert main(["restitution", str(EXAMPLE), *flags]) == EXIT_USAGE
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--n" in err[0] and "from 1 to 10000" in err[0]
+
+
+def test_restitution_of_a_settling_scene_has_a_path_in_size_only(tmp_path, capsys):
+    """A settling scene's speed follows from its bodies: along --vary v0 its approach speed was
+    mapped through the outer flow without gravity (2.9 m/s where it settles at 23 mm/s), and
+    along --vary approach_speed every point stopped before x0, x 1 too; refused, exit 2. Its
+    path in size settles at each size, as before."""
+    scene = tmp_path / "settling.toml"
+    scene.write_text(STEEL.read_text().replace('v0 = "1 m/s"', 'approach_speed = "settling"'))
+    for vary in ("v0", "approach_speed"):
+        assert main(["restitution", str(scene), "--vary", vary, "--n", "2"]) == EXIT_USAGE
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "settles at its own speed" in err[0], err
+    assert main(["restitution", str(scene), "--vary", "radius", "--from", "1", "--to", "2",
+                 "--n", "2", "--accuracy", "fast"]) == 0
+    # x 1: the approach speed the scene settles at (ehd scene: 22.77 mm/s), in the V column
+    row = capsys.readouterr().out.splitlines()[1].split()
+    assert row[4] == "0.02277", row

@@ -26,7 +26,9 @@ def solve_path(scene, vary: str, factors, accuracy: str = "standard", progress=N
     """Solve the scenes along a path (export.scene_path); scenes the solver refuses are skipped
     with their reason, and so are scenes whose outer flow stops the spheres before ``x0`` (they
     stick). ``progress``: called with a line per scene once the path has taken more than 2 s.
-    ``ranges``: each scene's ranges too (``run_scene``). Returns ``(results, skipped)``."""
+    ``ranges``: each scene's ranges too (``run_scene``). Returns ``(results, skipped, at)``:
+    ``at`` has an entry per factor, its result, None (stopped before ``x0``: sticks) or the
+    reason it was skipped (``threshold.sticking_threshold``'s ``results``)."""
     import time
 
     from pipeline.scenes.run import run_scene
@@ -34,23 +36,39 @@ def solve_path(scene, vary: str, factors, accuracy: str = "standard", progress=N
 
     from .export import scene_path
 
-    results, skipped = [], []
+    results, skipped, at = [], [], []
     path = scene_path(scene, vary, factors)
     t0 = time.perf_counter()
     for k, (factor, s) in enumerate(zip(factors, path)):
         if s.stops_outside:  # no film collision: the outer flow stops them (they stick)
             skipped.append(f"{vary} x {factor:.3g}: sticks, the outer flow stops the spheres "
                            "before x0")
+            at.append(None)
             continue
         try:
             results.append(run_scene(s, accuracy=accuracy, save_profiles=False,
                                       sensitivity_solves=False, ranges=ranges))
+            at.append(results[-1])
         except SceneError as exc:
             skipped.append(f"{vary} x {factor:.3g}: {exc}")
+            at.append(str(exc))
         elapsed = time.perf_counter() - t0
         if progress and elapsed > 2.0:
             progress(f"{vary} x {factor:.3g} solved ({k + 1}/{len(path)}), {elapsed:.1f} s")
-    return results, skipped
+    return results, skipped, at
+
+
+# the most points a path takes (``--n`` of restitution and export-dem): each is a solve, from
+# 0.05 s to seconds; 10^10 raised numpy's memory error (exit 70) before the first
+MAX_POINTS = 10000
+
+
+def _check_points(n) -> None:
+    from pipeline.cli import UsageError
+
+    if not 1 <= n <= MAX_POINTS:
+        raise UsageError(f"--n {n}: give a whole number of points from 1 to {MAX_POINTS} (each "
+                         "is a solve)")
 
 
 def _scene(path, materials):
@@ -105,7 +123,7 @@ def check_rows_between(scene, rows, fit_range, accuracy, progress):
     factors = [x / scene.stokes for x in check_stokes([r["St"] for r in rows], *fit_range)]
     if not factors:
         return [], []
-    results, skipped = solve_path(scene, "v0", factors, accuracy, progress=progress)
+    results, skipped, _ = solve_path(scene, "v0", factors, accuracy, progress=progress)
     return scene_rows(results, rows[0]["group"], role="check"), skipped
 
 
@@ -193,8 +211,7 @@ def _check_input_flags(args, store: bool) -> None:
     args.density_ratio = 0.0 if args.density_ratio is None else args.density_ratio
     args.n = 13 if args.n is None else args.n
     _check_density_ratio(args.density_ratio)
-    if args.n < 1:
-        raise UsageError(f"--n {args.n}: give a whole number of speeds >= 1")
+    _check_points(args.n)
 
 
 def cmd_export_dem(args) -> int:
@@ -241,7 +258,8 @@ def cmd_export_dem(args) -> int:
     else:
         scene = _scene(str(path), args.materials)
         factors = np.geomspace(0.1, 10.0, args.n)
-        results, skipped = solve_path(scene, "v0", factors, args.accuracy, progress=_progress)
+        results, skipped, _ = solve_path(scene, "v0", factors, args.accuracy,
+                                         progress=_progress)
         rows = scene_rows(results, f"{scene.body1.solid.name}-{scene.body2.solid.name} in "
                                    f"{scene.fluid.name}")
         if not rows:
@@ -292,18 +310,25 @@ def cmd_restitution(args) -> int:
     check_accuracy(args.accuracy)
     _check_kind(args.kind)
     scene = _scene(args.scene, args.materials)
-    if not (0 < args.start < np.inf and 0 < args.stop < np.inf and args.n >= 1):
-        raise UsageError("--from and --to must be finite positive factors and --n >= 1")
+    if not (0 < args.start < np.inf and 0 < args.stop < np.inf):
+        raise UsageError("--from and --to must be finite positive factors")
+    _check_points(args.n)
     factors = np.geomspace(args.start, args.stop, args.n)
     try:
         scene_path(scene, args.vary, factors[:1])  # a path the scene has (approach: an outer flow)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    results, skipped = solve_path(scene, args.vary, factors, args.accuracy, progress=_progress,
-                                  ranges=args.range)
+    results, skipped, at = solve_path(scene, args.vary, factors, args.accuracy,
+                                      progress=_progress, ranges=args.range)
     rows = scene_rows(results, f"{scene.body1.solid.name}-{scene.body2.solid.name} in "
                                f"{scene.fluid.name}, {args.vary} path")
     _print_rows(rows, skipped)
+    if all(isinstance(a, str) for a in at):  # as export-dem: nothing to show, fit or bisect
+        raise UsageError(f"{args.scene}: the solver refused every point of the path (skipped "
+                         "lines above); change the scene or --from/--to")
+    if not rows and (args.plot or args.out):  # every point stopped before x0: nothing to draw
+        raise UsageError(f"{args.scene}: every point of the path sticks before x0 (skipped lines "
+                         "above): no collision to draw or export; move --from/--to up")
     thresholds = []
     if args.threshold:
         from pipeline.scenes.threshold import format_threshold, sticking_threshold
@@ -312,7 +337,7 @@ def cmd_restitution(args) -> int:
         for key in ("e_far", "e_wet"):
             thresholds.append(sticking_threshold(scene, args.vary, args.accuracy,
                                                  start=args.start, stop=args.stop, n=args.n,
-                                                 results=results, key=key))
+                                                 results=at, key=key))
             print(format_threshold(thresholds[-1]))
     if args.plot:
         from pipeline.plots.restitution_plot import plot_restitution
@@ -370,8 +395,9 @@ def register(sub) -> None:
                    help="first factor on v0 or the radii (default 0.1)")
     p.add_argument("--to", dest="stop", type=float, default=10.0, help="last factor (default 10)")
     p.add_argument("--n", type=int, default=9, help="points, log-spaced (default 9)")
-    p.add_argument("--out", default=None, help="also write the DEM export into this folder "
-                   "(as export-dem: --for and --allow-invalid apply)")
+    p.add_argument("--out", default=None, help="also write the DEM export into this folder: "
+                   "the rows' CSV and JSON always, the fitted laws and snippets where 3 rows "
+                   "rebound (--for and --allow-invalid as in export-dem)")
     p.add_argument("--plot", metavar="DIR", default=None,
                    help="write e against St and the path's v0 or radius, the sticking threshold "
                         "marked, as DIR/restitution.png and .pdf")
@@ -395,7 +421,7 @@ def _add_export_flags(p) -> None:
                    help="the kind of DEM code: dry (default; LIGGGHTS or YADE without fluid "
                         "coupling) realises e_far, the whole loss the fluid causes, at the "
                         "approach speed at x_ref; cfd-dem (resolved CFD-DEM) realises e_wet at "
-                        "v0. Two unequal spheres have no e_far yet: use cfd-dem")
+                        "v0")
     p.add_argument("--allow-invalid", action="store_true",
                    help="export even when every row of a group fails a validity check (e.g. "
                         "a film thinner than a gas's mean free path); every snippet and the "

@@ -179,9 +179,19 @@ def scene_path(scene, vary: str, factors) -> list:
     """Scenes along a path: ``v0``, the approach speed or the radii (and ``x0``, the outer start
     and ``x_ref`` with them, keeping their ratios to ``a``) times each factor. eps moves along
     the path with the speed and size: that is the point. A scene given its approach speed keeps
-    it along a path in size (``v0`` mapped again: ``scene_file.at_approach_speed``)."""
+    it along a path in size (``v0`` mapped again: ``scene_file.at_approach_speed``); a settling
+    scene settles at its own speed at each size, and has no path in speed (refused: its speed
+    mapped through the outer flow without gravity was wrong, 2.9 m/s for a ball that settles at
+    23 mm/s)."""
     from pipeline.scenes.scene_file import at_approach_speed, at_settling
 
+    settling = scene.approach_speed_source.startswith("settling")
+    if vary != "radius" and settling:
+        from pipeline.scenes.scene import SceneError
+
+        raise SceneError(f"the scene settles at its own speed (approach_speed = 'settling'): "
+                         f"it has no path in {vary}; vary its size (--vary radius), or give the "
+                         "scene a v0 or an approach speed to move along")
     if vary == "v0" and scene.stops_outside:
         from pipeline.scenes.scene import SceneError
 
@@ -189,7 +199,7 @@ def scene_path(scene, vary: str, factors) -> list:
                          "to reach x0, so every v0 along the path would be 0; vary the approach "
                          "speed instead (--vary approach_speed)")
     scenes = []
-    for f in factors:
+    for f in map(float, factors):  # a numpy number would show as np.float64(...) in a refusal
         if vary == "v0":
             scenes.append(dataclasses.replace(scene, v0=scene.v0 * f, approach_speed=None))
         elif vary == "approach_speed":
@@ -201,7 +211,7 @@ def scene_path(scene, vary: str, factors) -> list:
             outer = {k: None if getattr(scene, k) is None else getattr(scene, k) * f
                      for k in ("outer_start", "x_ref")}
             scaled = dataclasses.replace(scene, body1=b1, body2=b2, x0=scene.x0 * f, **outer)
-            if scene.approach_speed_source.startswith("settling"):  # settles at its own speed
+            if settling:  # settles at its own speed
                 scaled = at_settling(scaled)
             elif scene.approach_speed is not None:
                 scaled = at_approach_speed(scaled, scene.approach_speed)

@@ -56,11 +56,15 @@ def _sticks(scene, vary, factor, accuracy, key):
     from pipeline.dem.export import scene_path
 
     from .run import run_scene
+    from .scene import SceneError
 
-    at = scene_path(scene, vary, [factor])[0]
-    if at.stops_outside:
-        return True
-    r = run_scene(at, accuracy=accuracy, save_profiles=False, sensitivity_solves=False)
+    try:
+        at = scene_path(scene, vary, [factor])[0]
+        if at.stops_outside:
+            return True
+        r = run_scene(at, accuracy=accuracy, save_profiles=False, sensitivity_solves=False)
+    except SceneError as exc:  # refused there (e.g. eps beyond 0.1 at a larger size)
+        raise SolveFailed(f"the scene at {vary} x {factor:.4g} is refused: {exc}") from None
     if not r.collision.ok:
         raise SolveFailed(f"the solve at {vary} x {factor:.4g} failed ({r.collision.status}): "
                           f"{r.collision.message}")
@@ -80,9 +84,9 @@ def sticking_threshold(scene, vary: str = "v0", accuracy: str = "standard", *,
     start, stop, n : float, float, int
         The first bracket is looked for on ``n`` log-spaced factors in ``[start, stop]``
         (``ehd restitution``'s ``--from``, ``--to``, ``--n``).
-    results : list of SceneResult or None, optional
-        Those factors already solved (in order, None for a scene stopped before ``x0``;
-        ``ehd restitution`` passes its rows).
+    results : list of SceneResult, None or str, optional
+        Those factors already solved, one entry each in order: its result, None for a scene
+        stopped before ``x0``, or why it was skipped (``ehd restitution`` passes its path's).
     rtol : float
         Stop when the bracket's factors differ by less than this, relatively.
     key : {"e_wet", "e_far"}
@@ -101,31 +105,15 @@ def sticking_threshold(scene, vary: str = "v0", accuracy: str = "standard", *,
     from pipeline.dem.export import PATHS, path_value
 
     factors = [float(f) for f in np.geomspace(start, stop, n)]
-    solves = 0
     unit = PATHS[vary][1]
-    if results is not None and len(results) == n:
-        outcome = [(f, sticks(r, key)) for f, r in zip(factors, results)
-                   if r is None or r.collision.ok]
-    else:
-        outcome = []
-        for f in factors:
-            solves += 1
-            try:
-                outcome.append((f, _sticks(scene, vary, f, accuracy, key)))
-            except SolveFailed:
-                continue
+    outcome, solves = _outcome(scene, vary, factors, accuracy, key, results)
     common = dict(vary=vary, unit=unit, key=key)
-    # St grows with v0 and with size (St ~ v0 a): the first rebounding factor after a sticking one
+    # the first rebounding factor after a sticking one
     change = next((i for i in range(1, len(outcome))
                    if outcome[i - 1][1] and not outcome[i][1]), None)
     if change is None:
-        stuck_all = [stuck for _, stuck in outcome]
-        what = "rebound" if not any(stuck_all) else "stick" if all(stuck_all) else "alternate"
-        if not outcome:
-            what = "fail to solve"
         return Threshold(St_c=None, factor=None, value=None, bracket=(), solves=solves,
-                         note=f"the spheres {what} at every {vary} from {start:g} to {stop:g} "
-                              f"times the scene's; widen --from/--to", **common)
+                         note=_no_change(outcome, vary, start, stop), **common)
     lo, hi = outcome[change - 1][0], outcome[change][0]
     while hi / lo - 1.0 > rtol:
         mid = math.sqrt(lo * hi)
@@ -144,6 +132,37 @@ def sticking_threshold(scene, vary: str = "v0", accuracy: str = "standard", *,
     approach = path_value(at, "approach_speed")
     return Threshold(St_c=at.stokes, factor=factor, value=path_value(at, vary),
                      bracket=(lo, hi), solves=solves, approach_speed=approach, **common)
+
+
+def _outcome(scene, vary, factors, accuracy, key, results):
+    """``([(factor, sticks)], solves)`` of the path's factors in increasing order (St grows with
+    v0 and with size, St ~ v0 a, whichever way the path ran): from ``results`` where it has an
+    entry per factor (a skipped point, a str, and a failed solve left out), else solved here."""
+    if results is not None and len(results) == len(factors):
+        outcome = [(f, sticks(r, key)) for f, r in zip(factors, results)
+                   if r is None or (not isinstance(r, str) and r.collision.ok)]
+        return sorted(outcome), 0
+    outcome = []
+    for f in factors:
+        try:
+            outcome.append((f, _sticks(scene, vary, f, accuracy, key)))
+        except SolveFailed:
+            continue
+    return sorted(outcome), len(factors)
+
+
+def _no_change(outcome, vary, start, stop) -> str:
+    """The note of a path without a change from sticking to rebounding: over the factors it
+    solved, never more (``--n 1`` had claimed the whole of ``--from``/``--to``)."""
+    if not outcome:
+        return (f"every {vary} from {min(start, stop):g} to {max(start, stop):g} times the "
+                "scene's failed to solve; change the scene or the path")
+    stuck_all = [stuck for _, stuck in outcome]
+    what = "rebound" if not any(stuck_all) else "stick" if all(stuck_all) else "alternate"
+    lo, hi = outcome[0][0], outcome[-1][0]
+    where = f"at {vary} x {lo:.4g}" if len(outcome) == 1 else \
+        f"at every {vary} solved from {lo:.4g} to {hi:.4g} times the scene's"
+    return f"the spheres {what} {where}; widen --from/--to, or more --n"
 
 
 # the e a threshold is read in -> the code kind it is for
