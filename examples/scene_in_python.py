@@ -2,7 +2,7 @@
 impact speed, and the sticking threshold of the materials.
 
     python examples/scene_in_python.py        (from the clone, or from a folder made by
-                                               ``ehd examples DIR``; about a minute)
+                                               ``ehd examples DIR``; a few seconds once compiled)
 
 Every quantity is a number in SI units or a string with its unit ("50 um", "10 cm/s").
 """

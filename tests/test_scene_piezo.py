@@ -289,7 +289,7 @@ def test_forced_laws_through_flags(solves, capsys):
     ({"viscosity_law": "barus", "fluid": {"name": "silicone_oil_10cst"}},
      "needs the fluid's pressure-viscosity coefficient, and the fluid 'silicone_oil_10cst'"),
     ({"viscosity_law": "roelands", "fluid": {"name": "water"}},
-     "pressure_viscosity = 0 is the constant viscosity"),
+     "pressure_viscosity = 0 \\(the fluid .water.\\) is the constant viscosity"),
     ({"viscosity_law": "roelands"}, "needs the fluid's roelands_index and roelands_pressure"),
     ({"density_law": "dowson-higginson"}, "needs the fluid's dowson_higginson_c1"),
     ({"fluid": {"name": "glycerol", "viscosity": "barus"}},

@@ -240,8 +240,8 @@ class Scene:
                                  f"coefficient, and the fluid {f.name!r} has none: give "
                                  "fluid.pressure_viscosity (e.g. '20 1/GPa', --pressure-viscosity)")
             if alpha == 0.0:
-                raise SceneError(f"viscosity_law = {law!r} with the fluid {f.name!r}'s "
-                                 "pressure_viscosity = 0 is the constant viscosity: give "
+                raise SceneError(f"viscosity_law = {law!r} with pressure_viscosity = 0 (the "
+                                 f"fluid {f.name!r}) is the constant viscosity: give "
                                  "fluid.pressure_viscosity > 0 or viscosity_law = 'constant'")
             if law == "roelands" and not f.has_roelands:
                 raise SceneError(f"viscosity_law = 'roelands' needs the fluid's roelands_index "
