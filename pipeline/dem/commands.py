@@ -89,7 +89,11 @@ def _print_rows(rows, skipped):
     print(f"{'St':>10} {'St_L':>10} {'eps':>10} {'v0 [m/s]':>10} {'V [m/s]':>10} {'e_wet':>8} "
           f"{'e_far':>8}  note")
     for r in rows:
-        note = "sticks" if r["sticks"] else ""
+        # as ehd scene's verdict, whose first e is e_far: sticking there alone is a dry DEM
+        # code's (the CSV's sticks column stays e_wet's)
+        far = r["e_far"]
+        note = "sticks" if r["sticks"] else \
+            "sticks in e_far (dry DEM)" if far != "" and far == 0.0 else ""
         if r["warning_checks"]:
             note = (note + "; " if note else "") + "warnings: " + r["warning_checks"] + " (see CSV)"
         approach = "-" if r["approach_speed_m_s"] == "" else f"{r['approach_speed_m_s']:.4g}"
