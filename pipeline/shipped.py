@@ -122,6 +122,8 @@ def cmd_examples(args) -> int:
     from .errors import PathError
 
     check_output_dir("DIR", args.dir)
+    for kind in FOLDERS:  # a read-only DIR/examples or DIR/sweeps too (it was exit 74)
+        check_output_dir("DIR", str(Path(args.dir) / kind))
     try:
         copy_examples(args.dir, force=args.force)
     except (FileExistsError, FileNotFoundError) as exc:

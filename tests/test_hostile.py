@@ -1510,3 +1510,21 @@ def test_restitution_of_a_settling_scene_has_a_path_in_size_only(tmp_path, capsy
     # x 1: the approach speed the scene settles at (ehd scene: 22.77 mm/s), in the V column
     row = capsys.readouterr().out.splitlines()[1].split()
     assert row[4] == "0.02277", row
+
+
+def test_examples_into_a_read_only_subfolder_is_refused_before_writing(tmp_path, capsys,
+                                                                      monkeypatch):
+    """DIR writable, DIR/examples read-only: the copy failed with exit 74 ("Permission denied"),
+    where docs/pipeline.md says a read-only folder is exit 2 before any work. (os.access is
+    the check; its answer is faked here, since root writes anywhere.)"""
+    import pipeline.cli_shared as shared
+
+    (tmp_path / "examples").mkdir()
+    locked = str(tmp_path / "examples")
+    real = os.access
+    monkeypatch.setattr(shared.os, "access",
+                        lambda p, mode: False if str(p) == locked else real(p, mode))
+    assert main(["examples", str(tmp_path)]) == EXIT_USAGE
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "is not writable" in err[0] and "examples" in err[0]
+    assert not any((tmp_path / "examples").iterdir())
