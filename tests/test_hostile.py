@@ -1528,3 +1528,11 @@ def test_examples_into_a_read_only_subfolder_is_refused_before_writing(tmp_path,
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "is not writable" in err[0] and "examples" in err[0]
     assert not any((tmp_path / "examples").iterdir())
+
+
+@pytest.mark.parametrize("command", ["scene", "restitution"])
+def test_an_empty_scene_path_is_named(command, capsys):
+    """'' was read as no file, and the refusal said "missing the table [body1]"."""
+    assert main([command, ""]) == EXIT_USAGE
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "empty scene file path" in err[0]

@@ -72,6 +72,8 @@ def load_scene(path=None, flags: dict | None = None, materials=(), *, user_files
 
     if isinstance(materials, (str, bytes)) or hasattr(materials, "__fspath__"):
         materials = (materials,)  # one file, not its name's characters
+    if path is not None and not str(path).strip():  # '' read as no file: "missing [body1]"
+        raise SceneError("empty scene file path: give a scene file (TOML; see docs/scenes.md)")
     data = _read_scene_file(path) if path else {}
     given = [k for k in _ONE_SPEED if (flags or {}).get(k) not in (None, False)]
     if len(given) == 2:
