@@ -509,7 +509,7 @@ def _premise_first(result, cols):
     no numerical one that a finer preset would mend (St 1e-12, eps 1e-2 had reported
     ``max_steps`` after 50000 steps; St 1e-300 ``step_underflow``). A failed solve's
     observables stay withheld, and its message says how it ended."""
-    result.start_strain_energy = _start_strain(cols)
+    result.start_strain_energy = float(cols["E_s"][0] / cols["E_k"][0])  # strain over kinetic
     if not result.start_strain_energy > START_STRAIN_LIMIT:
         return
     premise = failure_message("start_deformed", ratio=result.start_strain_energy,
@@ -517,11 +517,6 @@ def _premise_first(result, cols):
     if result.status != "ok":
         premise += f"; the solve then ended: {result.message}"
     result.status, result.message = "start_deformed", premise
-
-
-def _start_strain(cols):
-    """The strain energy where the coupled phase starts, of the kinetic energy there."""
-    return float(cols["E_s"][0] / cols["E_k"][0])
 
 
 def _depart(physics, shortcuts, cols, blocks):

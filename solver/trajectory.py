@@ -17,12 +17,12 @@ its drag couples into their relative motion, which the zero-momentum frame of th
 out (its relative weight ``m g rho_f (1/rho_2 - 1/rho_1)`` gave 0.19x the difference of the
 settling speeds of steel and glass spheres of 1 mm diameter in glycerol, and 0 for two glass
 spheres of any sizes); equal ones fall together, and a drag law beyond Stokes' at their relative
-speed is not the drag of their common fall. The resistance joins the exact Stokes resistance ``R_stokes(x)`` (wall or pair, outer_flow), which
-holds near contact where the gap's flow is viscous (its Reynolds number is ``Re x/a``), to the
-isolated spheres' drag at their Reynolds numbers: its far-field limit ``R_far`` (each sphere's
-Stokes drag, ``(a1 s1^2 + a2 s2^2)/a``, ``s_i = m/m_i``) is replaced by
-``R_isolated = (a1 s1^2 f(Re1) + a2 s2^2 f(Re2))/a`` with ``f`` the drag law's correction
-(model/drag.py) and ``Re_i = rho_f |u_i| 2 a_i / mu``. The energy
+speed is not the drag of their common fall. The resistance joins the exact Stokes resistance
+``R_stokes(x)`` (wall or pair, outer_flow), which holds near contact where the gap's flow is
+viscous (its Reynolds number is ``Re x/a``), to the isolated spheres' drag at their Reynolds
+numbers: its far-field limit ``R_far`` (each sphere's Stokes drag, ``(a1 s1^2 + a2 s2^2)/a``,
+``s_i = m/m_i``) is replaced by ``R_isolated = (a1 s1^2 f(Re1) + a2 s2^2 f(Re2))/a`` with ``f``
+the drag law's correction (model/drag.py) and ``Re_i = rho_f |u_i| 2 a_i / mu``. The energy
 ``E = M U^2/2 + W x`` then falls by the drag's work alone, ``dE/dt = -6 pi mu a R U^2``.
 
 At ``x0`` the near field (``collide``, unchanged) takes over with ``v0`` the arriving speed and
@@ -97,11 +97,9 @@ class Outer:
         # rho_f V1 / m1; two spheres: rho_f V1 / (2 m))
         object.__setattr__(self, "phi", self.fluid_density * volume1
                            / (self.m if solo else 2.0 * self.m))
-        weight = (self.mass1 - self.fluid_density * volume1) * s1
-        if not solo:
-            volume2 = 4.0 / 3.0 * math.pi * self.radius2**3
-            weight -= (self.mass2 - self.fluid_density * volume2) * s2
-        object.__setattr__(self, "weight", weight * self.gravity)
+        # the buoyant weight of sphere 1 (two free spheres have no gravity here, above)
+        weight = (self.mass1 - self.fluid_density * volume1) * self.gravity if solo else 0.0
+        object.__setattr__(self, "weight", weight)
         if self.geometry is not None:
             ratios = (self.radius2 / self.radius1, self.mass2 / self.mass1) \
                 if self.geometry == "pair" else outer_flow.UNIT_RATIOS

@@ -36,7 +36,7 @@ def solve_path(scene, vary: str, factors, accuracy: str = "standard", progress=N
 
     from .export import scene_path
 
-    results, skipped, at = [], [], []
+    skipped, at = [], []
     path = scene_path(scene, vary, factors)
     t0 = time.perf_counter()
     for k, (factor, s) in enumerate(zip(factors, path)):
@@ -46,15 +46,15 @@ def solve_path(scene, vary: str, factors, accuracy: str = "standard", progress=N
             at.append(None)
             continue
         try:
-            results.append(run_scene(s, accuracy=accuracy, save_profiles=False,
-                                      sensitivity_solves=False, ranges=ranges))
-            at.append(results[-1])
+            at.append(run_scene(s, accuracy=accuracy, save_profiles=False,
+                                sensitivity_solves=False, ranges=ranges))
         except SceneError as exc:
             skipped.append(f"{vary} x {factor:.3g}: {exc}")
             at.append(str(exc))
         elapsed = time.perf_counter() - t0
         if progress and elapsed > 2.0:
             progress(f"{vary} x {factor:.3g} solved ({k + 1}/{len(path)}), {elapsed:.1f} s")
+    results = [a for a in at if a is not None and not isinstance(a, str)]
     return results, skipped, at
 
 
