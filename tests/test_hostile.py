@@ -1474,7 +1474,15 @@ def test_restitution_threshold_on_a_path_run_downwards(capsys):
                for line in text.splitlines()), text
     assert main(args + ["--from", "10", "--to", "0.1"]) == 0
     down = [line for line in capsys.readouterr().out.splitlines() if "St_c = " in line]
-    assert len(up) == 2 and up == down
+    assert len(up) == 2 and len(down) == 2
+
+    def st_c(line):
+        return float(line.split("St_c = ")[1].split()[0])
+
+    # the same bracket from the same points (bisected to RTOL 1e-3, printed to 4 digits): equal
+    # to within one bracket, not to the bit (a path's factors may round differently either way)
+    for a, b in zip(up, down):
+        assert st_c(a) == pytest.approx(st_c(b), rel=2e-3), (a, b)
 
 
 def test_restitution_names_only_the_points_it_solved(capsys):
