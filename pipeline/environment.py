@@ -48,9 +48,11 @@ _NOTICE_GIVEN = False
 
 def compile_notice(stream=None) -> str | None:
     """Before the first solve of a process: one line on ``stream`` (stderr) when the solver's
-    compiled-code cache for this solver version is empty, so that the compile (about 20 s
-    of CPU: benchmarks/compile.md, longer in wall time on a busy machine; once per solver
-    version and cache folder) is not a silent wait. Says where the cache goes. Returns
+    compiled-code cache for this solver version is empty, so that the compile (12-15 s of CPU
+    for each set of physics pieces a process solves: benchmarks/compile.md, longer in wall time
+    on a busy machine; once per solver version and cache folder) is not a silent wait. A set
+    solved later for the first time compiles without a notice (its copy of the loop:
+    solver/integration/kinds.py). Says where the cache goes. Returns
     the line (None: nothing to say)."""
     global _NOTICE_GIVEN
     import sys
@@ -63,13 +65,13 @@ def compile_notice(stream=None) -> str | None:
 
     folder = _jit.CACHE_DIR
     if folder is None:
-        line = ("ehd-collision: compiling the solver (about 20 s on an idle core, minutes on a "
+        line = ("ehd-collision: compiling the solver (about 15 s on an idle core, minutes on a "
                 "busy machine); no writable cache folder, so every process compiles again: set "
                 "EHD_CACHE_DIR to a writable folder")
     elif not any(Path(folder).rglob("*.nbi")):
-        line = ("ehd-collision: compiling the solver for this version, once (about 20 s on an "
-                f"idle core, minutes on a busy machine); cached in {folder} (ehd info; "
-                "EHD_CACHE_DIR moves it)")
+        line = ("ehd-collision: compiling the solver for this version, once per set of physics "
+                "(about 15 s on an idle core, minutes on a busy machine); cached in "
+                f"{folder} (ehd info; EHD_CACHE_DIR moves it)")
     else:
         return None
     print(line, file=stream or sys.stderr, flush=True)

@@ -44,7 +44,8 @@
   in a copy with everything below it, as numba's libraries are linked). The classic
   collision's cold compile fell from 43.5 to 27.2 s of CPU (0.63x, 3 alternated rounds,
   0.61-0.64x), the compiled code the same (145 of the 146 regression scenes to the bit, one
-  number by 1.8e-12 of itself). docs/solver.md, "Compiled code", says why the renaming.
+  number by 1.8e-12 of itself). docs/solver.md, "Compiled code", says why the renaming. An
+  entry links the libraries below it callers first (``_callers_first`` says why).
 - An inner function's own machine code never runs, then: it is not emitted, nor the two wrappers
   numba adds to every function for callers outside compiled code (one converts Python's
   arguments, one is a C function pointer). A call from Python runs its twin (``_PythonCall``):
@@ -249,16 +250,32 @@ def _link_inner(library, callee):
     library._inner_callees.append(callee)
 
 
-def _closure(callee):
-    """The libraries ``callee`` runs: itself and, below an inner library, every library it calls,
-    each once, in a fixed order (an entry's, a loaded one's, numba's own hold their callees)."""
-    found, pending = [], [callee]
-    while pending:
-        lib = pending.pop()
-        if lib not in found:
-            found.append(lib)
-            pending.extend(reversed(getattr(lib, "_inner_callees", ())))
-    return found
+def _callers_first(roots):
+    """The libraries ``roots`` run: themselves and, below an inner library, every library it calls
+    (an entry's, a loaded one's, numba's own hold their callees), each once and after every one
+    among them that calls it (the reverse of a depth-first search's finishing order; the calls
+    form no cycle). The order in which a module must link them: numba hands a library's
+    functions over as ``linkonce_odr``, which LLVM's linker brings in only where the module
+    already refers to them, so a library linked before a caller that still calls it left that
+    call to nothing (a null pointer, once numba pruned another caller's call to it away: the
+    loop compiled without the liquid's laws, integration/kinds.py)."""
+    finished, seen = [], set()
+    for root in roots:
+        if root in seen:
+            continue
+        seen.add(root)
+        stack = [(root, iter(getattr(root, "_inner_callees", ())))]
+        while stack:
+            lib, callees = stack[-1]
+            for callee in callees:
+                if callee not in seen:
+                    seen.add(callee)
+                    stack.append((callee, iter(getattr(callee, "_inner_callees", ()))))
+                    break
+            else:
+                stack.pop()
+                finished.append(lib)
+    return finished[::-1]
 
 
 class _OwnCode:
@@ -282,12 +299,10 @@ def _as_linked(library):
 
 
 def _link_closure(library, callee):
-    """In place of an entry's ``add_linking_library``: an inner callee is linked in with every
-    library below it, so the entry's module holds all it runs."""
-    for lib in _closure(callee):
-        if lib not in library._linked:
-            library._linked.add(lib)
-            type(library).add_linking_library(library, _as_linked(lib))
+    """In place of an entry's ``add_linking_library``: the callee is remembered, and linked in with
+    every library below it when the entry is finalised (``_finalize_entry``), so the entry's
+    module holds all it runs."""
+    library._callees.append(callee)
 
 
 def _self_contained_module(library):
@@ -296,7 +311,7 @@ def _self_contained_module(library):
     in, as numba's libraries are (the caller's machine code, which numba may cache, must hold
     all it runs). The solver's entries link ``_OwnCode`` instead."""
     if library._self_contained is None:
-        closure = _closure(library)
+        closure = _callers_first([library])
         _environments_set(closure)
         module = _OwnCode(library)._get_module_for_linking().clone()
         for lib in closure[1:]:
@@ -310,7 +325,10 @@ def _finalize_entry(library):
     links the others in (``_renamed_then_optimised``), and sets the environments of the inner
     functions it runs first (``_environments_set``)."""
     library._own = {f.name for f in library._final_module.functions if not f.is_declaration}
-    _environments_set(library._linked)
+    linked = _callers_first(library._callees)
+    for lib in linked:
+        type(library).add_linking_library(library, _as_linked(lib))
+    _environments_set(linked)
     type(library).finalize(library)
 
 
@@ -392,7 +410,7 @@ class _InnerLibrary(AnalysisPass):
         if not _INNER_LIBRARIES:
             return False
         if self._always_entry or state.func_id.func in _ENTRIES:
-            library._linked = set()
+            library._callees = []
             library.add_linking_library = functools.partial(_link_closure, library)
             library.finalize = functools.partial(_finalize_entry, library)
             library._optimize_final_module = functools.partial(_renamed_then_optimised,

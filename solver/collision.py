@@ -24,7 +24,7 @@ import numpy as np
 
 from . import extrapolation, far_field
 from ._jit import deferred_interrupt
-from .integration import stepper
+from .integration import kinds, stepper
 from .integration.grid import reference_grid, scaled_grid
 from .model import liquid, rigid
 from .observables import OBSERVABLES, SERIES, STATUS, failure_message
@@ -422,13 +422,15 @@ def _integrate(physics, numerics, head, shortcuts):
     # first step of 1e-3 X/V spanned the whole stop and dissipated 1.5 times the kinetic energy
     time_scale = x_switch / max(v_switch, 1e-3) * min(1.0, stokes)
     _, stop_params = rigid.release_event(numerics.release, stokes, physics)
-    return (grid,) + stepper.integrate(
-        grid.nodes(), physics.as_array(),
-        stepper.Start(float(head.t), float(x_switch), float(v_switch), p_init,
-                      float(1.0 - v_switch**2)),
-        stepper.Control(float(numerics.rtol), float(1e-3 * time_scale),
-                        float(1e-12 * time_scale), int(numerics.max_steps),
-                        int(numerics.max_order), float(numerics.high_order_rtol_factor)),
+    phys = physics.as_array()
+    loop = kinds.loop_for(phys)  # compiled for the pieces this physics asks for
+    return (grid,) + loop.integrate(
+        grid.nodes(), phys,
+        loop.Start(float(head.t), float(x_switch), float(v_switch), p_init,
+                   float(1.0 - v_switch**2)),
+        loop.Control(float(numerics.rtol), float(1e-3 * time_scale), float(1e-12 * time_scale),
+                     int(numerics.max_steps), int(numerics.max_order),
+                     float(numerics.high_order_rtol_factor)),
         shortcuts.end_event, stop_params, numerics.save_profiles)
 
 

@@ -164,6 +164,35 @@ def test_only_an_entry_links_in_and_optimises_the_code_below_it():
     assert not calls, calls  # inlined
 
 
+# An entry over three inner functions: ``first`` calls ``doubled`` only in a branch that numba
+# keeps and LLVM's passes of ``first`` remove (the inlined hook folds to True), ``second`` calls
+# it for real
+LINK_ORDER_RUN = """
+import numba
+from solver import _jit
+FLAG = False
+compiled = numba.njit(pipeline_class=_jit._Compiler)
+always = numba.njit(pipeline_class=_jit._Compiler, inline="always")(lambda x: not FLAG or x > 0.0)
+doubled = compiled(lambda x: 2.0 * x)
+first = compiled(lambda x: 1.0 if always(x) else doubled(x))
+second = compiled(lambda x: doubled(x) + 1.0)
+print(_jit.entry(compiled(lambda x: first(x) + second(x)))(1.5))
+"""
+
+
+def test_an_entry_links_a_callee_after_every_caller_that_still_calls_it():
+    """An entry links the libraries below it callers first (``_jit._callers_first``): numba hands
+    a library's functions over as ``linkonce_odr``, which LLVM links in only where the module
+    already calls them. Linked in the order found (``first``, ``doubled``, ``second``), the
+    definition of ``doubled`` was dropped (``first`` no longer called it) and ``second``'s call
+    went to a null pointer: a segmentation fault, as the loop compiled without the liquid's laws
+    had (integration/kinds.py). In a subprocess, so that a crash is this test's failure."""
+    p = subprocess.run([sys.executable, "-c", LINK_ORDER_RUN], cwd=REPO, capture_output=True,
+                       text=True, timeout=300, env=dict(os.environ, NUMBA_DISABLE_CACHE="1"))
+    assert p.returncode == 0, p.stderr[-2000:]
+    assert p.stdout.split() == ["5.0"]
+
+
 def test_an_inner_function_emits_no_machine_code_and_python_runs_its_twin():
     """An inner function is lowered without the wrappers Python calls and never handed to the JIT
     (its machine code would never run: the entries link in its code). A call from Python runs

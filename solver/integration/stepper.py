@@ -43,6 +43,7 @@ import numpy as np
 
 from .._jit import copy_into, entry, filled, hook, jit, leaf
 from ..model import step as model
+from ..model.kind import holds_asked
 from ..model.state import Step, array_record
 from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
 from .events import reached
@@ -128,6 +129,16 @@ class Control(NamedTuple):
     max_steps: int
     max_order: int
     high_order_rtol_factor: float
+
+
+@jit
+def _refuse_absent_pieces(phys):
+    """Raises where the physics asks for a piece whose code this copy of the loop lacks
+    (model/kind.py: its hooks would answer as though the piece were off); ``loop_for``
+    (integration/kinds.py) never hands it one."""
+    if not holds_asked(phys):
+        raise ValueError("integrate: this copy of the loop lacks the code of a piece the physics "
+                         "asks for (integration/kinds.py: loop_for chooses the copy)")
 
 
 @jit
@@ -998,6 +1009,7 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
         The cells' fluid fraction ``theta`` at each row (model/step.py: 1 in full cells) when
         ``save_profiles``, else (0, N-1).
     """
+    _refuse_absent_pieces(phys)
     n = grid.s.size
     control = _film_control(control, phys)
     hist = _history(grid, start, control.max_order)
@@ -1049,10 +1061,8 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
         control, factor = _control_from_now(control, hist, factor, film, phys)
         strain_new, diss_new = model.energies(grid, phys, y0, w, h, q, film)
         hist.r[0] = diss_new
-        if k_step > 2:
-            dissipated += _dissipated_in_step(hist.t, hist.r, k_step, work.basis)
-        else:
-            dissipated += 0.5 * (diss_rate + diss_new) * dt
+        dissipated += (_dissipated_in_step(hist.t, hist.r, k_step, work.basis) if k_step > 2
+                       else 0.5 * (diss_rate + diss_new) * dt)
         strain, diss_rate = strain_new, diss_new
         dt *= factor
     kept = min(n_rows, p_hist.shape[0])

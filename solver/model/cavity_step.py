@@ -13,22 +13,28 @@ pressure (``split_update``); a Reynolds cavity's row is replaced by its constrai
 from .._jit import copy_into, hook, jit
 from ..observables import SERIES_INDEX
 from ..physics import CAVITATION, PI, ST
-from .film import (JFO, NO_FLOOR, cavity_edge, constrain, jfo_void, update_cavity,
-                   update_cavity_jfo, void_work)
+from .film import (JFO, cavity_edge, constrain, jfo_void, update_cavity, update_cavity_jfo,
+                   void_work)
+from .kind import CAVITATION_CODE, asks_floor
 
 _R_CAV, _V_VOID = SERIES_INDEX["cavity_radius"], SERIES_INDEX["void_volume"]
 
 
-@jit
+@hook
 def on(phys):
-    """Whether the film has a floor: a constraint decided cell by cell (an active set)."""
-    return phys[CAVITATION] != NO_FLOOR
+    """Whether the film has a floor: a constraint decided cell by cell (an active set). False in
+    a copy of the loop without the floor's code (model/kind.py), whose branches numba prunes."""
+    if CAVITATION_CODE:
+        return asks_floor(phys)
+    return False
 
 
-@jit
+@hook
 def held(phys):
     """Whether the floor holds cells' slots at the floor with another unknown (JFO)."""
-    return phys[CAVITATION] == JFO
+    if CAVITATION_CODE:
+        return phys[CAVITATION] == JFO
+    return False
 
 
 @jit

@@ -13,11 +13,12 @@ import numpy as np
 
 from .._jit import copy_into, filled, hook, jit
 from ..observables import SERIES_INDEX
-from ..physics import E_DRY, PI, ROUGHNESS, ST
+from ..physics import E_DRY, PI, ST
 from .cavity_step import held_cells
 from .contact import (FREE, asperity_work, contact_derivatives, contact_gap, contact_slopes,
                       contact_state)
 from .film import film_force, gap, strain_energy
+from .kind import CONTACT_CODE, asks_contact
 from .state import Coupling
 
 # a rough film's Newton measures the change of its film pressure against its own size or this
@@ -28,10 +29,13 @@ _E_A, _LOST, _F_A = SERIES_INDEX["E_a"], SERIES_INDEX["solid_loss"], SERIES_INDE
 _V, _X, _E_S = SERIES_INDEX["V"], SERIES_INDEX["X"], SERIES_INDEX["E_s"]
 
 
-@jit
+@hook
 def on(phys):
-    """Whether the surfaces are rough (asperity contact, model/contact.py): the slots hold loads."""
-    return phys[ROUGHNESS] != 0.0
+    """Whether the surfaces are rough (asperity contact, model/contact.py): the slots hold loads.
+    False in a copy of the loop without the contact's code (model/kind.py)."""
+    if CONTACT_CODE:
+        return asks_contact(phys)
+    return False
 
 
 @jit

@@ -32,10 +32,10 @@ import numpy as np
 
 from .._jit import hook, jit, leaf
 from ..integration.linalg import matvec
-from ..physics import CAVITATION, CAVITATION_MODELS, DENSITY, PI, SLIP, ST
-from .liquid import (CONSTANT, compression_energy, density, isoviscous, kirchhoff_difference,
-                     volume_difference)
-from .slip import flux_factor
+from ..physics import CAVITATION, CAVITATION_MODELS, PI, ST
+from .liquid import (compression_energy, constant_density, density, isoviscous,
+                     kirchhoff_difference, volume_difference)
+from .slip import flux_factor, slips
 
 # the cavitation models' codes in the physics array (solver/physics.py: codes("cavitation"))
 NO_FLOOR, REYNOLDS, JFO = (float(CAVITATION_MODELS.index(m)) for m in ("off", "reynolds", "jfo"))
@@ -162,7 +162,7 @@ def compression_work(area, p, h, theta, phys):
     """Energy stored in the compressed liquid, ``E_c = (2/(3 St)) Int rho_bar theta H e(P) ds``
     (``e`` per unit mass, model/liquid.py: ``compression_energy``), relative to the initial kinetic
     energy; 0 at constant density (docs/model.md, "Energy")."""
-    if phys[DENSITY] == CONSTANT:
+    if constant_density(phys):
         return 0.0
     total = 0.0
     for i in range(theta.size):  # the cells (the last node is the far-field boundary)
@@ -274,11 +274,13 @@ def strain_energy(weight, s_last, p, w, phys):
 
 
 # ---- assembled from the terms ---------------------------------------------------------------------
-@jit
+@hook
 def plain_flux(phys):
     """The face flux is ``flux_law`` with the drive ``P_hi - P_lo``: an isoviscous liquid that
     does not slip, decided once per call by the loops over the faces."""
-    return isoviscous(phys) and phys[SLIP] == 0.0
+    if isoviscous(phys) and not slips(phys):
+        return True
+    return False
 
 
 @hook
@@ -325,10 +327,11 @@ def residual(grid, phys, step, x, v, p, theta, h, q, res):
     # one loop, the density's law chosen inside it: the compiler still makes two loops of it and
     # vectorises the first, and numba's reference counts, which a loop in each branch of an if
     # kept, are all removed (docs/solver.md, "Reference counting")
-    constant = phys[DENSITY] == CONSTANT  # the content is theta H (cell_content with rho = 1)
     for i in range(n - 1):
         dq = q[i] - (q[i - 1] if i > 0 else 0.0)
-        content = theta[i] * h[i] if constant else cell_content(theta[i], h[i], p[i], phys)[0]
+        # the content is theta H at constant density (cell_content with rho = 1)
+        content = theta[i] * h[i] if constant_density(phys) else \
+            cell_content(theta[i], h[i], p[i], phys)[0]
         res[i] = content - c_hist[i] - bh / area[i] * dq
     res[n - 1] = far_field_row(p[n - 2], p[n - 1], h[n - 2], h[n - 1])[0]
     res[n] = x - step.x_hist + bh * v
@@ -393,9 +396,8 @@ def jacobian(grid, phys, bh, p, theta, h, active, link, jac, dres_dh):
     n = s.size
     jac[:, :] = 0.0
     dres_dh[:, :] = 0.0
-    classic_flux = plain_flux(phys)
     for f in range(n - 1):
-        if classic_flux:  # face_flux with the isoviscous drive P_hi - P_lo, decided once
+        if plain_flux(phys):  # face_flux with the isoviscous drive P_hi - P_lo
             _, c, dq_dhi, dq_dhj = flux_law(s[f], s[f + 1], s_face[f], h[f], h[f + 1],
                                             p[f + 1] - p[f])
             dq_dpi = -c
@@ -415,7 +417,7 @@ def jacobian(grid, phys, bh, p, theta, h, active, link, jac, dres_dh):
             jac[f + 1, f + 1] += g * dq_dpj
             dres_dh[f + 1, 0] += g * dq_dhi
             dres_dh[f + 1, 1] += g * dq_dhj
-    if phys[DENSITY] == CONSTANT:  # cell_content's partials with rho = 1
+    if constant_density(phys):  # cell_content's partials with rho = 1
         for i in range(n - 1):
             dres_dh[i, 1] += theta[i]
     else:
@@ -481,7 +483,7 @@ def energy_rates(s, s_face, weight, phys, x, p, w, h, q):
     n = s.size
     strain = strain_energy(weight, s[n - 1], p, w, phys)
     diss = 0.0
-    if phys[DENSITY] == CONSTANT:  # the volume difference is P_hi - P_lo: decided once
+    if constant_density(phys):  # the volume difference is P_hi - P_lo: decided once
         for f in range(n - 1):
             diss += dissipation_law(s[f], s[f + 1], s_face[f], h[f], h[f + 1], q[f],
                                     p[f + 1] - p[f])

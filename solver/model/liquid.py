@@ -34,9 +34,10 @@ import math
 
 import numpy as np
 
-from .._jit import entry, jit, leaf
+from .._jit import entry, hook, jit, leaf
 from ..physics import (BETA, DENSITY, DENSITY_LAWS, DH_C1, DH_C2, ROELANDS_PR, ROELANDS_Z, TABLE,
                        TENSION, TENSION_CHOICES, VISCOSITY, VISCOSITY_LAWS)
+from .kind import LIQUID_CODE, asks_liquid_law
 
 # codes in the physics array (solver/physics.py: a choice's code is its place in codes(name));
 # CONSTANT is the code of the constant viscosity and of the constant density alike
@@ -58,10 +59,21 @@ TENSION_WIDTH = 0.01
 THINNING_LIMIT = 300.0
 
 
-@leaf
+@hook
 def isoviscous(phys):
-    """True when neither viscosity nor density depends on pressure (the classic film)."""
-    return phys[VISCOSITY] == CONSTANT and phys[DENSITY] == CONSTANT
+    """True when neither viscosity nor density depends on pressure (the classic film); always in
+    a copy of the loop without the liquid's laws (model/kind.py), whose branches numba prunes."""
+    if LIQUID_CODE and asks_liquid_law(phys):
+        return False
+    return True
+
+
+@hook
+def constant_density(phys):
+    """True when the density does not depend on pressure."""
+    if LIQUID_CODE and phys[DENSITY] != CONSTANT:
+        return False
+    return True
 
 
 @leaf
@@ -138,7 +150,7 @@ def density(p, phys):
     compression; in tension its compressibility ``c1`` at 0 fades over ``TENSION_WIDTH``,
     ``1 + c1 w (exp(P/w) - 1)``, so the density and its slope are continuous at 0 and the liquid
     expands by at most ``c1 w``."""
-    if phys[DENSITY] == CONSTANT:
+    if constant_density(phys):
         return 1.0, 0.0
     c1 = phys[DH_C1]
     if p <= 0.0:
@@ -154,7 +166,7 @@ def _mobility_log(p, phys):
     """``g = ln mu_bar - ln rho_bar`` (``rho_bar/mu_bar = exp(-g)``) and ``dg/dp``; held at
     ``-THINNING_LIMIT`` below it (only a viscosity law read in tension gets there)."""
     g, dg = log_viscosity(p, phys)
-    if phys[DENSITY] != CONSTANT:
+    if not constant_density(phys):
         rho, drho = density(p, phys)
         g -= math.log(rho)
         dg -= drho / rho
@@ -227,7 +239,7 @@ def _specific_volume_integral(p, phys):
     (``rho_bar = (1 + b p)/(1 + c2 p)``, ``b = c1 + c2``) ``(c2/b) p + (c1/b^2) ln(1 + b p)``;
     in tension (``rho_bar = A + a exp(p/w)``, ``a = c1 w``, ``A = 1 - a``)
     ``(p - w ln rho_bar)/A``."""
-    if phys[DENSITY] == CONSTANT:
+    if constant_density(phys):
         return p
     c1 = phys[DH_C1]
     if p <= 0.0:
@@ -242,7 +254,7 @@ def volume_difference(p_lo, p_hi, phys):
     """``Int_{p_lo}^{p_hi} dP / rho_bar``: the work per unit *volume* of liquid that crosses a
     face, which makes the face's dissipation from its mass flux (``p_hi - p_lo`` at constant
     density)."""
-    if phys[DENSITY] == CONSTANT:
+    if constant_density(phys):
         return p_hi - p_lo
     return _specific_volume_integral(p_hi, phys) - _specific_volume_integral(p_lo, phys)
 
@@ -253,7 +265,7 @@ def compression_energy(p, phys):
     ``e = Int_0^p P rho_bar' / rho_bar^2 dP = Int_0^p dP/rho_bar - p/rho_bar`` (by parts;
     docs/model.md, "Energy"), 0 at constant density; for Dowson-Higginson
     ``(c1/b^2) (ln(1 + b p) - b p / (1 + b p))``, ``b = c1 + c2``; positive in tension too."""
-    if phys[DENSITY] == CONSTANT:
+    if constant_density(phys):
         return 0.0
     if p <= 0.0:
         return _specific_volume_integral(p, phys) - p / density(p, phys)[0]

@@ -30,8 +30,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._jit import jit, leaf
+from .._jit import hook, jit, leaf
 from ..physics import SLIP
+from .kind import SLIP_CODE, asks_slip
 
 __all__ = ["flux_factor", "mobility_gap", "force_factor", "potential", "velocity",
            "elapsed_time", "rest_separation", "rigid_pressure", "axis_deflection",
@@ -43,6 +44,15 @@ FAR = 4.0  # X/c (or c/H) beyond which a closed form loses digits and its series
 
 
 # ---- the film: the one change to the equations ------------------------------------------------
+@hook
+def slips(phys):
+    """Whether the surfaces slip; never in a copy of the loop without slip's code (model/kind.py),
+    whose branches numba prunes."""
+    if SLIP_CODE:
+        return asks_slip(phys)
+    return False
+
+
 @leaf
 def flux_factor(h_lo, h_hi, phys):
     """How much more a face carries with slip, ``1 + (c/2)(1/H_lo + 1/H_hi)`` (``c = 6 l``),

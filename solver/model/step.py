@@ -44,7 +44,6 @@ viscosity and density; Surface roughness).
 from .._jit import copy_into, hook, jit, leaf
 from ..integration.events import ENDED, HELD
 from ..observables import SERIES_INDEX
-from ..physics import DENSITY
 from . import cavity_step, contact_step
 # the contract's answers that one piece alone changes are that piece's hooks themselves (a
 # wrapper here would cost a call and a reference count on the loop's hottest path)
@@ -59,7 +58,7 @@ from .film import cell_content, compression_work, energy_rates, face_fluxes, jac
 # the gap of the rigid start, before the film's own state exists (its slots are the rigid film's
 # pressures whatever the pieces)
 from .film import gap as start_gap  # noqa: F401
-from .liquid import CONSTANT, isoviscous, kink_departure, kirchhoff_difference
+from .liquid import constant_density, isoviscous, kink_departure, kirchhoff_difference
 from .state import new_film  # noqa: F401 (new_film: the contract's start)
 
 _W_VOID, _E_C = SERIES_INDEX["void_work"], SERIES_INDEX["E_c"]
@@ -95,7 +94,7 @@ def accepted_content(y, h, film, phys, out):
     node's gap, into ``out``: the loop keeps it for the history of its steps (state.Step)."""
     n = out.size
     theta0 = film.cavity.theta0
-    if phys[DENSITY] == CONSTANT:  # C = theta H (rho = 1)
+    if constant_density(phys):  # C = theta H (rho = 1)
         for i in range(n - 1):
             out[i] = theta0[i] * h[i]
     else:
@@ -230,11 +229,11 @@ def step_error(y, y_pred, states, err_fac, rtol, h, film, phys, perr, dh, scale)
     Returns True when ``scale`` holds the Kirchhoff pressures, False when the errors are measured
     against the slots themselves (``scale`` untouched)."""
     not_smooth = cavity_step.error_in_time(film, phys, states.shape[0] - 1, perr, dh)
-    kirchhoff = not isoviscous(phys) and not not_smooth and not contact_step.on(phys)
-    if kirchhoff:
-        _kirchhoff_errors(y_pred, y, err_fac, phys, perr, scale)
-        _kinks_in_time(states, y, rtol, phys, perr)
-    return kirchhoff
+    if isoviscous(phys) or not_smooth or contact_step.on(phys):
+        return False
+    _kirchhoff_errors(y_pred, y, err_fac, phys, perr, scale)
+    _kinks_in_time(states, y, rtol, phys, perr)
+    return True
 
 
 @leaf

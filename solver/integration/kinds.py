@@ -1,0 +1,83 @@
+"""The time loop compiled for the pieces of physics a scene asks for.
+
+``stepper`` as imported holds every piece's code (model/kind.py), and compiling it cold took about
+twice what the classic film's own code takes. ``loop_for`` hands out a copy of the loop compiled
+for the pieces the physics asks for alone: the modules that read model/kind.py's ``*_CODE``
+constants, and every one between them and the loop's entry (``_COPIED``), loaded anew under a
+package of their own (``solver._loop_<pieces>``, ``solver._loop_classic`` for none) with the
+pieces it lacks set False before they load; every other module of the solver is the one already
+imported, so the copy shares its records, grids and linear algebra. numba prunes the branches of
+the pieces a copy lacks, and their code is never compiled.
+
+Each copy has its own folder in the compile cache (``loop-<pieces>`` in ``_jit.CACHE_DIR``):
+numba names a cached kernel by its source file and function, which the copies share. A copy is
+loaded once per process, when a scene first asks for its pieces; a physics with every piece on
+runs ``stepper`` itself.
+"""
+
+import importlib
+import sys
+import threading
+import types
+
+import numba
+
+from .. import _jit
+from ..model import kind
+from . import stepper
+
+# the modules a copy loads anew (relative to the solver package): model/kind.py first (its
+# constants are set before the others read them), then those whose compiled code reads them or
+# calls one that does, up to the loop's entry
+_COPIED = ("model.kind", "model.liquid", "model.slip", "model.film", "model.cavity_step",
+           "model.contact_step", "model.step", "integration.stepper")
+_PACKAGES = ("model", "integration")  # loaded anew too: a package holds its modules by name
+
+_lock = threading.Lock()
+_loops = {}  # pieces (model/kind.py: CODES) -> the copy's stepper module
+
+
+def loop_for(phys):
+    """The stepper module (``integrate``, ``Start``, ``Control``) compiled for the pieces the
+    physics array ``phys`` asks for (``kind.asked_codes``): a copy loaded the first time a
+    process asks for them, or ``stepper`` itself when it asks for every piece."""
+    codes = kind.asked_codes(phys)
+    if codes == kind.CODES:
+        return stepper
+    with _lock:
+        if codes not in _loops:
+            _loops[codes] = _load(codes)
+        return _loops[codes]
+
+
+def _load(codes):
+    root = sys.modules["solver"]
+    tag = "_".join(codes) or "classic"
+    name = f"solver._loop_{tag}"
+    package = types.ModuleType(name, f"The time loop compiled for {codes or 'the classic film'}.")
+    package.__path__ = list(root.__path__)
+    package.__package__ = name
+    shared = {}
+    for full, module in list(sys.modules.items()):
+        relative = full[len("solver."):]
+        if full.startswith("solver.") and relative not in _COPIED + _PACKAGES and \
+                not relative.startswith("_loop_"):
+            shared[f"{name}.{relative}"] = module
+    sys.modules[name] = package
+    sys.modules.update(shared)
+    folder = None if _jit.CACHE_DIR is None else f"{_jit.CACHE_DIR}/loop-{tag}"
+    saved = numba.config.CACHE_DIR
+    try:
+        if folder is not None:
+            numba.config.CACHE_DIR = folder  # a kernel's cache locator is fixed as it is decorated
+        constants = importlib.import_module(f"{name}.model.kind")
+        for code in kind.CODES:
+            setattr(constants, f"{code.upper()}_CODE", code in codes)
+        loop = importlib.import_module(f"{name}.integration.stepper")
+    except BaseException:
+        for full in [full for full in sys.modules if full == name or full.startswith(name + ".")]:
+            del sys.modules[full]
+        raise
+    finally:
+        numba.config.CACHE_DIR = saved
+    return loop
