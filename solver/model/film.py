@@ -324,9 +324,9 @@ def residual(grid, phys, step, x, v, p, theta, h, q, res):
     s, area = grid.s, grid.area
     bh, c_hist = step.bh, step.c_hist
     n = s.size
-    # one loop, the density's law chosen inside it: the compiler still makes two loops of it and
-    # vectorises the first, and numba's reference counts, which a loop in each branch of an if
-    # kept, are all removed (docs/solver.md, "Reference counting")
+    # one loop, the density's law chosen inside it: numba's reference counts, which a loop in
+    # each branch of an if kept, are all removed (docs/solver.md, "Reference counting"); a copy
+    # of the loop without the liquid's laws has the choice pruned (model/kind.py)
     for i in range(n - 1):
         dq = q[i] - (q[i - 1] if i > 0 else 0.0)
         # the content is theta H at constant density (cell_content with rho = 1)
