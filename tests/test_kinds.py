@@ -81,3 +81,32 @@ def test_a_copy_gives_the_loop_with_every_piece_its_answer(monkeypatch, fields):
     for name in ("e_wet", "v_r", "h_m_x1", "ln_x_e_x1", "p_max"):
         a, b = getattr(own, name), getattr(general, name)
         assert math.isclose(a, b, rel_tol=1e-5), (name, a, b)
+
+
+def _scene(**fields):
+    physics = Physics(St=10.0, eps=1e-4, **fields)
+    return {name: getattr(physics, name) for name in Physics.names()}
+
+
+def test_a_sweeps_warm_up_solves_once_for_every_set_of_pieces_it_asks_for(monkeypatch):
+    """A sweep's warm-up (pipeline/sweeps/tasks.py) compiles, before any worker starts, the loop of
+    every set of pieces its scenes ask for: each set's copy compiles apart, and a worker that met
+    one first would compile it on its own (each of a cluster's workers). One scene per set, at the
+    warm-up's St 5 and eps 0.01; one not valid there is left to its workers."""
+    import solver
+    from pipeline.sweeps.tasks import one_scene_per_set, warm
+
+    scenes = [_scene(), _scene(Pi=1e-3, cavitation="jfo"), _scene(Pi=1e-2, cavitation="jfo"),
+              _scene(roughness=1.0), _scene(roughness=20.0, Pi=1e-3, cavitation="reynolds")]
+    picked = one_scene_per_set(scenes)
+    assert picked == [scenes[1], scenes[3], scenes[4]]  # the classic film: the warm-up's own
+    solved = []
+
+    def collide(physics, eps=None, **_):
+        physics = Physics(St=physics, eps=eps) if eps is not None else physics
+        solved.append((physics.St, physics.eps, kind.asked_codes(physics.as_array())))
+
+    monkeypatch.setattr(solver, "collide", collide)
+    warm("fast", {}, picked)
+    # roughness 20 lies beyond the start gap at eps 0.01 (6.3 x1): refused, left to the workers
+    assert solved == [(5.0, 0.01, ()), (5.0, 0.01, ("cavitation",)), (5.0, 0.01, ("contact",))]

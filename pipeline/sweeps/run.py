@@ -21,7 +21,7 @@ from .progress import Progress
 from .runners import (DEFAULT_RUNNER, check_runner, choose_runner, open_runner,
                       probe_scheduler)
 from .store import SweepStore
-from .tasks import MasterSolve, solve_scene, warm
+from .tasks import MasterSolve, one_scene_per_set, solve_scene, warm
 
 __all__ = ["run_sweep", "Summary", "EXIT_OK", "EXIT_FAILED", "format_physics"]
 
@@ -168,7 +168,8 @@ def run_sweep(sweep, *, store=None, runner: str | None = DEFAULT_RUNNER, workers
             solve = _master_solve(sweep, progress)
         if todo:
             jobs = [(cell, (st.scene(cell), sweep.accuracy, overrides)) for cell in todo]
-            warm_fn = _Warm(sweep.accuracy, overrides) if warm_up else None
+            warm_fn = _Warm(sweep.accuracy, overrides, one_scene_per_set(
+                job[1][0] for job in jobs)) if warm_up else None
             if warm_up and progress is not None:  # the warm-up compiles on a fresh install
                 from ..environment import compile_notice
 
@@ -349,11 +350,11 @@ def _master_solve(sweep, progress) -> MasterSolve:
 class _Warm:
     """Picklable warm-up call (run on every worker by ``runners.WorkerSetup``)."""
 
-    def __init__(self, accuracy, overrides):
-        self.accuracy, self.overrides = accuracy, overrides
+    def __init__(self, accuracy, overrides, scenes=()):
+        self.accuracy, self.overrides, self.scenes = accuracy, overrides, list(scenes)
 
     def __call__(self):
-        return warm(self.accuracy, self.overrides)
+        return warm(self.accuracy, self.overrides, self.scenes)
 
 
 def _count(summary: Summary, st, cells) -> None:

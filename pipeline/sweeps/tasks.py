@@ -16,8 +16,8 @@ from solver.observables import OBSERVABLES
 
 from ..errors import interrupt_cause
 
-__all__ = ["solve_scene", "warm", "collision_record", "error_record", "MasterSolve",
-           "RECORD_FIELDS", "DIAGNOSTIC_FIELDS"]
+__all__ = ["solve_scene", "warm", "one_scene_per_set", "collision_record", "error_record",
+           "MasterSolve", "RECORD_FIELDS", "DIAGNOSTIC_FIELDS"]
 
 # the record of a scene: every observable of the registry (solver/observables.py) plus labels;
 # the scene's physics is not in it (the store's coordinates and fixed physics hold it)
@@ -150,19 +150,46 @@ class MasterSolve:
             return error_record(exc)
 
 
-def warm(accuracy: str = "fast", overrides: dict | None = None) -> float:
+def warm(accuracy: str = "fast", overrides: dict | None = None, scenes=()) -> float:
     """Compile (or load from the on-disk cache) the solver's kernels in this process.
 
-    Runs one small scene that takes the coupled (EHD) path, so every kernel a sweep uses is
-    compiled. Returns the wall time in seconds.
+    Runs one small scene that takes the coupled (EHD) path, and one more per scene of ``scenes``
+    (``one_scene_per_set``: a scene for each set of pieces of physics the sweep asks for, whose
+    copy of the time loop is compiled apart, solver/integration/kinds.py) with its St and eps
+    made those of the small scene, so every kernel a sweep uses is compiled. Returns the wall
+    time in seconds.
     """
     import time
 
     t = time.perf_counter()
-    from solver import collide
+    from solver import Physics, collide
 
     # eps = 0.01, St = 5 deforms early, so the coupled solve runs (a rigid-only scene would not
     # touch the compiled code; with presets where even this one were rigid, workers would only
     # compile on their own: slower, never wrong)
-    collide(5.0, 0.01, accuracy=accuracy, **{**(overrides or {}), "save_profiles": False})
+    kw = {**(overrides or {}), "save_profiles": False}
+    collide(5.0, 0.01, accuracy=accuracy, **kw)
+    for scene in scenes:
+        try:
+            collide(Physics.from_mapping({**scene, "St": 5.0, "eps": 0.01}), accuracy=accuracy,
+                    **kw)
+        except ValueError:  # not a valid scene there (e.g. a roughness beyond its start gap):
+            pass  # its workers compile its loop on their own
     return time.perf_counter() - t
+
+
+def one_scene_per_set(scenes) -> list[dict]:
+    """The first scene (``{name: value}``) of ``scenes`` for each set of pieces of physics they
+    ask for beyond the classic film (model/kind.py: ``asked_codes``), for ``warm``."""
+    from solver import Physics
+    from solver.model.kind import asked_codes
+
+    first = {}
+    for scene in scenes:
+        try:
+            codes = asked_codes(Physics.from_mapping(scene).as_array())
+        except ValueError:  # an invalid scene is stored as failed by its solve
+            continue
+        if codes:
+            first.setdefault(codes, scene)
+    return list(first.values())

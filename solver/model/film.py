@@ -324,14 +324,14 @@ def residual(grid, phys, step, x, v, p, theta, h, q, res):
     s, area = grid.s, grid.area
     bh, c_hist = step.bh, step.c_hist
     n = s.size
-    # one loop, the density's law chosen inside it: numba's reference counts, which a loop in
-    # each branch of an if kept, are all removed (docs/solver.md, "Reference counting"); a copy
-    # of the loop without the liquid's laws has the choice pruned (model/kind.py)
+    # one loop, the density's law chosen inside it: the compiler still makes two loops of it and
+    # vectorises the first, and numba's reference counts, which a loop in each branch of an if
+    # kept, are all removed (docs/solver.md, "Reference counting"); numba prunes the choice from
+    # a copy of the loop without the liquid's laws (model/kind.py)
+    constant = constant_density(phys)  # the content is theta H (cell_content with rho = 1)
     for i in range(n - 1):
         dq = q[i] - (q[i - 1] if i > 0 else 0.0)
-        # the content is theta H at constant density (cell_content with rho = 1)
-        content = theta[i] * h[i] if constant_density(phys) else \
-            cell_content(theta[i], h[i], p[i], phys)[0]
+        content = theta[i] * h[i] if constant else cell_content(theta[i], h[i], p[i], phys)[0]
         res[i] = content - c_hist[i] - bh / area[i] * dq
     res[n - 1] = far_field_row(p[n - 2], p[n - 1], h[n - 2], h[n - 1])[0]
     res[n] = x - step.x_hist + bh * v
@@ -396,8 +396,9 @@ def jacobian(grid, phys, bh, p, theta, h, active, link, jac, dres_dh):
     n = s.size
     jac[:, :] = 0.0
     dres_dh[:, :] = 0.0
+    classic_flux = plain_flux(phys)  # pruned, with face_flux, from a copy without its pieces
     for f in range(n - 1):
-        if plain_flux(phys):  # face_flux with the isoviscous drive P_hi - P_lo
+        if classic_flux:  # face_flux with the isoviscous drive P_hi - P_lo, decided once
             _, c, dq_dhi, dq_dhj = flux_law(s[f], s[f + 1], s_face[f], h[f], h[f + 1],
                                             p[f + 1] - p[f])
             dq_dpi = -c
