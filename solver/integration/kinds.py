@@ -1,7 +1,7 @@
 """The time loop compiled for the pieces of physics a scene asks for.
 
-``stepper`` as imported holds every piece's code (model/kind.py), and compiling it cold took about
-twice what the classic film's own code takes. ``loop_for`` hands out a copy of the loop compiled
+``stepper`` as imported holds every piece's code (model/kind.py), and compiling it cold took 18.4 s
+of CPU where the classic film's own code takes 11.6 s (benchmarks/compile.md). ``loop_for`` hands out a copy of the loop compiled
 for the pieces the physics asks for alone: the modules that read model/kind.py's ``*_CODE``
 constants, and every one between them and the loop's entry (``_COPIED``), loaded anew under a
 package of their own (``solver._loop_<pieces>``, ``solver._loop_classic`` for none) with the
@@ -26,9 +26,10 @@ from .. import _jit
 from ..model import kind
 from . import stepper
 
-# the modules a copy loads anew (relative to the solver package): model/kind.py first (its
-# constants are set before the others read them), then those whose compiled code reads them or
-# calls one that does, up to the loop's entry
+# the modules a copy loads anew (relative to the solver package): model/kind.py, whose constants
+# are set before the others load (they import them), and those whose compiled code reads them or
+# calls one that does, up to the loop's entry (only the first two are loaded by name; the rest
+# come with the copy's stepper, by the relative imports, in the order they need each other)
 _COPIED = ("model.kind", "model.liquid", "model.slip", "model.film", "model.cavity_step",
            "model.contact_step", "model.step", "integration.stepper")
 _PACKAGES = ("model", "integration")  # loaded anew too: a package holds its modules by name
