@@ -55,6 +55,17 @@ def test_a_copy_holds_the_pieces_asked_and_shares_the_rest_of_the_solver():
     assert loop.holds_asked is constants.holds_asked is not kind.holds_asked
 
 
+@pytest.mark.parametrize("codes", list(PHYSICS))
+def test_a_piece_alone_has_a_copy_and_two_or_more_run_the_loop_with_every_piece(codes):
+    """Each set compiles apart (12-15 s of CPU), so only the classic film and each piece alone
+    get a copy; two pieces or more run the loop as imported, which holds them all."""
+    loop = kinds.loop_for(Physics(St=10.0, eps=1e-4, **PHYSICS[codes]).as_array())
+    if len(codes) > kinds.MOST_PIECES:
+        assert loop is stepper
+    else:
+        assert loop.__name__ == f"solver._loop_{'_'.join(codes) or 'classic'}.integration.stepper"
+
+
 def test_a_copy_refuses_a_physics_whose_code_it_lacks(monkeypatch):
     """The classic film's copy asked to run a cavitating film raises at its start (its hooks would
     answer as the classic film): ``loop_for`` never hands it one."""

@@ -11,8 +11,11 @@ the pieces a copy lacks, and their code is never compiled.
 
 Each copy has its own folder in the compile cache (``loop-<pieces>`` in ``_jit.CACHE_DIR``):
 numba names a cached kernel by its source file and function, which the copies share. A copy is
-loaded once per process, when a scene first asks for its pieces; a physics with every piece on
-runs ``stepper`` itself.
+loaded once per process, when a scene first asks for its pieces. Only the classic film and each
+piece alone get a copy (``MOST_PIECES``); a physics with two pieces or more runs ``stepper``
+itself: every set compiles once (12-15 s of CPU), combinations are rarer than a piece alone,
+and the test tiers met five of them, each a compile of its own (the loop as imported takes 18 s
+for all of them at once).
 """
 
 import importlib
@@ -34,16 +37,18 @@ _COPIED = ("model.kind", "model.liquid", "model.slip", "model.film", "model.cavi
            "model.contact_step", "model.step", "integration.stepper")
 _PACKAGES = ("model", "integration")  # loaded anew too: a package holds its modules by name
 
+MOST_PIECES = 1  # the most pieces a copy is compiled for; more run the loop as imported
+
 _lock = threading.Lock()
 _loops = {}  # pieces (model/kind.py: CODES) -> the copy's stepper module
 
 
 def loop_for(phys):
-    """The stepper module (``integrate``, ``Start``, ``Control``) compiled for the pieces the
-    physics array ``phys`` asks for (``kind.asked_codes``): a copy loaded the first time a
-    process asks for them, or ``stepper`` itself when it asks for every piece."""
+    """The stepper module (``integrate``, ``Start``, ``Control``) for the physics array ``phys``:
+    a copy compiled for the pieces it asks for (``kind.asked_codes``), loaded the first time a
+    process asks for them, or ``stepper`` itself where it asks for more than ``MOST_PIECES``."""
     codes = kind.asked_codes(phys)
-    if codes == kind.CODES:
+    if len(codes) > MOST_PIECES:
         return stepper
     with _lock:
         if codes not in _loops:
