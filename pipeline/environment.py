@@ -48,11 +48,11 @@ _NOTICE_GIVEN = False
 
 def compile_notice(stream=None) -> str | None:
     """Before the first solve of a process: one line on ``stream`` (stderr) when the solver's
-    compiled-code cache for this solver version is empty, so that the compile (12-15 s of CPU
-    for each set of physics pieces a process solves: benchmarks/compile.md, longer in wall time
-    on a busy machine; once per solver version and cache folder) is not a silent wait. A set
-    solved later for the first time compiles without a notice (its copy of the loop:
-    solver/integration/kinds.py). Says where the cache goes. Returns
+    compiled-code cache for this solver version is empty, so that the compile (12-18 s of CPU
+    for each loop a process solves with: the classic film's, one piece's, all pieces':
+    benchmarks/compile.md, longer in wall time on a busy machine; once per solver version and
+    cache folder) is not a silent wait. A loop solved with later for the first time compiles
+    without a notice (solver/integration/kinds.py). Says where the cache goes. Returns
     the line (None: nothing to say)."""
     global _NOTICE_GIVEN
     import sys

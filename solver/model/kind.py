@@ -11,9 +11,10 @@ CAVITATION_CODE or ...`` numba does not prune).
 
 This module, imported as ``solver.model.kind``, holds every piece (``True`` throughout): the loop
 as imported (``solver.integration.stepper``) runs any physics. ``solver.integration.kinds`` loads
-copies of the loop with some of them False, one per set of pieces a scene asks for, each with its
-own compile cache; ``asked_codes`` says which set, and ``holds_asked`` is the loop's own check that
-it holds them (``stepper.integrate`` refuses a physics whose code it lacks).
+copies of the loop with some of them False, one for the classic film and one for each piece
+alone, each with its own compile cache; ``asked_codes`` says which pieces a physics asks for, and
+``holds_asked`` is the loop's own check that it holds them (``stepper.integrate`` refuses a
+physics whose code it lacks).
 
 The ``asks_*`` tests are each piece's switch in the physics array, read by the hooks in compiled
 code and by ``asked_codes`` in Python (their ``py_func``), so the two cannot disagree.
