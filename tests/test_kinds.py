@@ -100,9 +100,9 @@ def _scene(**fields):
 
 
 def test_a_sweeps_warm_up_solves_once_for_every_set_of_pieces_it_asks_for(monkeypatch):
-    """A sweep's warm-up (pipeline/sweeps/tasks.py) compiles, before any worker starts, the loop of
-    every set of pieces its scenes ask for: each set's copy compiles apart, and a worker that met
-    one first would compile it on its own (each of a cluster's workers). One scene per set, at the
+    """A sweep's warm-up (pipeline/sweeps/tasks.py) compiles, before any worker starts, every loop
+    its scenes run on (``kinds.compiled_pieces``): each compiles apart, and a worker that met one
+    first would compile it on its own (each of a cluster's workers). One scene per loop, at the
     warm-up's St 5 and eps 0.01; one not valid there is left to its workers."""
     import solver
     from pipeline.sweeps.tasks import one_scene_per_set, warm

@@ -154,8 +154,8 @@ def warm(accuracy: str = "fast", overrides: dict | None = None, scenes=()) -> fl
     """Compile (or load from the on-disk cache) the solver's kernels in this process.
 
     Runs one small scene that takes the coupled (EHD) path, and one more per scene of ``scenes``
-    (``one_scene_per_set``: a scene for each set of pieces of physics the sweep asks for, whose
-    copy of the time loop is compiled apart, solver/integration/kinds.py) with its St and eps
+    (``one_scene_per_set``: a scene for each loop the sweep runs on beyond the classic film's,
+    each compiled apart, solver/integration/kinds.py) with its St and eps
     made those of the small scene, so every kernel a sweep uses is compiled. Returns the wall
     time in seconds.
     """
@@ -179,15 +179,15 @@ def warm(accuracy: str = "fast", overrides: dict | None = None, scenes=()) -> fl
 
 
 def one_scene_per_set(scenes) -> list[dict]:
-    """The first scene (``{name: value}``) of ``scenes`` for each set of pieces of physics they
-    ask for beyond the classic film (model/kind.py: ``asked_codes``), for ``warm``."""
+    """The first scene (``{name: value}``) of ``scenes`` for each compiled loop beyond the classic
+    film's that they run on (solver/integration/kinds.py: ``compiled_pieces``), for ``warm``."""
     from solver import Physics
-    from solver.model.kind import asked_codes
+    from solver.integration.kinds import compiled_pieces
 
     first = {}
     for scene in scenes:
         try:
-            codes = asked_codes(Physics.from_mapping(scene).as_array())
+            codes = compiled_pieces(Physics.from_mapping(scene).as_array())
         except ValueError:  # an invalid scene is stored as failed by its solve
             continue
         if codes:

@@ -43,12 +43,20 @@ _lock = threading.Lock()
 _loops = {}  # pieces (model/kind.py: CODES) -> the copy's stepper module
 
 
-def loop_for(phys):
-    """The stepper module (``integrate``, ``Start``, ``Control``) for the physics array ``phys``:
-    a copy compiled for the pieces it asks for (``kind.asked_codes``), loaded the first time a
-    process asks for them, or ``stepper`` itself where it asks for more than ``MOST_PIECES``."""
+def compiled_pieces(phys) -> tuple:
+    """The pieces (model/kind.py: ``CODES``) the loop that runs the physics array ``phys`` is
+    compiled for: those it asks for (``kind.asked_codes``), or every piece where it asks for more
+    than ``MOST_PIECES``. Two physics with the same answer run the same compiled code."""
     codes = kind.asked_codes(phys)
-    if len(codes) > MOST_PIECES:
+    return kind.CODES if len(codes) > MOST_PIECES else codes
+
+
+def loop_for(phys):
+    """The stepper module (``integrate``, ``Start``, ``Control``) compiled for
+    ``compiled_pieces(phys)``: ``stepper`` itself for every piece, else a copy loaded the first
+    time a process asks for it."""
+    codes = compiled_pieces(phys)
+    if codes == kind.CODES:
         return stepper
     with _lock:
         if codes not in _loops:
