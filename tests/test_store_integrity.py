@@ -692,3 +692,18 @@ def test_the_store_state_survives_a_file_that_goes_while_it_is_walked(ws, monkey
     first = stamp.store_state(ws / "s.zarr")
     monkeypatch.undo()
     assert gone and first is not None and first != stamp.store_state(ws / "s.zarr")
+
+
+def test_a_folder_without_a_zarr_group_has_no_store_state(tmp_path, monkeypatch):
+    """``ehd figures /`` walked the whole file system to take the "store's" state (24 s here)
+    before it said the root folder is no store: a folder without a zarr group at its top is not
+    walked at all."""
+    from pipeline.plots import stamp
+
+    (tmp_path / "deep" / "er").mkdir(parents=True)
+    (tmp_path / "deep" / "er" / "zarr.json").write_text("{}")
+    walked = []
+    monkeypatch.setattr(stamp.os, "walk", lambda *a, **k: walked.append(a) or iter(()))
+    assert stamp.store_state(tmp_path) is None and walked == []
+    (tmp_path / "zarr.json").write_text("{}")
+    assert stamp.store_state(tmp_path) is not None and walked == [(os.path.realpath(tmp_path),)]
