@@ -41,10 +41,11 @@ test-fast: $(STAMP)
 
 # pip install of the clone into a fresh venv, then the README's first commands from an empty
 # folder (tests/install_from_pip.py), and the install tests of the compile cache's folder (a few
-# minutes: each fresh install compiles the solver)
+# minutes: each fresh install compiles the solver). The two files run side by side, one per
+# worker (--dist loadfile: install_from_pip.py's tests share one install)
 test-install: $(STAMP)
-	$(PY) -m pytest -q tests/install_from_pip.py
-	$(PY) -m pytest -q -m install tests/test_environment.py
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadfile -m install tests/install_from_pip.py \
+	  tests/test_environment.py
 
 # No result reads memory the solver never wrote: the scenes of tests/poison/scenes.py solved
 # as installed and with numba's fresh arrays filled with NaN and with 1e306 bytes must agree bit

@@ -21,6 +21,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.install
+
 REPO = Path(__file__).resolve().parent.parent
 SKIP = shutil.ignore_patterns(".venv", ".git", ".ehd-cache", ".numba_cache", "results", "figures",
                               "build", "*.egg-info", "__pycache__", ".pytest_cache", "dem_export")
