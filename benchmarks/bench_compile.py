@@ -148,10 +148,11 @@ def render(doc: dict) -> str:
             row += (f" {b['median']:.1f} [{b['min']:.1f}-{b['max']:.1f}] | {q['median']:.2f} "
                     f"({q['min']:.2f}-{q['max']:.2f}) |")
         lines.append(row)
-    classic = results["classic"]["cpu_s"]["median"]
-    lines += ["", f"Target (issue 30): a cold compile under {TARGET_S:g} s: the classic "
-              f"collision takes {classic:.1f} s CPU "
-              f"({'met' if classic < TARGET_S else 'not met'})."]
+    medians = {case: r["cpu_s"]["median"] for case, r in results.items()}
+    over = [f"{case} {t:.1f} s" for case, t in medians.items() if t >= TARGET_S]
+    lines += ["", f"Target (issue 30): a cold compile under {TARGET_S:g} s: "
+              + ", ".join(f"{case} {t:.1f} s" for case, t in medians.items()) + " CPU ("
+              + (f"not met: {', '.join(over)}" if over else "met") + ")."]
     if before:
         lines += ["", f"Before: {doc['before_source']}, alternated with this checkout case by "
                   "case in this run (the ratio is the median of the per-round CPU ratios)."]

@@ -11,11 +11,12 @@ the pieces a copy lacks, and their code is never compiled.
 
 Each copy has its own folder in the compile cache (``loop-<pieces>`` in ``_jit.CACHE_DIR``):
 numba names a cached kernel by its source file and function, which the copies share. A copy is
-loaded once per process, when a scene first asks for its pieces. Only the classic film and each
-piece alone get a copy (``MOST_PIECES``); a physics with two pieces or more runs ``stepper``
-itself: every set compiles once (12-15 s of CPU), combinations are rarer than a piece alone,
-and the test tiers met five of them, each a compile of its own (the loop as imported takes 18 s
-for all of them at once).
+loaded once per process, when a scene first asks for its pieces. Only the classic film gets a
+copy (``MOST_PIECES`` = 0); a physics with any piece runs ``stepper`` itself, which holds every
+piece. Each copy compiles apart: a copy per piece alone (solver 1.16.0) took 13.7-15.1 s each
+against 18 s for the loop with every piece once, so a sweep or a process that met two pieces
+compiled more than it saved, and a fresh clone's ``.ci/run`` met the classic film, each piece
+and the combinations (1.16.1, docs/solver.md "Compiled code").
 """
 
 import importlib
@@ -37,7 +38,7 @@ _COPIED = ("model.kind", "model.liquid", "model.slip", "model.film", "model.cavi
            "model.contact_step", "model.step", "integration.stepper")
 _PACKAGES = ("model", "integration")  # loaded anew too: a package holds its modules by name
 
-MOST_PIECES = 1  # the most pieces a copy is compiled for; more run the loop as imported
+MOST_PIECES = 0  # the most pieces a copy is compiled for; more run the loop as imported
 
 _lock = threading.Lock()
 _loops = {}  # pieces (model/kind.py: CODES) -> the copy's stepper module

@@ -11,8 +11,7 @@ CAVITATION_CODE or ...`` numba does not prune).
 
 This module, imported as ``solver.model.kind``, holds every piece (``True`` throughout): the loop
 as imported (``solver.integration.stepper``) runs any physics. ``solver.integration.kinds`` loads
-copies of the loop with some of them False, one for the classic film and one for each piece
-alone, each with its own compile cache; ``asked_codes`` says which pieces a physics asks for, and
+a copy of the loop with them all False for the classic film, with its own compile cache; ``asked_codes`` says which pieces a physics asks for, and
 ``holds_asked`` is the loop's own check that it holds them (``stepper.integrate`` refuses a
 physics whose code it lacks).
 
