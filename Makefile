@@ -97,6 +97,7 @@ bench: $(STAMP)
 bench-validation: $(STAMP)
 	$(PY) benchmarks/bench_accuracy.py
 	$(PY) benchmarks/bench_extrapolation.py
+	$(PY) benchmarks/bench_moved.py
 	$(PY) benchmarks/bench_cavitation.py
 	$(PY) benchmarks/bench_piezoviscous.py
 	$(PY) benchmarks/bench_trajectory.py
@@ -119,6 +120,7 @@ bench-sweep: $(STAMP)
 bench-accuracy: $(STAMP)
 	$(PY) benchmarks/bench_accuracy.py
 	$(PY) benchmarks/bench_extrapolation.py
+	$(PY) benchmarks/bench_moved.py
 
 # The documentation site -> docs/_build/html/index.html (docs/conf.py), warnings as errors. Phony:
 # the docs/ folder never makes it "up to date". The docs extra is installed once per venv.
