@@ -11,9 +11,9 @@ CAVITATION_CODE or ...`` numba does not prune).
 
 This module, imported as ``solver.model.kind``, holds every piece (``True`` throughout): the loop
 as imported (``solver.integration.stepper``) runs any physics. ``solver.integration.kinds`` loads
-a copy of the loop with them all False for the classic film, with its own compile cache; ``asked_codes`` says which pieces a physics asks for, and
-``holds_asked`` is the loop's own check that it holds them (``stepper.integrate`` refuses a
-physics whose code it lacks).
+a copy of the loop with them all False for the classic film, with its own compile cache;
+``asked_codes`` says which pieces a physics asks for, and ``holds_asked`` is the loop's own check
+that it holds them (``stepper.integrate`` refuses a physics whose code it lacks).
 
 The ``asks_*`` tests are each piece's switch in the physics array, read by the hooks in compiled
 code and by ``asked_codes`` in Python (their ``py_func``), so the two cannot disagree.
