@@ -135,7 +135,7 @@ def cmd_run(args) -> int:
     physics = physics_from_args(args)
     from .environment import compile_notice
 
-    compile_notice()
+    compile_notice(physics=[physics])
     outer = outer_from_args(args)
     try:
         result = collide(physics, accuracy=args.accuracy, x_ref_x0=args.x_ref, outer=outer,

@@ -43,36 +43,55 @@ def info() -> dict:
             **{var: os.environ.get(var, "unset") for var in THREAD_VARS}}
 
 
-_NOTICE_GIVEN = False
+_NOTICED = set()  # the loops (solver/integration/kinds.py: compiled_pieces) already announced
 
 
-def compile_notice(stream=None) -> str | None:
-    """Before the first solve of a process: one line on ``stream`` (stderr) when the solver's
-    compiled-code cache for this solver version is empty, so that the compile (12-18 s of CPU
-    for each loop a process solves with: the classic film's, one piece's, all pieces':
-    benchmarks/compile.md, longer in wall time on a busy machine; once per solver version and
-    cache folder) is not a silent wait. A loop solved with later for the first time compiles
-    without a notice (solver/integration/kinds.py). Says where the cache goes. Returns
-    the line (None: nothing to say)."""
-    global _NOTICE_GIVEN
+def _loop_name(codes) -> str:
+    """A loop (its pieces, ``kinds.compiled_pieces``) as the notice names it, with its cold
+    compile in CPU seconds on an idle core (benchmarks/compile.md: 11.4; 18.8-20.4)."""
+    from solver.model.kind import CODES
+
+    if not codes:
+        return "the loop for the classic film (about 11 s on an idle core)"
+    if codes == CODES:
+        return "the loop for every piece of physics (about 20 s on an idle core)"
+    return f"the loop for {', '.join(codes)} (about 15 s on an idle core)"
+
+
+def compile_notice(stream=None, physics=None) -> str | None:
+    """Before a process first solves with a compiled loop its cache lacks: one line on ``stream``
+    (stderr), so that the compile is not a silent wait. ``physics``: what is about to be solved
+    (``Physics`` records, mappings of their fields, or None for the classic film; None: the
+    classic film alone). Each loop (solver/integration/kinds.py: the classic film's copy, the
+    loop with every piece) compiles once per solver version and cache folder, about 11 and 20 s
+    of CPU (benchmarks/compile.md; longer in wall time on a busy machine), and is announced once
+    per process. Says where the cache goes. Returns the line (None: nothing to say)."""
     import sys
-    from pathlib import Path
 
-    if _NOTICE_GIVEN:
+    from solver import Physics, _jit
+    from solver.integration import kinds
+
+    asked = []
+    for p in physics if physics is not None else [None]:
+        try:
+            p = p if p is None or isinstance(p, Physics) else Physics.from_mapping(p)
+        except ValueError:  # an invalid scene: its solve says so, and compiles nothing
+            continue
+        codes = () if p is None else kinds.compiled_pieces(p.as_array())
+        if codes not in asked:
+            asked.append(codes)
+    new = [codes for codes in asked if codes not in _NOTICED and not kinds.is_cached(codes)]
+    _NOTICED.update(asked)
+    if not new:
         return None
-    _NOTICE_GIVEN = True
-    from solver import _jit
-
+    what = " and ".join(_loop_name(codes) for codes in new)
     folder = _jit.CACHE_DIR
     if folder is None:
-        line = ("ehd-collision: compiling the solver (about 15 s on an idle core, minutes on a "
-                "busy machine); no writable cache folder, so every process compiles again: set "
-                "EHD_CACHE_DIR to a writable folder")
-    elif not any(Path(folder).rglob("*.nbi")):
-        line = ("ehd-collision: compiling the solver for this version, once per set of physics "
-                "(about 15 s on an idle core, minutes on a busy machine); cached in "
-                f"{folder} (ehd info; EHD_CACHE_DIR moves it)")
+        line = (f"ehd-collision: compiling the solver: {what}, minutes on a busy machine; no "
+                "writable cache folder, so every process compiles again: set EHD_CACHE_DIR to a "
+                "writable folder")
     else:
-        return None
+        line = (f"ehd-collision: compiling the solver for this version: {what}, minutes on a "
+                f"busy machine; cached in {folder} (ehd info; EHD_CACHE_DIR moves it)")
     print(line, file=stream or sys.stderr, flush=True)
     return line

@@ -144,6 +144,32 @@ def test_non_editable_install_caches_in_the_documented_folder_not_site_packages(
                     scene=False)  # (no site-packages/.numba_cache nor __pycache__ kernels either)
 
 
+def test_the_compile_notice_names_each_loop_the_cache_lacks_once(monkeypatch):
+    """A user who ran the classic film and then a JFO film waited 19 s in silence: the notice came
+    only for an empty cache. Now each compiled loop (solver/integration/kinds.py) the cache lacks
+    is announced, once per process, before the solve that compiles it."""
+    import io
+
+    from pipeline import environment
+    from solver import Physics
+    from solver.integration import kinds
+
+    cached = set()
+    monkeypatch.setattr(kinds, "is_cached", lambda codes: codes in cached)
+    monkeypatch.setattr(environment, "_NOTICED", set())
+    jfo = dict(St=5.0, eps=1e-2, Pi=1e-3, cavitation="jfo")
+    said = io.StringIO()
+    assert "the loop for the classic film" in environment.compile_notice(said)
+    assert environment.compile_notice(said, physics=[None]) is None  # once per process
+    line = environment.compile_notice(said, physics=[Physics(St=5.0, eps=1e-2), jfo])
+    assert "every piece of physics" in line and "classic" not in line
+    assert said.getvalue().count("\n") == 2 and "compiling the solver" in said.getvalue()
+    # a loop the cache holds is not announced; an invalid scene is its solve's to refuse
+    monkeypatch.setattr(environment, "_NOTICED", set())
+    cached.update({(), kinds.compiled_pieces(Physics(**jfo).as_array())})
+    assert environment.compile_notice(said, physics=[None, jfo, dict(St=-1.0, eps=1e-2)]) is None
+
+
 def test_too_many_local_workers_are_refused(tmp_path, capsys):
     from pipeline.cli import main
     from pipeline.sweeps.runners import max_local_workers

@@ -250,7 +250,6 @@ def run_scene(scene: Scene, accuracy: str = "standard", sensitivity_solves: bool
         raise ValueError(f"the outer flow stops the spheres before x0 (approach speed "
                          f"{scene.approach_speed:.4g} m/s): they stick without a film collision; "
                          "stopped_result(scene) gives the report ehd scene prints for it")
-    compile_notice()  # one line when the solver is about to compile (a silent minute otherwise)
     outer = scene.outer_flow()
     auto = [p for p in PIECES if getattr(scene, p.field) == "auto"]
     # the automatic switches start from the classic film (docs/scenes.md, "Which model, and
@@ -258,10 +257,12 @@ def run_scene(scene: Scene, accuracy: str = "standard", sensitivity_solves: bool
     base = scene.physics(**{p.field: p.base for p in auto})
     overrides = {"save_profiles": False,
                  **{k: v for k, v in overrides.items() if v is not None}, "outer": outer}
+    compile_notice(physics=[base])  # one line when a solve is about to compile (a silent wait)
     c = collide(base, accuracy=accuracy, **overrides)
     first = BaseFilm.of(scene, c)
     final = scene.physics(**{p.field: p.on if p.switch(scene, first) else p.base for p in auto})
     if final != base:
+        compile_notice(physics=[final])
         c = collide(final, accuracy=accuracy, **overrides)
     reasons = {p.reason_key: p.reason(scene, c.physics, first, p not in auto, base)
                for p in PIECES}
@@ -313,6 +314,9 @@ def _sensitivity(c, base, accuracy, overrides) -> dict:
             variants[label] = final.replace(**off)
     for piece in PIECES:
         variants.update(piece.variants(final))
+    from ..environment import compile_notice
+
+    compile_notice(physics=list(variants.values()))
     out = {}
     for label, physics in variants.items():
         r = collide(physics, accuracy=accuracy, **overrides)

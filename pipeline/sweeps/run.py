@@ -173,7 +173,7 @@ def run_sweep(sweep, *, store=None, runner: str | None = DEFAULT_RUNNER, workers
             if warm_up and progress is not None:  # the warm-up compiles on a fresh install
                 from ..environment import compile_notice
 
-                compile_notice(progress)
+                compile_notice(progress, physics=[None, *warm_fn.scenes])
             runner_at = open_runner(choose_runner(runner, len(jobs)), workers, address, None,
                                     warm=warm_fn, stream=progress, **runner_kw)
             _compute(st, summary, jobs, solve, runner_at, progress)

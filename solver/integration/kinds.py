@@ -66,9 +66,34 @@ def loop_for(phys):
         return _loops[codes]
 
 
+def cache_folder(codes) -> str | None:
+    """The compile cache folder of the loop compiled for ``codes`` (``compiled_pieces``): the
+    solver's own (``_jit.CACHE_DIR``) for the loop with every piece, its ``loop-<pieces>`` for a
+    copy; None where nothing is cached."""
+    if _jit.CACHE_DIR is None:
+        return None
+    return _jit.CACHE_DIR if codes == kind.CODES else f"{_jit.CACHE_DIR}/loop-{_tag(codes)}"
+
+
+def is_cached(codes) -> bool:
+    """Whether the cache holds the loop for ``codes`` (its entry ``integrate``'s index file,
+    numba's ``<module>.<function>-<line>.py<XY>.nbi`` in a folder named after the module's
+    package folder, ``integration_<hash of its path>``), so a solve with it loads rather than
+    compiles."""
+    import glob
+
+    folder = cache_folder(codes)
+    return folder is not None and bool(
+        glob.glob(f"{glob.escape(folder)}/integration_*/stepper.integrate-*.nbi"))
+
+
+def _tag(codes) -> str:
+    return "_".join(codes) or "classic"
+
+
 def _load(codes):
     root = sys.modules["solver"]
-    tag = "_".join(codes) or "classic"
+    tag = _tag(codes)
     name = f"solver._loop_{tag}"
     package = types.ModuleType(name, f"The time loop compiled for {codes or 'the classic film'}.")
     package.__path__ = list(root.__path__)
