@@ -89,7 +89,11 @@ def test_examples_scene_sweep_figures(installed):
     p = _ehd(installed, "scene", "mine/examples/glass_beads_water.toml", "--accuracy", "fast")
     assert "results" in p.stdout and "max rebound speed" in p.stdout
     notice = [line for line in p.stderr.splitlines() if "compiling the solver" in line]
-    assert len(notice) == 1 and str(installed["tmp"] / "cache") in notice[0], p.stderr
+    # one line per compiled loop, before the solve that compiles it: the classic film's first,
+    # then the loop with every piece where the scene's sensitivity solves switch a piece on
+    assert notice and "the classic film" in notice[0], p.stderr
+    assert len(notice) == len(set(notice)) <= 2, p.stderr
+    assert all(str(installed["tmp"] / "cache") in line for line in notice), p.stderr
     p = _ehd(installed, "sweep", "quick", "--store", "q.zarr", "--executor", "threads")
     assert re.search(r"^\s*done\s+24\b", p.stdout, re.M), p.stdout
     p = _ehd(installed, "figures", "q.zarr", "--out", "figs")

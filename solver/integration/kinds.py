@@ -83,8 +83,9 @@ def is_cached(codes) -> bool:
     import glob
 
     folder = cache_folder(codes)
+    python = f"py{sys.version_info.major}{sys.version_info.minor}"
     return folder is not None and bool(
-        glob.glob(f"{glob.escape(folder)}/integration_*/stepper.integrate-*.nbi"))
+        glob.glob(f"{glob.escape(folder)}/integration_*/stepper.integrate-*.{python}.nbi"))
 
 
 def _tag(codes) -> str:
@@ -106,7 +107,7 @@ def _load(codes):
             shared[f"{name}.{relative}"] = module
     sys.modules[name] = package
     sys.modules.update(shared)
-    folder = None if _jit.CACHE_DIR is None else f"{_jit.CACHE_DIR}/loop-{tag}"
+    folder = cache_folder(codes)
     saved = numba.config.CACHE_DIR
     try:
         if folder is not None:
