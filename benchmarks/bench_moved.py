@@ -148,6 +148,8 @@ def main() -> None:
     parser.add_argument("--out", default=None, help="the report (the JSON beside it; default: "
                                                     "benchmarks/moved_<version>.md)")
     args = parser.parse_args()
+    if not harness.resolve_commit(args.ref):  # fail before the runs, not after them
+        parser.error(f"--ref {args.ref}: not a commit of this repository")
     version = harness.solver_version(commit=args.ref)
     out = Path(args.out) if args.out else HERE / f"moved_{version}.md"
     if not out.parent.is_dir():  # fail before the runs, not after them

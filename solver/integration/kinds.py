@@ -77,15 +77,19 @@ def cache_folder(codes) -> str | None:
 
 def is_cached(codes) -> bool:
     """Whether the cache holds the loop for ``codes`` (its entry ``integrate``'s index file,
-    numba's ``<module>.<function>-<line>.py<XY>.nbi`` in a folder named after the module's
-    package folder, ``integration_<hash of its path>``), so a solve with it loads rather than
-    compiles."""
+    numba's ``<module>.<function>-<line>.py<XY>.nbi`` in a folder named after the source's
+    folder, ``<folder>_<hash of its path>``), so a solve with it loads rather than compiles."""
     import glob
+    import os
 
     folder = cache_folder(codes)
+    if folder is None:
+        return False
+    source, name = os.path.splitext(os.path.basename(stepper.__file__))[0], stepper.integrate
     python = f"py{sys.version_info.major}{sys.version_info.minor}"
-    return folder is not None and bool(
-        glob.glob(f"{glob.escape(folder)}/integration_*/stepper.integrate-*.{python}.nbi"))
+    pattern = (f"{glob.escape(folder)}/{os.path.basename(os.path.dirname(stepper.__file__))}_*/"
+               f"{source}.{name.py_func.__name__}-*.{python}.nbi")
+    return bool(glob.glob(pattern))
 
 
 def _tag(codes) -> str:
