@@ -7,6 +7,7 @@ presets' numbers are read only when a parser with the numerics flags is built.
 from __future__ import annotations
 
 import argparse
+import itertools
 import math
 import os
 
@@ -76,8 +77,9 @@ def numerics_overrides(args) -> dict:
 
 
 # Groups that act only when another group switches their piece of physics on: (the groups,
-# the group that switches them, when a group counts as set (None: away from its default), when
-# the switch is on for one value of it, why, what to give). A run or a sweep that sets them
+# the group that switches them, or a tuple of groups that together do, when a group counts as
+# set (None: away from its default), when the switch is on for one value of it (one value of
+# each switching group, in their order), why, what to give). A run or a sweep that sets them
 # while the switch is off at every grid point would silently compute something else.
 INERT_RULES = (
     (("asperity_stiffness", "e_dry"), "roughness", None, lambda v: v != 0.0,
@@ -97,6 +99,12 @@ INERT_RULES = (
     (("dh_c1", "dh_c2"), "density_law", None, lambda v: v == "dowson-higginson",
      "belong{s} to the Dowson-Higginson density, and {ctl} is constant",
      "give {ctl} dowson-higginson"),
+    # the law read in tension: a viscosity law that depends on pressure (solver.Physics resolves
+    # the law: constant where beta is 0 without a table, or where it is asked for)
+    (("viscosity_in_tension",), ("viscosity_law", "beta", "viscosity_table"),
+     lambda v: v == "law", lambda law, beta, table: law != "constant" and (beta > 0.0 or table),
+     "reads the viscosity's law at negative pressure, and {ctl} give a constant viscosity",
+     "give {beta} > 0 or a {viscosity_table}"),
 )
 
 
@@ -114,7 +122,8 @@ def inert_groups(values: dict) -> list[tuple]:
 
     found = []
     for names, switch, is_set, acts, reason, fix in INERT_RULES:
-        if any(acts(v) for v in each(switch)):
+        switches = switch if isinstance(switch, tuple) else (switch,)
+        if any(acts(*point) for point in itertools.product(*map(each, switches))):
             continue
         default = {n: Physics.group(n).default for n in names}
         given = [n for n in names if any(is_set(v) if is_set else v != default[n]
@@ -126,15 +135,23 @@ def inert_groups(values: dict) -> list[tuple]:
 
 def inert_message(found, label) -> str:
     """One line for ``inert_groups``'s findings, each group and switch written ``label(name)``
-    (a flag with its value, or a sweep file's name)."""
+    (a flag with its value, or a sweep file's name); a fix names a switching group by
+    ``{ctl}`` (all of them) or by its own name (``{beta}``)."""
     parts = []
     for names, switch, reason, fix in found:
         given = " and ".join(label(n) for n in names)
-        ctl = label(switch).split()[0]
+        switches = {n: label(n).split()[0]
+                    for n in (switch if isinstance(switch, tuple) else (switch,))}
+        ctl = _listed(list(switches.values()))
         parts.append(f"{given} " + reason.format(ctl=ctl, s="" if len(names) > 1 else "s")
-                     + f": {fix.format(ctl=ctl)}, or leave "
+                     + f": {fix.format(ctl=ctl, **switches)}, or leave "
                      + " and ".join(label(n).split()[0] for n in names) + " out")
     return "; ".join(parts)
+
+
+def _listed(words) -> str:
+    """``a``, ``a and b``, ``a, b and c``."""
+    return " and ".join(filter(None, (", ".join(words[:-1]), words[-1])))
 
 
 def format_value(v, spec=".6g"):

@@ -499,6 +499,60 @@ def test_a_sweep_with_smooth_and_rough_points_keeps_its_e_dry():
     assert sweep.fixed["e_dry"] == 0.5 and sweep.axes["roughness"] == (0.0, 1.0)
 
 
+@pytest.mark.parametrize("args", [
+    [],  # beta 0 and no table: the classic, constant viscosity
+    ["--beta", "1", "--viscosity", "constant"],  # a beta the law asked for does not use
+], ids=["beta-0", "law-constant"])
+def test_run_law_in_tension_with_a_constant_viscosity_is_exit_2(capsys, monkeypatch, args):
+    """``--viscosity-in-tension law`` reads a pressure-dependent viscosity at negative pressure;
+    with a constant viscosity it would do nothing (it was accepted and ignored)."""
+    no_solve(monkeypatch)
+    code, out, err = ehd(capsys, "run", "--St", "5", "--eps", "0.01", *args,
+                         "--viscosity-in-tension", "law")
+    assert code == EXIT_USAGE and out == ""
+    one_error_line(err, "--viscosity-in-tension law", "constant viscosity", "--beta > 0",
+                   "--viscosity-table")
+
+
+@pytest.mark.parametrize("args, law", [
+    (["--beta", "1"], "barus"),
+    (["--viscosity-table", "0:1, 1:3"], "table"),
+], ids=["barus", "table"])
+def test_run_law_in_tension_with_a_pressure_dependent_viscosity_is_accepted(monkeypatch, args,
+                                                                            law):
+    import solver
+    from pipeline.cli import main
+
+    seen = []
+
+    def stop(physics, **kwargs):
+        seen.append(physics)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(solver, "collide", stop)
+    main(["run", "--St", "5", "--eps", "0.01", *args, "--viscosity-in-tension", "law"])
+    assert seen and (seen[0].viscosity_in_tension, seen[0].viscosity_law) == ("law", law)
+
+
+@pytest.mark.parametrize("physics, grid, ok", [
+    ('viscosity_in_tension = "law"', "", False),
+    ('viscosity_in_tension = "law"\nbeta = 2.0\nviscosity_law = "constant"', "", False),
+    ('viscosity_in_tension = "law"', "beta = [0.0, 2.0]", True),  # acts where beta is 2
+    ('viscosity_in_tension = "law"\nbeta = 2.0', "", True),
+], ids=["beta-0", "law-constant", "beta-axis", "barus"])
+def test_sweep_law_in_tension_needs_a_pressure_dependent_viscosity(physics, grid, ok):
+    from pipeline.sweeps.config import ConfigError, parse_sweep
+    from tests.test_pipeline import sweep_text
+
+    text = sweep_text([5.0], [0.01]).replace("[numerics]", f"[physics]\n{physics}\n[numerics]")
+    text = text.replace("eps = [0.01]", f"eps = [0.01]\n{grid}")
+    if ok:
+        assert parse_sweep(text).fixed["viscosity_in_tension"] == "law"
+    else:
+        with pytest.raises(ConfigError, match="viscosity_in_tension reads the viscosity.s law"):
+            parse_sweep(text)
+
+
 def test_scene_e_dry_without_roughness_is_exit_2(capsys, monkeypatch):
     from pipeline.scenes.commands import load_scene
 
