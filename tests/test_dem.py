@@ -569,3 +569,23 @@ def test_dry_export_of_unequal_spheres_works_once_they_have_e_far(exported):
     for r in rows:
         r["e_far"] = ""
     assert len(missing_e(rows, "dry")) == len(rows) and not missing_e(rows, "cfd-dem")
+
+
+def test_a_path_table_says_where_the_physics_changes(capsys):
+    """A scene switches its pieces on where they act (the floor, asperity contact), so e can
+    jump along a path where one switches on (the sandstone grains' radius path: e_wet 0.14,
+    then 0.90 where asperity contact starts). The table says which physics the first row has and
+    where it changes; a path of one physics says nothing of it."""
+    from pipeline.dem.commands import _print_rows
+
+    def row(physics, sticks=False):
+        return {"St": 1.0, "St_L": 1.0, "eps": 1e-4, "v0_m_s": 0.1, "approach_speed_m_s": 0.2,
+                "e_wet": 0.0 if sticks else 0.5, "e_far": 0.0 if sticks else 0.4,
+                "sticks": sticks, "warning_checks": "", "physics": physics}
+
+    _print_rows([row("classic film", sticks=True), row("classic film"), row("jfo cavitation")],
+                [])
+    notes = [(line.split(None, 7) + [""])[7] for line in capsys.readouterr().out.splitlines()[1:]]
+    assert notes == ["physics: classic film; sticks", "", "physics: jfo cavitation"]
+    _print_rows([row("jfo cavitation"), row("jfo cavitation", sticks=True)], [])
+    assert "physics" not in capsys.readouterr().out

@@ -88,12 +88,19 @@ def _cell(v):
 def _print_rows(rows, skipped):
     print(f"{'St':>10} {'St_L':>10} {'eps':>10} {'v0 [m/s]':>10} {'V [m/s]':>10} {'e_wet':>8} "
           f"{'e_far':>8}  note")
+    # a scene switches its pieces (the floor, asperity contact) on where they act, so the
+    # physics can change along a path, and e with it: the first row and each change say which
+    changes = len({r["physics"] for r in rows}) > 1
+    before = None
     for r in rows:
         # as ehd scene's verdict, whose first e is e_far: sticking there alone is a dry DEM
         # code's (the CSV's sticks column stays e_wet's)
         far = r["e_far"]
-        note = "sticks" if r["sticks"] else \
+        verdict = "sticks" if r["sticks"] else \
             "sticks in e_far (dry DEM)" if far != "" and far == 0.0 else ""
+        physics = f"physics: {r['physics']}" if changes and r["physics"] != before else ""
+        before = r["physics"]
+        note = "; ".join(part for part in (physics, verdict) if part)
         if r["warning_checks"]:
             note = (note + "; " if note else "") + "warnings: " + r["warning_checks"] + " (see CSV)"
         approach = "-" if r["approach_speed_m_s"] == "" else f"{r['approach_speed_m_s']:.4g}"
