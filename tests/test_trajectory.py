@@ -301,6 +301,17 @@ def test_cli_trajectory_of_a_bouncing_sphere(tmp_path):
     assert 0.0 < d["e_observed"] < 1.0 and d["rebound_height_m"] == pytest.approx(
         max(gaps[gaps.index(min(gaps)):]), rel=1e-12)
     assert (tmp_path / "fig" / "trajectory.png").exists()
+    # the approach speed at the outer start (1 a) is the trajectory's own there, not the speed
+    # the outer flow alone would map from v0 (it knows neither the release nor gravity: a steel
+    # ball released at 23 mm/s in glycerol read 2.9 m/s)
+    approach = [(float(r["gap_m"]), -float(r["speed_m_per_s"])) for r in rows
+                if r["phase"] == "approach"]
+    above = max(i for i, (g, _) in enumerate(approach) if g >= 1.5e-3)
+    (g1, u1), (g2, u2) = approach[above], approach[above + 1]
+    assert d["inputs"]["approach_speed_source"] == "the released trajectory"
+    # linear interpolation between two CSV rows (16 samples an integrator step, RTOL 1e-9)
+    assert d["approach_speed_m_per_s"] == pytest.approx(
+        u1 + (u2 - u1) * (1.5e-3 - g1) / (g2 - g1), rel=1e-6)
 
 
 def test_report_lines_of_a_trajectory():
@@ -315,6 +326,37 @@ def test_report_lines_of_a_trajectory():
     assert "written to" not in text  # ehd scene says it once the CSV is written
     assert trajectory_summary(d, "t.csv").endswith("\n  written to t.csv")
     assert "top of the first bounce 0.0093 m" in text
+
+
+def test_the_speeds_line_of_a_trajectory_says_the_release_set_them():
+    """With --trajectory the speeds line called v0 "given" and showed the approach speed the
+    outer flow maps from it (2.9 m/s for a ball released at 23 mm/s); it now names the
+    trajectory, and the trajectory's line the speed the scene gave, which the release replaces."""
+    import dataclasses
+
+    from pipeline.scenes.answer import answer_lines
+    from pipeline.scenes.commands import load_scene
+    from pipeline.scenes.trajectory import ON_TRAJECTORY, trajectory_summary
+
+    d = {"verdict": None, "approach_speed_m_per_s": 0.01077, "outer_start_over_a": 1.0,
+         "x0_over_a": 0.01, "inputs": {"approach_speed_source": ON_TRAJECTORY,
+                                       "approach_speed_m_per_s": None, "v0_m_per_s": 2.236e-4}}
+    line = answer_lines(d)[-1]
+    assert line == ("speeds: approach 10.77 mm/s at the outer start 1 a (on the released "
+                    "trajectory), v0 223.6 µm/s at x0 = 0.01 a (what the release arrives with)")
+    d["approach_speed_m_per_s"] = None  # released inside the outer start
+    assert "approach - (released inside the outer start 1 a)" in answer_lines(d)[-1]
+    scene = load_scene(GLYCEROL, None)
+    read = {"release_gap_m": 0.015, "release_speed_m_per_s": 0.0228,
+            "release_speed_is_settling": True, "drag_law": "stokes",
+            "arrival_speed_m_per_s": 2.236e-4, "e_observed": None,
+            "observed_speed_out_m_per_s": None, "observed_speed_in_m_per_s": None,
+            "observed_reading_gap_m": 1.5e-4, "rebound_height_m": 0.0}
+    first = trajectory_summary(read, replaced=scene).splitlines()[0]
+    assert first.endswith(f"(the scene's v0, in place of the given v0 {scene.v0:.4g} m/s)")
+    given = dataclasses.replace(scene, approach_speed=0.5, approach_speed_source="given")
+    assert "in place of the given approach speed 0.5 m/s" in trajectory_summary(
+        read, replaced=given)
 
 
 @pytest.mark.parametrize("radius2, density2", [(1e-3, 2500.0), (2e-3, 7800.0)])

@@ -34,6 +34,7 @@ import math
 from ..dem.conventions import DEM_KINDS
 from .materials import ROUGHNESS_CLASSES
 from .pieces import STIFFNESS_LABELS
+from .trajectory import ON_TRAJECTORY
 from .units import format_quantity
 
 __all__ = ["ALPHA_UNKNOWN_HIGH", "READING_BAND_OVER_A", "CODE_KINDS", "SOLVED_UNKNOWNS", "answer",
@@ -278,10 +279,15 @@ def answer_lines(d: dict) -> list[str]:
     given = d["inputs"]["approach_speed_m_per_s"] is not None
     if source.startswith("settling"):
         where, how = f"far out, {source}", "through the settling motion"
+    elif source == ON_TRAJECTORY:
+        where = f"at the outer start {d['outer_start_over_a']:.3g} a (on {source})"
+        how = "what the release arrives with"
     else:
         where = (f"at the outer start {d['outer_start_over_a']:.3g} a "
                  f"({'given' if given else 'what arrives at x0 with v0'})")
         how = "through the outer flow" if given else "given"
+    if approach is None and source == ON_TRAJECTORY:  # released inside the outer start
+        where = f"(released inside the outer start {d['outer_start_over_a']:.3g} a)"
     approach = "-" if approach is None else format_quantity(approach, "m/s")
     lines.append(f"speeds: approach {approach} {where}, "
                  f"v0 {format_quantity(d['inputs']['v0_m_per_s'], 'm/s')} at x0 = "

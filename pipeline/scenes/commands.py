@@ -276,6 +276,8 @@ def cmd_scene(args) -> int:
     if args.file is None and not any(v for v in flags.values()):
         raise _usage_error("give a scene file (ehd scene FILE.toml) or the scene as flags "
                            "(see ehd scene --help)")
+    from .trajectory import trajectory_asked
+
     try:
         scene = load_scene(args.file, flags, args.materials or ())
     except ValueError as exc:
@@ -283,8 +285,6 @@ def cmd_scene(args) -> int:
     from ..cli_shared import check_output_paths
 
     check_output_paths(plot=args.plot)
-    from .trajectory import trajectory_asked
-
     if scene.stops_outside and not trajectory_asked(args):
         return _report_stopped(scene, args)
     try:
@@ -304,9 +304,10 @@ def cmd_scene(args) -> int:
         d.update(status="error", message=reason)
         failed = True
     if whole:
-        from .trajectory import trajectory_keys
+        from .trajectory import approach_on_trajectory, trajectory_keys
 
         d.update(trajectory_keys(whole[1]))
+        approach_on_trajectory(d, whole[0], scene)
     if args.json:
         print(json.dumps(d))
         for w in d["warnings"]:
@@ -316,7 +317,7 @@ def cmd_scene(args) -> int:
         if whole:
             from .trajectory import trajectory_summary
 
-            print(trajectory_summary(d))
+            print(trajectory_summary(d, replaced=scene))
     if whole:  # after the report: a failed write (a full disk) loses no number computed
         from .trajectory import write_trajectory
 

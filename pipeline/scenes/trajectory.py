@@ -200,6 +200,32 @@ def run_trajectory(scene, args, accuracy, **overrides):
     return results[-1], tr, read, timings
 
 
+# the approach speed's source in ``inputs`` where it is read off the released trajectory
+ON_TRAJECTORY = "the released trajectory"
+
+
+def approach_on_trajectory(d: dict, tr, scene) -> None:
+    """Set the approach speed of ``ehd scene``'s JSON object ``d`` (``approach_speed_m_per_s``,
+    the speed at the outer start, and its source) to the released trajectory ``tr``'s."""
+    d["approach_speed_m_per_s"] = _speed_at(tr, scene.outer_start_distance)
+    d["inputs"]["approach_speed_source"] = ON_TRAJECTORY
+
+
+def _speed_at(tr, gap: float) -> float | None:
+    """The approach speed [m/s] of the trajectory ``tr`` where its gap first comes down to ``gap``
+    (None when it is released inside it): the speed at the outer start, in place of the one
+    that would arrive at ``x0`` with ``v0`` through the outer flow alone, which knows neither
+    the release nor gravity (a steel ball released at 23 mm/s read 2.9 m/s there)."""
+    import numpy as np
+
+    end = tr.phases["near_field"]
+    gaps, speeds = tr.gap[:end], -tr.speed[:end]
+    if end == 0 or gaps[0] < gap:
+        return None
+    # the approach's gap falls monotonically: interpolate in it, reversed to increase
+    return float(np.interp(gap, gaps[::-1], speeds[::-1]))
+
+
 def trajectory_keys(read: dict) -> dict:
     """The JSON keys a trajectory adds to ``ehd scene --json`` (docs/scenes.md): finite numbers
     or null."""
@@ -211,6 +237,18 @@ def trajectory_keys(read: dict) -> dict:
         return float(v) if math.isfinite(v) else None
 
     return {k: num(v) for k, v in read.items()}
+
+
+def _replacing(scene) -> str:
+    """``, in place of the given ...`` for the speed the scene was given, which the release
+    replaces (a settling approach is the release's own default: nothing replaced)."""
+    if scene is None:
+        return ""
+    if scene.approach_speed is not None and scene.approach_speed_source == "given":
+        return f", in place of the given approach speed {scene.approach_speed:.4g} m/s"
+    if scene.approach_speed is None and scene.v0 is not None:
+        return f", in place of the given v0 {scene.v0:.4g} m/s"
+    return ""
 
 
 def trajectory_csv(tr) -> str:
@@ -287,10 +325,11 @@ def write_trajectory(whole, args, failed) -> None:
             plot_trajectory(tr, args.plot, reading=read)
 
 
-def trajectory_summary(d: dict, path=None) -> str:
+def trajectory_summary(d: dict, path=None, replaced=None) -> str:
     """The report's lines on the trajectory (``d`` the JSON object with ``trajectory_keys``), and
     one naming the CSV at ``path`` if given: ``ehd scene`` leaves it out and says it once the CSV
-    is written (``write_trajectory``)."""
+    is written (``write_trajectory``). ``replaced``: the scene as given, whose own speed (v0 or
+    the approach speed, from its file or a flag) the release replaces, said on the first line."""
     def num(v, spec):
         return "-" if v is None else format(v, spec)
 
@@ -298,7 +337,7 @@ def trajectory_summary(d: dict, path=None) -> str:
     lines = [f"trajectory: released at {num(d['release_gap_m'], '.4g')} m with {speed} m/s"
              f"{' (settling)' if d['release_speed_is_settling'] else ''}, drag "
              f"{d['drag_law']}; arrives at x0 with {num(d['arrival_speed_m_per_s'], '.4g')} m/s "
-             "(the scene's v0)",
+             f"(the scene's v0{_replacing(replaced)})",
              f"  e_observed = {num(d['e_observed'], '.4f')} (speeds "
              f"{num(d['observed_speed_out_m_per_s'], '.4g')} / "
              f"{num(d['observed_speed_in_m_per_s'], '.4g')} m/s at "
