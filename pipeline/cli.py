@@ -135,8 +135,15 @@ def cmd_run(args) -> int:
     physics = physics_from_args(args)
     from .environment import compile_notice
 
-    compile_notice(physics=[physics])
     outer = outer_from_args(args)
+    if args.x_ref * outer.x0_over_a > outer.start_over_a:  # collide checks x_ref >= x0 itself
+        raise UsageError(
+            f"--x-ref {args.x_ref:g}: e_wet would be seen at {args.x_ref * outer.x0_over_a:.3g} "
+            f"a, beyond the outer start {outer.start_over_a:g} a, where the outer flow, not the "
+            "film's lubrication, slows the spheres; give --x-ref at most "
+            f"{outer.start_over_a / outer.x0_over_a:g} (x0 = {outer.x0_over_a:g} a), or read "
+            "e far out as e_far (--x-ref-over-a)")
+    compile_notice(physics=[physics])
     try:
         result = collide(physics, accuracy=args.accuracy, x_ref_x0=args.x_ref, outer=outer,
                          save_profiles=bool(args.save or args.plot), **_numerics_overrides(args))

@@ -126,9 +126,10 @@ OBSERVABLES = (
     Observable("e_wet", "float", "wet coefficient of restitution: separation speed where the "
                "spheres pass back out through x_ref (default x0) over the approach speed there; "
                "0 when they stick", "v0/v0", "wet restitution e_wet (at x_ref)",
+               # a scene reads e_wet at x0 (its x_ref is e_far's, docs/scenes.md)
                scene=(SceneKey("e_wet", "1", "wet restitution e_wet"),
                       SceneKey("departure_speed_m_per_s", "v(x_ref)",
-                               "  departure speed at x_ref"))),
+                               "  departure speed at x0"))),
     Observable("h_m_x1", "float", "closest approach of the deformed surfaces, whole collision",
                "x1", "closest approach h_m/x1", master="log length",
                scene=(SceneKey("closest_approach_nm", label="closest approach"),)),

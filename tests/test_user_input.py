@@ -553,6 +553,19 @@ def test_sweep_law_in_tension_needs_a_pressure_dependent_viscosity(physics, grid
             parse_sweep(text)
 
 
+@pytest.mark.parametrize("args, seen", [
+    (["--x-ref", "1000"], "10 a"),  # x0 = 0.01 a: 10 a, beyond the outer start 1 a
+    (["--x-ref", "60", "--x0-over-a", "0.05", "--outer-start-over-a", "2"], "3 a"),
+], ids=["default-outer", "moved-outer"])
+def test_run_x_ref_beyond_the_outer_start_is_exit_2(capsys, monkeypatch, args, seen):
+    """``--x-ref`` (where e_wet is seen, over x0) beyond the outer start read e_wet on the film's
+    lubrication resistance where the outer flow slows the spheres (accepted: e_wet 0.23)."""
+    no_solve(monkeypatch)
+    code, out, err = ehd(capsys, "run", "--St", "5", "--eps", "0.01", *args)
+    assert code == EXIT_USAGE and out == ""
+    one_error_line(err, f"--x-ref {args[1]}", seen, "beyond the outer start", "--x-ref-over-a")
+
+
 def test_scene_e_dry_without_roughness_is_exit_2(capsys, monkeypatch):
     from pipeline.scenes.commands import load_scene
 
