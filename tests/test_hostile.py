@@ -1487,11 +1487,14 @@ def test_restitution_threshold_on_a_path_run_downwards(capsys):
 
 def test_restitution_names_only_the_points_it_solved(capsys):
     """--n 1 solved x 0.1 alone and said the spheres stick at every v0 from 0.1 to 10 (they
-    rebound at 10)."""
-    assert main(["restitution", str(EXAMPLE), "--n", "1", "--threshold", "--accuracy",
-                 "fast"]) == 0
+    rebound at 10). One point now takes one factor (--n 1 with the range 0.1-10 solved 0.1
+    quietly: refused, as a sweep's range of one point is)."""
+    assert main(["restitution", str(EXAMPLE), "--from", "0.1", "--to", "0.1", "--n", "1",
+                 "--threshold", "--accuracy", "fast"]) == 0
     text = capsys.readouterr().out
     assert "stick at v0 x 0.1;" in text and "from 0.1 to 10" not in text
+    assert main(["restitution", str(EXAMPLE), "--n", "1", "--accuracy", "fast"]) == EXIT_USAGE
+    assert "one point takes one factor" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("flags", [["--n", "10000000000"], ["--n", "0"]])

@@ -566,6 +566,24 @@ def test_run_x_ref_beyond_the_outer_start_is_exit_2(capsys, monkeypatch, args, s
     one_error_line(err, f"--x-ref {args[1]}", seen, "beyond the outer start", "--x-ref-over-a")
 
 
+@pytest.mark.parametrize("args, keywords", [
+    (["--for", "cfd-dem"], ["--for cfd-dem", "--out DIR"]),
+    (["--allow-invalid"], ["--allow-invalid", "--out DIR"]),
+    (["--from", "2", "--to", "2", "--n", "3"], ["the same scene", "--n 1"]),
+    (["--n", "1"], ["one point takes one factor"]),
+], ids=["for-without-out", "allow-invalid-without-out", "one-factor-many-points",
+        "one-point-a-range"])
+def test_restitution_flags_that_would_do_nothing_are_exit_2(capsys, monkeypatch, args,
+                                                            keywords):
+    """Accepted before, and the output was byte for byte the same without them (--for and
+    --allow-invalid choose what the export writes), or three rows of the same scene, or the
+    range's first factor alone for --n 1 (a hostile scan)."""
+    no_solve(monkeypatch)
+    code, out, err = ehd(capsys, "restitution", EXAMPLE, *args)
+    assert code == EXIT_USAGE and out == ""
+    one_error_line(err, *keywords)
+
+
 def test_scene_e_dry_without_roughness_is_exit_2(capsys, monkeypatch):
     from pipeline.scenes.commands import load_scene
 

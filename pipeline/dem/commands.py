@@ -320,10 +320,21 @@ def cmd_restitution(args) -> int:
                          "too")
     check_accuracy(args.accuracy)
     _check_kind(args.kind)
+    inert = [f for f, on in (("--for " + args.kind, args.kind != "dry"),
+                             ("--allow-invalid", args.allow_invalid)) if on]
+    if inert and not args.out:  # they choose what the export writes: without one, nothing
+        raise UsageError(f"{' and '.join(inert)} choose{'s' if len(inert) == 1 else ''} what "
+                         "the DEM export writes: give --out DIR too, or leave "
+                         f"{' and '.join(f.split()[0] for f in inert)} out")
     scene = _scene(args.scene, args.materials)
     if not (0 < args.start < np.inf and 0 < args.stop < np.inf):
         raise UsageError("--from and --to must be finite positive factors")
     _check_points(args.n)
+    if (args.n == 1) != (args.start == args.stop):  # one point is one factor, and back
+        raise UsageError(f"--from {args.start:g} --to {args.stop:g} --n {args.n}: " + (
+            "one point takes one factor: give --from equal to --to, or --n 2 or more"
+            if args.n == 1 else
+            "every point would be the same scene: give --to another factor, or --n 1"))
     factors = np.geomspace(args.start, args.stop, args.n)
     try:
         scene_path(scene, args.vary, factors[:1])  # a path the scene has (approach: an outer flow)
