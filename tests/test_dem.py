@@ -157,6 +157,26 @@ def test_export_dem_from_a_scene_file(tmp_path, capsys):
     assert main(["export-dem", str(tmp_path / "nothing.zarr")]) == 2
 
 
+def test_too_few_rebounds_to_fit_name_the_fix_of_their_input(tmp_path, capsys):
+    """A scene's export needs more points (--n); a store's, a sweep over more St: the store's
+    message said "a wider sweep or --n", and --n on a store is refused."""
+    from pipeline.sweeps.config import parse_sweep
+    from pipeline.sweeps.run import run_sweep
+
+    # the beads' e_far rebounds only from about 2 v0 on: 1 of 2 speeds (0.1 and 10 v0)
+    assert main(["export-dem", EXAMPLE, "--accuracy", "fast", "--n", "2",
+                 "--out", str(tmp_path / "a")]) == 2
+    err = capsys.readouterr().err
+    assert "no group has 3 rebounding collisions" in err and "more points (--n)" in err
+    text = ('store = "x.zarr"\n[grid]\nSt = [30.0, 60.0]\neps = [0.01]\n'
+            '[numerics]\naccuracy = "fast"\n')
+    sweep = parse_sweep(text).with_store(tmp_path / "s.zarr")
+    run_sweep(sweep, runner="serial", progress=None)
+    assert main(["export-dem", str(sweep.store), "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err
+    assert "a sweep over more or higher St" in err and "--n" not in err
+
+
 def test_export_dem_from_a_sweep_store(tmp_path, capsys):
     # a real (fast) sweep: e_wet goes into the store from the registry and out to the CSV
     from pipeline import open_results

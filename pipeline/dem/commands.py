@@ -297,9 +297,10 @@ def cmd_export_dem(args) -> int:
         raise UsageError(f"{args.path}: {exc}; nothing written: change the scene, or export "
                          "anyway with --allow-invalid (every file then says so)") from None
     if not any(name.startswith("liggghts_") for name in files):
+        more = "a sweep over more or higher St" if path.is_dir() else "more points (--n)"
         raise UsageError(f"{args.path}: no group has 3 rebounding collisions"
                          + (" in --fit-range" if fit_range else "") + ": nothing to fit; "
-                         "export more St (a wider sweep or --n)")
+                         f"export {more}")
     paths = write_files(files, args.out)
     print(f"wrote {len(rows)} rows: " + ", ".join(str(p) for p in paths))
     return 0
