@@ -400,6 +400,33 @@ def test_cli_flags_override_the_file_and_build_a_scene_alone(tmp_path, capsys):
     assert d["inputs"]["body2"]["wall"] and d["reduced_radius_m"] == pytest.approx(1e-3)
 
 
+def test_cli_wall_and_radius2_flags_together_are_exit_2(capsys):
+    """--wall dropped --radius2 without a word (a file with both is refused: ``wall = true but
+    radius``)."""
+    assert main(["scene", "--material1", "glass", "--radius1", "100 um", "--material2", "glass",
+                 "--wall", "--radius2", "5 um", "--fluid", "water", "--v0", "10 cm/s"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--wall and --radius2" in err
+
+
+@pytest.mark.parametrize("line, flag, value, read, want", [
+    ('x0 = "1 um"', "x0_over_a", "0.005", lambda s: s.x0 / s.reduced_radius, 0.005),
+    ("x0_over_a = 0.02", "x0", "250 nm", lambda s: s.x0, 250e-9),
+    ("x_ref_over_a = 0.3", "x_ref", "2 um", lambda s: s.x_ref_distance, 2e-6),
+    ('outer_start = "40 um"', "outer_start_over_a", "2",
+     lambda s: s.outer_start_distance / s.reduced_radius, 2.0),
+], ids=["x0", "x0_over_a", "x_ref", "outer_start"])
+def test_a_flag_overrides_the_files_other_form_of_its_key(tmp_path, line, flag, value, read,
+                                                           want):
+    """A scene gives x0, x_ref or the outer start in SI or over a; the flag of one form refused a
+    file holding the other ("give either x0 or x0_over_a, not both", though only one was given
+    of each), as a speed's flag already replaced the file's other speed."""
+    from pipeline.scenes.commands import load_scene
+
+    path = write(tmp_path, SCENE.replace('v0 = "10 cm/s"', f'v0 = "10 cm/s"\n{line}'))
+    assert read(load_scene(path, {flag: value})) == pytest.approx(want, rel=1e-12)
+
+
 @pytest.mark.parametrize("edit, message", [
     (lambda t: t.replace('v0 = "10 cm/s"', ""), "missing the speed: give approach_speed"),
     (lambda t: t.replace('radius = "50 um"', 'radius = "-50 um"', 1), "body1.radius"),

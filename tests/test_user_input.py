@@ -596,6 +596,12 @@ def test_scene_e_dry_without_roughness_is_exit_2(capsys, monkeypatch):
     flags = {"material1": "pmma", "radius1": "50 um", "wall2": True, "material2": "pmma",
              "fluid": "water", "v0": "1 m/s", "e_dry": "0.5", "roughness1": "0.3 um"}
     assert load_scene(None, flags, user_files=False).e_dry == 0.5  # with a roughness: taken
+    # with the contact switched off it would do nothing too (accepted, the JSON then said
+    # e_dry 1 from "the scene's e_dry")
+    code, _, err = ehd(capsys, "scene", *smooth, "--roughness1", "0.3 um", "--e-dry", "0.5",
+                       "--asperity-contact", "off")
+    assert code == EXIT_USAGE
+    one_error_line(err, "e_dry", "asperity_contact is off", "--asperity-contact")
 
 
 # ---- 8. user input that ended as a bug (exit 70) -------------------------------------------------

@@ -306,6 +306,28 @@ def cmd_export_dem(args) -> int:
     return 0
 
 
+def _check_path_flags(args) -> None:
+    """UsageError for ``ehd restitution`` flags that would do nothing (``--for`` or
+    ``--allow-invalid`` without ``--out``, a point repeated, a range of one point) or whose
+    path has no factors (not finite positive, or an impossible ``--n``)."""
+    from pipeline.cli import UsageError
+
+    inert = [f for f, on in (("--for " + args.kind, args.kind != "dry"),
+                             ("--allow-invalid", args.allow_invalid)) if on]
+    if inert and not args.out:  # they choose what the export writes: without one, nothing
+        raise UsageError(f"{' and '.join(inert)} choose{'s' if len(inert) == 1 else ''} what "
+                         "the DEM export writes: give --out DIR too, or leave "
+                         f"{' and '.join(f.split()[0] for f in inert)} out")
+    if not (0 < args.start < np.inf and 0 < args.stop < np.inf):
+        raise UsageError("--from and --to must be finite positive factors")
+    _check_points(args.n)
+    if (args.n == 1) != (args.start == args.stop):  # one point is one factor, and back
+        raise UsageError(f"--from {args.start:g} --to {args.stop:g} --n {args.n}: " + (
+            "one point takes one factor: give --from equal to --to, or --n 2 or more"
+            if args.n == 1 else
+            "every point would be the same scene: give --to another factor, or --n 1"))
+
+
 def cmd_restitution(args) -> int:
     from pipeline.cli import UsageError, check_output_dir
     from pipeline.cli_shared import check_accuracy
@@ -321,21 +343,8 @@ def cmd_restitution(args) -> int:
                          "too")
     check_accuracy(args.accuracy)
     _check_kind(args.kind)
-    inert = [f for f, on in (("--for " + args.kind, args.kind != "dry"),
-                             ("--allow-invalid", args.allow_invalid)) if on]
-    if inert and not args.out:  # they choose what the export writes: without one, nothing
-        raise UsageError(f"{' and '.join(inert)} choose{'s' if len(inert) == 1 else ''} what "
-                         "the DEM export writes: give --out DIR too, or leave "
-                         f"{' and '.join(f.split()[0] for f in inert)} out")
+    _check_path_flags(args)
     scene = _scene(args.scene, args.materials)
-    if not (0 < args.start < np.inf and 0 < args.stop < np.inf):
-        raise UsageError("--from and --to must be finite positive factors")
-    _check_points(args.n)
-    if (args.n == 1) != (args.start == args.stop):  # one point is one factor, and back
-        raise UsageError(f"--from {args.start:g} --to {args.stop:g} --n {args.n}: " + (
-            "one point takes one factor: give --from equal to --to, or --n 2 or more"
-            if args.n == 1 else
-            "every point would be the same scene: give --to another factor, or --n 1"))
     factors = np.geomspace(args.start, args.stop, args.n)
     try:
         scene_path(scene, args.vary, factors[:1])  # a path the scene has (approach: an outer flow)

@@ -25,6 +25,10 @@ _FLAG_FIELDS = {dest: (section, key) for flag in _SCENE_FLAGS
                 for _, dest, section, key in flag.options()}
 # the scene's speed is v0 or approach_speed: one given by a flag replaces the other of the file
 _ONE_SPEED = {"v0": "approach_speed", "approach_speed": "v0"}
+# keys of which a scene gives one, in SI or over a: one given by a flag replaces the other of
+# the file too ("every field has a flag of the same name, which overrides the file")
+_ONE_OF = {**_ONE_SPEED, **{k: k + "_over_a" for k in ("x0", "outer_start", "x_ref")},
+           **{k + "_over_a": k for k in ("x0", "outer_start", "x_ref")}}
 
 
 def _e(value):
@@ -76,6 +80,9 @@ def load_scene(path=None, flags: dict | None = None, materials=(), *, user_files
         raise SceneError("empty scene file path: give a scene file (TOML; see docs/scenes.md)")
     data = _read_scene_file(path) if path else {}
     given = [k for k in _ONE_SPEED if (flags or {}).get(k) not in (None, False)]
+    if (flags or {}).get("wall2") and (flags or {}).get("radius2") is not None:
+        raise SceneError("--wall and --radius2: a plane wall has no radius; give --wall for a "
+                         "wall, or --radius2 for a sphere")
     if len(given) == 2:
         raise ValueError("give either --v0 (the speed at the film's start x0) or "
                          "--approach-speed (the speed at the outer start), not both")
@@ -94,8 +101,8 @@ def load_scene(path=None, flags: dict | None = None, materials=(), *, user_files
             raise SceneError(f"unknown scene field {dest!r}{did_you_mean(dest, known)}; the "
                              f"fields: {', '.join(sorted(known))}")
         section, key = _FLAG_FIELDS[dest]
-        if key in _ONE_SPEED:  # a speed given as a flag replaces the file's other speed
-            data.pop(_ONE_SPEED[key], None)
+        if section is None and key in _ONE_OF:  # replaces the file's other form of it
+            data.pop(_ONE_OF[key], None)
         target = data if section is None else data.setdefault(section, {})
         if not isinstance(target, dict):
             raise ValueError(f"{section} must be a table in the scene file")

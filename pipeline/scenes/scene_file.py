@@ -246,6 +246,32 @@ def _outer(data, a, x0):
     return start, ref
 
 
+def _e_dry(data, body1, body2, contact, table) -> tuple:
+    """``(e_dry, where it came from)``: the scene's, the materials table's pair, else 1 (elastic
+    solids); a given e_dry that could never act (no roughness, or the contact off) is refused."""
+    e_dry, e_dry_source = 1.0, "not given, and no pair group of the materials table holds both " \
+        "solids: elastic solids (1)"
+    materials = body1.solid.material, body2.solid.material
+    pair = table.dry_restitution(*materials) if all(materials) else None
+    if pair is not None:
+        e_dry = pair.e_dry
+        e_dry_source = f"the pair {materials[0]}/{materials[1]}: [pairs.{pair.name}] of the " \
+            "materials table, whose source ehd scene --list-materials shows"
+    if "e_dry" in data:
+        e_dry = to_si(data["e_dry"], _E_DRY, "e_dry")
+        if not any(b.solid.roughness for b in (body1, body2)):
+            # smooth surfaces never touch: the given e_dry would silently do nothing
+            raise SceneError(f"e_dry = {data['e_dry']!r} acts only where rough surfaces touch, "
+                             "and neither body has a roughness: give one (e.g. body1.roughness "
+                             "= '0.3 um', --roughness1), or leave e_dry out")
+        if contact == "off":  # the contact is never modelled: e_dry would do nothing either
+            raise SceneError(f"e_dry = {data['e_dry']!r} acts only where the asperities touch, "
+                             "and asperity_contact is off: give asperity_contact auto or on "
+                             "(--asperity-contact), or leave e_dry out")
+        e_dry_source = "the scene's e_dry"
+    return e_dry, e_dry_source
+
+
 def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
     """Build a ``Scene`` from a parsed scene document (see docs/scenes.md for the format).
 
@@ -298,22 +324,7 @@ def scene_from_dict(data: dict, table: MaterialTable) -> Scene:
     if contact not in ROUGHNESS_CHOICES:
         raise SceneError(f"asperity_contact must be one of {list(ROUGHNESS_CHOICES)}, got "
                          f"{contact!r}")
-    e_dry, e_dry_source = 1.0, "not given, and no pair group of the materials table holds both " \
-        "solids: elastic solids (1)"
-    materials = body1.solid.material, body2.solid.material
-    pair = table.dry_restitution(*materials) if all(materials) else None
-    if pair is not None:
-        e_dry = pair.e_dry
-        e_dry_source = f"the pair {materials[0]}/{materials[1]}: [pairs.{pair.name}] of the " \
-            "materials table, whose source ehd scene --list-materials shows"
-    if "e_dry" in data:
-        e_dry = to_si(data["e_dry"], _E_DRY, "e_dry")
-        if not any(b.solid.roughness for b in (body1, body2)):
-            # smooth surfaces never touch: the given e_dry would silently do nothing
-            raise SceneError(f"e_dry = {data['e_dry']!r} acts only where rough surfaces touch, "
-                             "and neither body has a roughness: give one (e.g. body1.roughness "
-                             "= '0.3 um', --roughness1), or leave e_dry out")
-        e_dry_source = "the scene's e_dry"
+    e_dry, e_dry_source = _e_dry(data, body1, body2, contact, table)
     scene = Scene(title=title, body1=body1, body2=body2, fluid=fluid,
                   # a stand-in speed until at_settling or at_approach_speed maps the approach
                   v0=(1.0 if approach == "settling" else approach) if v0 is None else v0, x0=x0,
