@@ -15,7 +15,8 @@ from .errors import PathError
 
 __all__ = ["add_numerics_flags", "numerics_overrides", "format_value", "check_output_dir",
            "check_output_paths", "check_name_length", "accuracy_help", "check_accuracy", "saved_by_run",
-           "SAVED_BY_KEY", "SAVED_BY", "INERT_RULES", "inert_groups", "inert_message"]
+           "SAVED_BY_KEY", "SAVED_BY", "INERT_RULES", "inert_groups", "inert_message",
+           "probe_writable"]
 
 
 def accuracy_help(what: str = "preset") -> str:
@@ -220,6 +221,20 @@ def check_output_dir(flag: str, value: str | None) -> None:
         raise PathError(f"{flag} {value}: {str(existing)!r} is not a directory")
     if not os.access(existing, os.W_OK | os.X_OK):
         raise PathError(f"{flag} {value}: {str(existing)!r} is not writable")
+    probe_writable(flag, value, existing)
+
+
+def probe_writable(flag: str, value: str, folder) -> None:
+    """PathError when a folder cannot be made in ``folder`` though its permissions allow it
+    (``/proc``, a file system that refuses new entries): found before the work, not at its
+    write (exit 74 after the solve). The probe folder is removed at once."""
+    import tempfile
+
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".ehd-probe-", dir=folder))
+    except OSError as exc:
+        raise PathError(f"{flag} {value}: cannot write in {str(folder)!r} "
+                        f"({exc.strerror or exc}); choose another path") from None
 
 
 # the mark of ``ehd run --save``'s own output (an attribute of the saved Dataset): the only
@@ -277,6 +292,7 @@ def check_output_paths(save: str | None = None, plot: str | None = None) -> None
             raise PathError(f"--save {save}: the directory {str(parent)!r} does not exist")
         if not os.access(parent, os.W_OK | os.X_OK):
             raise PathError(f"--save {save}: the directory {str(parent)!r} is not writable")
+        probe_writable("--save", save, parent)
         if save.endswith(".zarr") and path.exists() and not path.is_dir():
             raise PathError(f"--save {save}: exists and is not a directory (a .zarr store is one)")
         if save.endswith(".nc") and path.is_dir():

@@ -584,6 +584,28 @@ def test_restitution_flags_that_would_do_nothing_are_exit_2(capsys, monkeypatch,
     one_error_line(err, *keywords)
 
 
+GLYCEROL = REPO / "examples" / "steel_ball_glass_wall_glycerol.toml"
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux's /proc")
+@pytest.mark.parametrize("args, flag", [
+    (["scene", str(EXAMPLE), "--plot", "/proc/nope"], "--plot"),
+    (["scene", str(GLYCEROL), "--trajectory", "/proc/t.csv"], "--trajectory"),
+    (["run", "--St", "5", "--eps", "0.01", "--save", "/proc/x.nc"], "--save"),
+    (["restitution", str(EXAMPLE), "--out", "/proc/nope"], "--out"),
+    (["export-dem", str(EXAMPLE), "--out", "/proc/nope"], "--out"),
+], ids=["scene-plot", "trajectory", "run-save", "restitution-out", "export-dem-out"])
+def test_an_output_path_no_folder_can_be_made_in_is_exit_2_before_the_solve(capsys, monkeypatch,
+                                                                            args, flag):
+    """/proc lets root write by its permissions but makes no entry: the write failed with exit
+    74 after the solve (a hostile scan); the documented exit is 2 before any solve."""
+    no_solve(monkeypatch)
+    code, out, err = ehd(capsys, *args)
+    assert code == EXIT_USAGE and out == ""
+    line = one_error_line(err, flag, "'/proc'")  # root: the probe; anyone else: permissions
+    assert "cannot write in" in line or "is not writable" in line, line
+
+
 def test_scene_e_dry_without_roughness_is_exit_2(capsys, monkeypatch):
     from pipeline.scenes.commands import load_scene
 

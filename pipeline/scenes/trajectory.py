@@ -297,6 +297,9 @@ def check_trajectory_path(path) -> None:
         raise PathError(f"--trajectory {path}: the directory {str(parent)!r} does not exist")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise PathError(f"--trajectory {path}: the directory {str(parent)!r} is not writable")
+    from ..cli_shared import probe_writable
+
+    probe_writable("--trajectory", path, parent)
     if Path(path).is_dir():
         raise PathError(f"--trajectory {path}: is a directory, not a file")
     if os.path.lexists(path) and (os.path.islink(path) or not Path(path).is_file()
