@@ -198,7 +198,8 @@ def test_a_path_in_approach_speed_keeps_each_scene_at_its_factor(table):
 
 def test_thresholds_in_e_far_and_e_wet_bracket_the_change(table, tmp_path, capsys):
     from pipeline.dem.export import scene_path
-    from pipeline.scenes.threshold import RTOL, sticking_threshold
+    from pipeline.scenes.threshold import RTOL, format_threshold, sticking_threshold
+    from pipeline.scenes.units import format_quantity
 
     scene = scene_from_dict(beads(approach_speed="0.05 m/s", body1={
         "material": "glass", "radius": "100 um"}), table)
@@ -211,6 +212,10 @@ def test_thresholds_in_e_far_and_e_wet_bracket_the_change(table, tmp_path, capsy
         assert getattr(run_scene(below, accuracy="fast").collision, key) == 0.0
         assert getattr(run_scene(above, accuracy="fast").collision, key) > 0.0
         assert t.value == pytest.approx(0.05 * t.factor, rel=1e-12)
+        # the line gives v0 there too, which the path moved (docs/scenes.md: "each St_c with
+        # its v0, approach speed (or radius)"; it gave the approach speed alone)
+        at = scene_path(scene, "approach_speed", [t.factor])[0]
+        assert f", v0 {format_quantity(at.v0, 'm/s')}" in format_threshold(t)
     # the dry DEM code's threshold lies above the CFD-DEM code's: the outer flow takes more
     wet = sticking_threshold(scene, "approach_speed", "fast", start=0.5, stop=8.0, n=5)
     far = sticking_threshold(scene, "approach_speed", "fast", start=0.5, stop=8.0, n=5,

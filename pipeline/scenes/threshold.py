@@ -40,6 +40,7 @@ class Threshold:
     failed: bool = False  # a solve the bisection needed failed (``note`` says which and why)
     key: str = "e_wet"  # the e whose 0 is sticking: "e_wet" or "e_far"
     approach_speed: float | None = None  # the approach speed at St_c [m/s] (None: no outer flow)
+    v0: float | None = None  # the speed at x0 at St_c [m/s]
 
 
 class SolveFailed(ValueError):
@@ -131,7 +132,8 @@ def sticking_threshold(scene, vary: str = "v0", accuracy: str = "standard", *,
     at = scene_path(scene, vary, [factor])[0]
     approach = path_value(at, "approach_speed")
     return Threshold(St_c=at.stokes, factor=factor, value=path_value(at, vary),
-                     bracket=(lo, hi), solves=solves, approach_speed=approach, **common)
+                     bracket=(lo, hi), solves=solves, approach_speed=approach, v0=at.v0,
+                     **common)
 
 
 def _outcome(scene, vary, factors, accuracy, key, results):
@@ -182,6 +184,8 @@ def format_threshold(t: Threshold) -> str:
 
     approach = "" if t.approach_speed is None or t.vary == "approach_speed" else \
         f", approach speed {format_quantity(t.approach_speed, 'm/s')}"
+    if t.v0 is not None and t.vary != "v0":  # the path moved v0 too (docs/scenes.md)
+        approach = f", v0 {format_quantity(t.v0, 'm/s')}" + approach
     return (f"{head}: St_c = {t.St_c:.4g} ({PATHS[t.vary][0]} "
             f"{format_quantity(t.value, t.unit)}{approach}, {t.factor:.4g} x the scene's): below "
             f"it the spheres stick, above it they rebound (bisected to {RTOL:g} in {t.solves} "
