@@ -337,6 +337,28 @@ def test_write_files_leaves_the_old_export_when_a_write_fails(tmp_path, monkeypa
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.txt", "b.txt"]
 
 
+def test_an_export_removes_the_snippets_of_an_earlier_one_it_does_not_write(tmp_path):
+    """An export of 3 rows (no fit) into a folder with a 7-row export's snippets left them beside
+    the new CSV, laws fitted to rows it no longer holds (a hostile scan); someone else's file of
+    the same pattern stays, and so does a snippet the new export writes again."""
+    from pipeline.dem import export
+
+    earlier = {"restitution.csv": "old", "restitution.json": "{}",
+               "liggghts_a.in": "# ==== ehd-collision wet restitution for LIGGGHTS ====\n",
+               "yade_a.py": "# ==== ehd-collision wet restitution for YADE ====\n",
+               "openfoam_a.txt": "// ehd-collision wet restitution for OpenFOAM\n",
+               "liggghts_b.in": "# ==== ehd-collision wet restitution for LIGGGHTS ====\n"}
+    export.write_files(earlier, tmp_path)
+    (tmp_path / "yade_mine.py").write_text("# my own script\n")
+    written, removed = export.write_files(
+        {"restitution.csv": "new", "restitution.json": "{}", "liggghts_b.in": "# ==== "
+         "ehd-collision wet restitution for LIGGGHTS ====\n"}, tmp_path)
+    assert sorted(p.name for p in removed) == ["liggghts_a.in", "openfoam_a.txt", "yade_a.py"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "liggghts_b.in", "restitution.csv", "restitution.json", "yade_mine.py"]
+    assert len(written) == 3
+
+
 def test_fit_range_fits_only_there_and_reports_every_row(tmp_path):
     store = _tiny_store(tmp_path / "s.zarr", [6.0, 10.0, 15.0, 30.0, 60.0, 120.0])
     out_all, out_near = tmp_path / "all", tmp_path / "near"

@@ -301,9 +301,16 @@ def cmd_export_dem(args) -> int:
         raise UsageError(f"{args.path}: no group has 3 rebounding collisions"
                          + (" in --fit-range" if fit_range else "") + ": nothing to fit; "
                          f"export {more}")
-    paths = write_files(files, args.out)
+    paths, removed = write_files(files, args.out)
     print(f"wrote {len(rows)} rows: " + ", ".join(str(p) for p in paths))
+    _print_removed(removed)
     return 0
+
+
+def _print_removed(removed) -> None:
+    if removed:
+        print("removed an earlier export's snippets, whose laws this CSV no longer holds: "
+              + ", ".join(str(p) for p in removed))
 
 
 def _check_path_flags(args) -> None:
@@ -384,12 +391,13 @@ def cmd_restitution(args) -> int:
 
         check_rows(rows, args.kind, args.scene)
         try:
-            paths = write_export(rows, args.out, args.scene, progress=_progress, kind=args.kind,
-                                 allow_invalid=args.allow_invalid)
+            paths, removed = write_export(rows, args.out, args.scene, progress=_progress,
+                                          kind=args.kind, allow_invalid=args.allow_invalid)
         except InvalidExport as exc:
             raise UsageError(f"{args.scene}: {exc}; --out not written: change the scene, or "
                              "export anyway with --allow-invalid") from None
         print("wrote " + ", ".join(str(p) for p in paths))
+        _print_removed(removed)
     failed = [t for t in thresholds if t.failed]
     if failed:  # the rest is written; the threshold is not
         from pipeline.errors import EXIT_SCENE_FAILED, EhdError

@@ -682,19 +682,49 @@ def _csv_text(rows) -> str:
     return fh.getvalue()
 
 
-def write_files(files: dict, out_dir) -> list[Path]:
+# the snippet files an export writes (``_snippets``), and the word their first line carries
+SNIPPETS = ("liggghts_*.in", "yade_*.py", "openfoam_*.txt")
+SNIPPET_MARK = "ehd-collision"
+
+
+def write_files(files: dict, out_dir) -> tuple[list[Path], list[Path]]:
     """Write ``files`` into ``out_dir``: each to a hidden temporary name first, all renamed into
     place only once every one is written (a failure leaves no partial or half-new export:
-    ``pipeline.writes.write_all``)."""
+    ``pipeline.writes.write_all``). Then the snippets of an earlier export in ``out_dir`` that
+    this one does not write are removed (``stale_snippets``): beside the new CSV they would
+    give laws fitted to rows it no longer holds. Returns ``(paths written, paths removed)``."""
     from ..writes import write_all
 
     out = Path(out_dir)
-    return write_all({out / name: text for name, text in files.items()}, f"--out {out_dir}")
+    written = write_all({out / name: text for name, text in files.items()},
+                        f"--out {out_dir}")
+    stale = stale_snippets(out, files)
+    for path in stale:
+        path.unlink(missing_ok=True)
+    return written, stale
+
+
+def stale_snippets(out: Path, keep) -> list[Path]:
+    """The snippet files in ``out`` that an export wrote (their first line names ehd-collision)
+    and that ``keep`` (this export's names) does not hold; anyone else's file is left alone."""
+    stale = []
+    for pattern in SNIPPETS:
+        for path in sorted(out.glob(pattern)):
+            if path.name in keep or path.is_symlink() or not path.is_file():
+                continue
+            try:
+                with open(path, encoding="utf-8", errors="replace") as fh:
+                    first = fh.readline(200)
+            except OSError:
+                continue
+            if SNIPPET_MARK in first:
+                stale.append(path)
+    return stale
 
 
 def write_export(rows: list[dict], out_dir, source: str, *, fit_range=None, density_ratio=0.0,
-                 progress=None, kind="dry", allow_invalid=False) -> list[Path]:
-    """Compute the export of ``rows`` and write it into ``out_dir``."""
+                 progress=None, kind="dry", allow_invalid=False) -> tuple[list[Path], list[Path]]:
+    """Compute the export of ``rows`` and write it into ``out_dir`` (``write_files``)."""
     return write_files(export_files(rows, source, fit_range=fit_range,
                                     density_ratio=density_ratio, progress=progress, kind=kind,
                                     allow_invalid=allow_invalid), out_dir)
