@@ -92,3 +92,34 @@ def test_cli_run_plot(tmp_path, capsys):
     assert "figures:" in capsys.readouterr().out
     assert {p.stem for p in tmp_path.glob("*.png")} >= {"gap", "deformation", "pressure",
                                                         "motion", "energy"}
+
+
+def test_restitution_curve_rises_from_zero_at_the_threshold_not_below_it():
+    """A straight line from the last sticking scene to the first rebounding one showed e > 0
+    below the bisected St_c (e_far about 0.07 at St 10, St_c 11.04: a hostile scan): the
+    rebounding line starts at (St_c, 0), the line along 0 ends there. Log axes label their
+    minor ticks at 2 and 5 only over more than half a decade (3 and 4 ran into each other)."""
+    import types
+
+    from matplotlib.figure import Figure
+
+    from pipeline.plots.restitution_plot import _curve, _minor_labels
+
+    def result(e):
+        return types.SimpleNamespace(collision=types.SimpleNamespace(e_far=e), answer={})
+
+    ok = [result(0.0), result(0.0), result(0.6), result(0.8)]
+    st = np.array([3.0, 10.0, 20.0, 60.0])
+    ax = Figure().subplots()
+    t = types.SimpleNamespace(key="e_far", St_c=11.04)
+    _curve(ax, ok, st, "e_far", [t])
+    zero, rise = ax.lines[0].get_xydata(), ax.lines[1].get_xydata()
+    assert zero.tolist() == [[3.0, 0.0], [10.0, 0.0], [11.04, 0.0]]
+    assert rise.tolist() == [[11.04, 0.0], [20.0, 0.6], [60.0, 0.8]]
+    ax.set_xscale("log")
+    ax.set_xlim(2.0, 80.0)
+    label = _minor_labels(ax.xaxis)
+    assert [label(x) for x in (3.0, 4.0, 5.0, 20.0)] == [
+        "", "", r"$5\times10^{0}$", r"$2\times10^{1}$"]
+    ax.set_xlim(15.0, 22.0)  # a short axis: every minor tick
+    assert label(17.0) == r"$1.7\times10^{1}$"

@@ -19,14 +19,27 @@ CURVES = {"e_far": ("dry DEM: $e_{far}$", "C0"), "e_wet": ("resolved CFD-DEM: $e
 _RANGE_KEY = {"e_far": "e_for_dem_range", "e_wet": "e_for_cfd_dem_range"}
 
 
-def _curve(ax, ok, st, key):
-    """One e along the path, its sticking points open, its range a band where computed."""
+def _curve(ax, ok, st, key, thresholds=()):
+    """One e along the path, its sticking points open, its range a band where computed. No line
+    joins a sticking scene to a rebounding one: drawn straight, it showed e > 0 below the
+    threshold (e_far 0.07 at St 10 with St_c 11.04). The line through the rebounding scenes
+    starts at e = 0 at the bisected ``St_c`` where the path has one, and the line along 0 of the
+    sticking scenes ends there; without one, the two lines leave the bracket open."""
     label, colour = CURVES[key]
     e = np.array([float(getattr(r.collision, key)) for r in ok])
     if not np.isfinite(e).any():
         return
     stuck = e == 0.0
-    ax.plot(st, e, color=colour, lw=1.4, marker="o", ms=4, label=label)
+    st_c = [t.St_c for t in thresholds if t.key == key and t.St_c is not None]
+    zero_st, rise_st, rise_e = st[stuck], st[~stuck], e[~stuck]
+    if st_c:
+        zero_st = np.sort(np.append(zero_st[zero_st < st_c[0]], st_c[0]))
+        up = rise_st > st_c[0]
+        rise_st, rise_e = np.append(st_c[0], rise_st[up]), np.append(0.0, rise_e[up])
+    order = np.argsort(rise_st)  # a path may run down in St (--from above --to)
+    ax.plot(np.sort(zero_st), np.zeros(zero_st.size), color=colour, lw=1.4)
+    ax.plot(rise_st[order], rise_e[order], color=colour, lw=1.4, label=label)
+    ax.plot(st[~stuck], e[~stuck], ls="none", marker="o", ms=4, color=colour)
     ax.plot(st[stuck], e[stuck], ls="none", marker="o", ms=5, mfc="white", color=colour)
     spans = [r.answer.get(_RANGE_KEY[key]) for r in ok]
     if all(spans):
@@ -53,6 +66,23 @@ def _threshold(ax, ok, st, thresholds):
         if i > 0:
             ax.axvspan(st[i - 1], st[i], color="0.88", lw=0,
                        label=f"$e_{{wet}}$ threshold between St = {st[i - 1]:.3g} and {st[i]:.3g}")
+
+
+def _minor_labels(axis):
+    """A formatter of ``axis``'s (log) minor ticks: at 2 and 5 times a power of ten only where
+    the axis spans more than half a decade (matplotlib labelled 3, 4 and 6 too on a path of
+    about a decade, and ``3x10^0`` ran into ``4x10^0``), every one on a shorter axis."""
+    def label(x, _pos=None) -> str:
+        if not x > 0.0:
+            return ""
+        power = int(np.floor(np.log10(x) + 1e-9))
+        mantissa = x / 10.0 ** power
+        lo, hi = sorted(axis.get_view_interval())
+        wide = lo > 0.0 and np.log10(hi / lo) > 0.5
+        if wide and min(abs(mantissa - 2.0), abs(mantissa - 5.0)) > 1e-6:
+            return ""
+        return rf"${mantissa:.3g}\times10^{{{power}}}$"
+    return label
 
 
 def _loglog(x, lx, ly):
@@ -88,7 +118,7 @@ def plot_restitution(results, vary: str, out_dir, *, thresholds=(), title: str =
         fig = Figure(layout="constrained")
         ax = fig.subplots()
         for key in CURVES:
-            _curve(ax, ok, st, key)
+            _curve(ax, ok, st, key, thresholds)
         rough = [r.scene.stokes for r in ok if any(w.check == "roughness" for w in r.warnings)]
         if rough:
             ax.plot(rough, np.full(len(rough), 1.02), ls="none", marker="v", color="C3", ms=4,
@@ -96,6 +126,7 @@ def plot_restitution(results, vary: str, out_dir, *, thresholds=(), title: str =
                     label="roughness decides (validity warning)")
         _threshold(ax, ok, st, thresholds)
         ax.set_xscale("log")
+        ax.xaxis.set_minor_formatter(_minor_labels(ax.xaxis))
         ax.set_ylim(0.0, 1.0)
         ax.set_xlabel(r"Stokes number $St = m v_0 / (6 \pi \mu a^2)$ (at $x_0$)")
         ax.set_ylabel("restitution $e$ (open: sticks, $e = 0$)")
@@ -108,6 +139,7 @@ def plot_restitution(results, vary: str, out_dir, *, thresholds=(), title: str =
             sec = ax.secondary_xaxis("top", functions=(lambda s: _loglog(s, ls, lq),
                                                        lambda v: _loglog(v, lq, ls)))
             sec.set_xlabel(f"{q_label} [{unit}]")
+            sec.xaxis.set_minor_formatter(_minor_labels(sec.xaxis))
         ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=2, frameon=False)
         ax.set_title(title, fontsize=9)
         return save_figure(fig, out_dir, "restitution")
