@@ -436,8 +436,9 @@ def register(sub) -> None:
     p.add_argument("--to", dest="stop", type=float, default=10.0, help="last factor (default 10)")
     p.add_argument("--n", type=int, default=9, help="points, log-spaced (default 9)")
     p.add_argument("--out", default=None, help="also write the DEM export into this folder: "
-                   "the rows' CSV and JSON always, the fitted laws and snippets where 3 rows "
-                   "rebound (--for and --allow-invalid as in export-dem)")
+                   "the rows' CSV and JSON, the fitted laws and snippets where 3 rows rebound; "
+                   "nothing where every row of a group fails a validity check, unless "
+                   "--allow-invalid (--for and --allow-invalid as in export-dem)")
     p.add_argument("--plot", metavar="DIR", default=None,
                    help="write e against St and the path's v0 or radius, the sticking threshold "
                         "marked, as DIR/restitution.png and .pdf")
