@@ -131,7 +131,9 @@ def add_outer_flags(p) -> None:
 def cmd_run(args) -> int:
     from solver import collide
 
-    check_output_paths(args.save, args.plot)
+    from .plots import SCENE_FIGURES, figure_files
+
+    check_output_paths(args.save, args.plot, figure_files(SCENE_FIGURES))
     physics = physics_from_args(args)
     from .environment import compile_notice
 

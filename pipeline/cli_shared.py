@@ -203,9 +203,10 @@ def check_name_length(flag: str, value, siblings=()) -> None:
                             "choose a shorter name")
 
 
-def check_output_dir(flag: str, value: str | None) -> None:
+def check_output_dir(flag: str, value: str | None, files=()) -> None:
     """PathError, before any work, when the folder ``value`` of ``flag`` cannot be made or
-    written: empty, an existing file, a file among its parents, or a read-only parent."""
+    written: empty, an existing file, a file among its parents, or a read-only parent; or when
+    one of the ``files`` it will write there is taken by a folder (or a FIFO, a device)."""
     if value is None:
         return
     from pathlib import Path  # here: pathlib costs a third of ``ehd --help``'s start-up
@@ -222,6 +223,11 @@ def check_output_dir(flag: str, value: str | None) -> None:
     if not os.access(existing, os.W_OK | os.X_OK):
         raise PathError(f"{flag} {value}: {str(existing)!r} is not writable")
     probe_writable(flag, value, existing)
+    for name in files:
+        target = path / name
+        if os.path.lexists(target) and not target.is_file():
+            raise PathError(f"{flag} {value}: {name} is there and is not a file, where ehd "
+                            "writes one: move it away, or choose another folder")
 
 
 def probe_writable(flag: str, value: str, folder) -> None:
@@ -273,8 +279,9 @@ def saved_by_run(path: str) -> bool:
     return isinstance(attrs, dict) and attrs.get(SAVED_BY_KEY) == SAVED_BY
 
 
-def check_output_paths(save: str | None = None, plot: str | None = None) -> None:
-    """PathError, before any solve, when ``--save FILE`` or ``--plot DIR`` cannot be written:
+def check_output_paths(save: str | None = None, plot: str | None = None, figures=()) -> None:
+    """PathError, before any solve, when ``--save FILE`` or ``--plot DIR`` (with the file names
+    ``figures`` it will hold, ``check_output_dir``) cannot be written:
     a missing or read-only parent directory, or an existing path of the wrong kind (a ``.zarr``
     store and ``DIR`` are directories, a ``.nc`` file is a file), or an existing ``--save``
     path that ``ehd run --save`` did not write (``saved_by_run``: it is never replaced)."""
@@ -301,4 +308,4 @@ def check_output_paths(save: str | None = None, plot: str | None = None) -> None
             raise PathError(f"--save {save}: exists and is not the output of an earlier ehd run "
                             "--save (a sweep store, a link or someone else's files), so it is "
                             "not replaced: give a new path, or move it away yourself")
-    check_output_dir("--plot", plot)
+    check_output_dir("--plot", plot, figures)

@@ -606,6 +606,27 @@ def test_an_output_path_no_folder_can_be_made_in_is_exit_2_before_the_solve(caps
     assert "cannot write in" in line or "is not writable" in line, line
 
 
+@pytest.mark.parametrize("args, taken", [
+    (["run", "--St", "5", "--eps", "0.01", "--plot", "{out}"], "gap.png"),
+    (["scene", str(GLYCEROL), "--trajectory", "{tmp}/t.csv", "--plot", "{out}"],
+     "trajectory.pdf"),
+    (["restitution", str(EXAMPLE), "--plot", "{out}"], "restitution.png"),
+    (["export-dem", str(EXAMPLE), "--out", "{out}"], "restitution.csv"),
+    (["paper-figures", "--out", "{out}"], "fig02_kernel.png"),
+], ids=["run-plot", "scene-trajectory-plot", "restitution-plot", "export-dem-out",
+        "paper-figures"])
+def test_a_folder_where_a_figure_or_export_file_goes_is_exit_2_before_the_solve(
+        tmp_path, capsys, monkeypatch, args, taken):
+    """A folder named like a file ehd writes into --plot or --out was found only at the write,
+    exit 74 after the solve (the results printed first); now before it, one line."""
+    no_solve(monkeypatch)
+    (tmp_path / "out" / taken).mkdir(parents=True)
+    args = [a.format(out=tmp_path / "out", tmp=tmp_path) for a in args]
+    code, out, err = ehd(capsys, *args)
+    assert code == EXIT_USAGE and out == ""
+    one_error_line(err, f"{taken} is there and is not a file", "move it away")
+
+
 def test_scene_e_dry_without_roughness_is_exit_2(capsys, monkeypatch):
     from pipeline.scenes.commands import load_scene
 

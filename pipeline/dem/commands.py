@@ -63,6 +63,10 @@ def solve_path(scene, vary: str, factors, accuracy: str = "standard", progress=N
 MAX_POINTS = 10000
 
 
+# the files every export writes (export.export_files; its snippets' names come with its groups)
+EXPORT_FILES = ("restitution.csv", "restitution.json")
+
+
 def _check_points(n) -> None:
     from pipeline.cli import UsageError
 
@@ -235,7 +239,7 @@ def cmd_export_dem(args) -> int:
 
     _progress = progress_to_stderr("export-dem")
 
-    check_output_dir("--out", args.out)  # before any solve
+    check_output_dir("--out", args.out, EXPORT_FILES)  # before any solve
     check_accuracy(args.accuracy)
     fit_range = _fit_range(args)
     _check_kind(args.kind)
@@ -343,8 +347,10 @@ def cmd_restitution(args) -> int:
 
     _progress = progress_to_stderr("restitution")
 
-    check_output_dir("--out", args.out)  # before any solve
-    check_output_dir("--plot", args.plot)
+    from pipeline.plots import figure_files
+
+    check_output_dir("--out", args.out, EXPORT_FILES)  # before any solve
+    check_output_dir("--plot", args.plot, figure_files(("restitution",)))
     if args.range and not args.plot:
         raise UsageError("--range draws each e's range as a band on the figure: give --plot DIR "
                          "too")

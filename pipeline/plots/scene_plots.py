@@ -96,7 +96,8 @@ def _si_axis(ax, quantity: str, scales: dict | None, which: str = "y", span=None
 
 
 def save_figure(fig, out_dir, stem: str) -> list[Path]:
-    """Write ``stem.png`` and ``stem.pdf`` into ``out_dir`` (created) with fixed metadata."""
+    """Write ``stem.png`` and ``stem.pdf`` into ``out_dir`` (created) with fixed metadata (the
+    names ``pipeline.plots.figure_files`` gives, checked before the work)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = [out / f"{stem}.png", out / f"{stem}.pdf"]

@@ -290,8 +290,10 @@ def cmd_scene(args) -> int:
     except ValueError as exc:
         raise _usage_error(str(exc)) from None
     from ..cli_shared import check_output_paths
+    from ..plots import SCENE_FIGURES, figure_files
 
-    check_output_paths(plot=args.plot)
+    figures = SCENE_FIGURES + (("trajectory",) if trajectory_asked(args) else ())
+    check_output_paths(plot=args.plot, figures=figure_files(figures))
     if scene.stops_outside and not trajectory_asked(args):
         return _report_stopped(scene, args)
     try:
@@ -394,7 +396,10 @@ def cmd_paper_figures(args) -> int:
     from ..plots.paper_figures import paper_figures
     from ..writes import guarded_dir
 
-    check_output_dir("--out", args.out)
+    from ..plots.paper_figures import FIGURES
+    from ..plots import figure_files
+
+    check_output_dir("--out", args.out, figure_files(FIGURES))
     try:
         with guarded_dir(args.out, f"--out {args.out}"):
             paths = paper_figures(args.out, accuracy=args.accuracy)
