@@ -359,6 +359,17 @@ def test_units_parse_and_convert():
         to_si(True, visc, "mu")
 
 
+def test_quantities_take_a_prefix_from_atto_to_exa_only():
+    """``--v0 '1e-25 m/s'`` was shown as ``100 rm/s`` (pint's ronto): beyond the prefixes a
+    reader knows, the SI unit with a power of ten."""
+    from pipeline.scenes.units import format_quantity
+
+    assert format_quantity(2.5e-5, "m") == "25 µm"
+    assert format_quantity(1e-18, "m") == "1 am"
+    assert format_quantity(1e-25, "m/s") == "1×10⁻²⁵ m/s"
+    assert format_quantity(3e22, "Pa") == "3×10²² Pa"
+
+
 # ---- the command line -------------------------------------------------------------------------
 def write(tmp_path, text, name="scene.toml"):
     p = tmp_path / name

@@ -162,5 +162,7 @@ def format_quantity(value, unit: str, spec: str = ".4g") -> str:
         return str(value)
     if value == 0:
         return f"0 {unit}"
-    q = _registry().Quantity(value, unit).to_compact()
+    q = _registry().Quantity(value, unit)
+    if 1e-18 <= abs(value) < 1e21:  # atto to exa; beyond, the SI unit (not "100 rm/s")
+        q = q.to_compact()
     return format(q, f"{spec}~P")
