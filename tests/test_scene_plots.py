@@ -46,6 +46,10 @@ def test_plot_scene_writes_reproducible_files(tmp_path, fast_paper):
     stems = {p.stem for p in first}
     assert stems == {"gap", "deformation", "pressure", "motion", "energy"} | (
         {"dimple"} if c.dimple else set())
+    # the names a command checks in --plot before the solve (pipeline.plots) are these
+    from pipeline.plots import SCENE_FIGURES, figure_files
+
+    assert {p.name for p in first} <= set(figure_files(SCENE_FIGURES))
     for p, q in zip(first, second):
         assert p.stat().st_size > 10_000
         assert p.read_bytes() == q.read_bytes(), p.name  # no timestamps / versions in the files
@@ -73,6 +77,9 @@ def test_profile_and_dimple_rows(fast_paper):
 def test_paper_figures_writes_figures_2_to_11(tmp_path, fast_paper):
     paths = paper_figures(tmp_path, collisions=fast_paper)
     assert [p.stem for p in paths if p.suffix == ".png"] == list(FIGURES)
+    from pipeline.plots import figure_files  # what ehd paper-figures checks in --out first
+
+    assert sorted(p.name for p in paths) == sorted(figure_files(FIGURES))
     assert all(p.exists() and p.stat().st_size > 5_000 for p in paths)
 
 

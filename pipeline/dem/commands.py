@@ -347,10 +347,10 @@ def cmd_restitution(args) -> int:
 
     _progress = progress_to_stderr("restitution")
 
-    from pipeline.plots import figure_files
+    from pipeline.plots import RESTITUTION_FIGURE, figure_files
 
     check_output_dir("--out", args.out, EXPORT_FILES)  # before any solve
-    check_output_dir("--plot", args.plot, figure_files(("restitution",)))
+    check_output_dir("--plot", args.plot, figure_files((RESTITUTION_FIGURE,)))
     if args.range and not args.plot:
         raise UsageError("--range draws each e's range as a band on the figure: give --plot DIR "
                          "too")

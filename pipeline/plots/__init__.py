@@ -3,6 +3,8 @@
 # the figures ``scene_plots.plot_scene`` may write (``dimple`` only where a dimple forms); here,
 # not there, so that a command checks its output folder without importing matplotlib
 SCENE_FIGURES = ("gap", "deformation", "pressure", "motion", "energy", "dimple")
+RESTITUTION_FIGURE = "restitution"  # restitution_plot's, a path's e against St
+TRAJECTORY_FIGURE = "trajectory"  # trajectory_plot's, a released sphere's gap against time
 FIGURE_SUFFIXES = (".png", ".pdf")  # each figure's files (``scene_plots.save_figure``)
 
 

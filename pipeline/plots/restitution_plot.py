@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import RESTITUTION_FIGURE
+
 __all__ = ["plot_restitution"]
 
 
@@ -142,4 +144,4 @@ def plot_restitution(results, vary: str, out_dir, *, thresholds=(), title: str =
             sec.xaxis.set_minor_formatter(_minor_labels(sec.xaxis))
         ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=2, frameon=False)
         ax.set_title(title, fontsize=9)
-        return save_figure(fig, out_dir, "restitution")
+        return save_figure(fig, out_dir, RESTITUTION_FIGURE)

@@ -10,6 +10,7 @@ import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 
+from . import TRAJECTORY_FIGURE
 from .scene_plots import STYLE, save_figure
 
 __all__ = ["plot_trajectory", "trajectory_axes"]
@@ -52,4 +53,4 @@ def plot_trajectory(tr, out_dir, reading=None, title=None):
             text += f": e_observed = {reading['e_observed']:.3f}"
         ax.set_title(text)
         ax.legend(loc="upper right")
-        return save_figure(fig, out_dir, "trajectory")
+        return save_figure(fig, out_dir, TRAJECTORY_FIGURE)

@@ -290,9 +290,9 @@ def cmd_scene(args) -> int:
     except ValueError as exc:
         raise _usage_error(str(exc)) from None
     from ..cli_shared import check_output_paths
-    from ..plots import SCENE_FIGURES, figure_files
+    from ..plots import SCENE_FIGURES, TRAJECTORY_FIGURE, figure_files
 
-    figures = SCENE_FIGURES + (("trajectory",) if trajectory_asked(args) else ())
+    figures = SCENE_FIGURES + ((TRAJECTORY_FIGURE,) if trajectory_asked(args) else ())
     check_output_paths(plot=args.plot, figures=figure_files(figures))
     if scene.stops_outside and not trajectory_asked(args):
         return _report_stopped(scene, args)
