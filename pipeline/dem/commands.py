@@ -63,10 +63,6 @@ def solve_path(scene, vary: str, factors, accuracy: str = "standard", progress=N
 MAX_POINTS = 10000
 
 
-# the files every export writes (export.export_files; its snippets' names come with its groups)
-EXPORT_FILES = ("restitution.csv", "restitution.json")
-
-
 def _check_points(n) -> None:
     from pipeline.cli import UsageError
 
@@ -234,8 +230,8 @@ def cmd_export_dem(args) -> int:
     from pipeline.cli_shared import check_accuracy
 
     from .conventions import DEM_KINDS
-    from .export import (InvalidExport, export_files, progress_to_stderr, scene_rows, store_rows,
-                         write_files)
+    from .export import (EXPORT_FILES, InvalidExport, export_files, progress_to_stderr,
+                         scene_rows, store_rows, write_files)
 
     _progress = progress_to_stderr("export-dem")
 
@@ -343,7 +339,7 @@ def cmd_restitution(args) -> int:
     from pipeline.cli import UsageError, check_output_dir
     from pipeline.cli_shared import check_accuracy
 
-    from .export import progress_to_stderr, scene_path, scene_rows, write_export
+    from .export import EXPORT_FILES, progress_to_stderr, scene_path, scene_rows, write_export
 
     _progress = progress_to_stderr("restitution")
 

@@ -48,6 +48,8 @@ __all__ = ["CSV_FIELDS", "store_rows", "scene_rows", "scene_path", "PATHS", "app
            "PLACEHOLDERS", "ref_speed_ratio", "realised_physics", "validity", "snippet_header",
            "InvalidExport", "missing_e", "store_groups", "store_row", "check_stokes"]
 
+# the files every export writes (``export_files``; its snippets' names come with its groups)
+EXPORT_FILES = CSV_NAME, JSON_NAME = ("restitution.csv", "restitution.json")
 CSV_FIELDS = (
     "group", "geometry", "material1", "material2", "fluid", "radius1_m", "radius2_m",
     "density1_kg_m3", "density2_kg_m3", "youngs1_Pa", "youngs2_Pa", "poisson1", "poisson2",
@@ -667,8 +669,7 @@ def export_files(rows: list[dict], source: str, *, fit_range=None, density_ratio
             progress(f"group {name} ({k + 1}/{len(groups)}) {done}, "
                      f"{time.perf_counter() - t0:.1f} s")
     buf = _csv_text(rows)
-    return {"restitution.csv": buf,
-            "restitution.json": json.dumps(doc, indent=2, default=_json_default), **files}
+    return {CSV_NAME: buf, JSON_NAME: json.dumps(doc, indent=2, default=_json_default), **files}
 
 
 def _csv_text(rows) -> str:
