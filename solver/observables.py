@@ -244,7 +244,8 @@ OBSERVABLES = (
                "  approach speed at outer start /v0",
                scene=(SceneKey("outer_start_speed_m_per_s",
                                label="  approach speed at the outer start",
-                               outer=True, null="not computed (no outer flow)"),)),
+                               outer=True, null="none (no outer flow, or a release inside "
+                                                "the outer start)"),)),
     Observable("steps", "count", "accepted time steps of the coupled solve (a pair's: both)",
                "1", "steps", diagnostic=True),
     Observable("rejected_steps", "count",

@@ -312,6 +312,8 @@ def test_cli_trajectory_of_a_bouncing_sphere(tmp_path):
     # linear interpolation between two CSV rows (16 samples an integrator step, RTOL 1e-9)
     assert d["approach_speed_m_per_s"] == pytest.approx(
         u1 + (u2 - u1) * (1.5e-3 - g1) / (g2 - g1), rel=1e-6)
+    # and so is the results' row under e_far, which had kept the outer flow's map of v0
+    assert d["outer_start_speed_m_per_s"] == d["approach_speed_m_per_s"]
 
 
 def test_report_lines_of_a_trajectory():
@@ -334,9 +336,13 @@ def test_the_speeds_line_of_a_trajectory_says_the_release_set_them():
     trajectory, and the trajectory's line the speed the scene gave, which the release replaces."""
     import dataclasses
 
+    from types import SimpleNamespace
+
     from pipeline.scenes.answer import answer_lines
-    from pipeline.scenes.commands import load_scene
-    from pipeline.scenes.trajectory import ON_TRAJECTORY, trajectory_summary
+    from pipeline.scenes.commands import _si_text, load_scene
+    from pipeline.scenes.run import scene_keys
+    from pipeline.scenes.trajectory import (ON_TRAJECTORY, approach_on_trajectory,
+                                            trajectory_summary)
 
     d = {"verdict": None, "approach_speed_m_per_s": 0.01077, "outer_start_over_a": 1.0,
          "x0_over_a": 0.01, "inputs": {"approach_speed_source": ON_TRAJECTORY,
@@ -347,6 +353,14 @@ def test_the_speeds_line_of_a_trajectory_says_the_release_set_them():
     d["approach_speed_m_per_s"] = None  # released inside the outer start
     assert "approach - (released inside the outer start 1 a)" in answer_lines(d)[-1]
     scene = load_scene(GLYCEROL, None)
+    # nor has the results' row a speed there (it had kept the outer flow's map of v0, 2.9 m/s)
+    inside = SimpleNamespace(phases={"near_field": 2}, gap=np.array([7.5e-4, 1e-4, 1.5e-5]),
+                             speed=np.array([-0.01, -0.005, -2.2e-4]))
+    row = {"outer_start_speed_m_per_s": 2.893, "inputs": {}}
+    approach_on_trajectory(row, inside, scene)
+    assert row["outer_start_speed_m_per_s"] is None and row["approach_speed_m_per_s"] is None
+    key = next(k for _, k in scene_keys() if k.key == "outer_start_speed_m_per_s")
+    assert "a release inside the outer start" in _si_text(None, key)
     read = {"release_gap_m": 0.015, "release_speed_m_per_s": 0.0228,
             "release_speed_is_settling": True, "drag_law": "stokes",
             "arrival_speed_m_per_s": 2.236e-4, "e_observed": None,

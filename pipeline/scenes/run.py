@@ -121,6 +121,8 @@ class SceneResult:
             return v if math.isfinite(v) else None
 
         si = {k.key: si_value(o, k, s, c, self.outer) for o, k in scene_keys()}
+        if s.settling_outer_start_speed is not None:  # gravity drives the approach
+            si["outer_start_speed_m_per_s"] = s.settling_outer_start_speed
         out = {
             "title": s.title, **self.answer,
             # the speed at the outer start: given, or what arrives at x0 with v0
@@ -198,7 +200,9 @@ def stopped_result(scene: Scene, ranges: bool = True) -> dict:
         v_r=0.0, e_wet=0.0, e_far=0.0, x_ref_m=scene.x_ref_distance,
         x_ref_over_a=scene.x_ref_distance / a, outer_start_m=scene.outer_start_distance,
         outer_start_over_a=scene.outer_start_distance / a,
-        outer_start_speed_m_per_s=scene.approach_speed, outer_geometry=scene.outer_geometry,
+        outer_start_speed_m_per_s=(scene.approach_speed if scene.settling_outer_start_speed is None
+                                   else scene.settling_outer_start_speed),
+        outer_geometry=scene.outer_geometry,
         density_ratio=scene.density_ratio, sensitivity={}, warnings=[], notes=[])
     return out
 

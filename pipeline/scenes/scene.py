@@ -126,6 +126,9 @@ class Scene:
     approach_speed: float | None = None
     # how the approach speed was set: "given", or "settling (<law> drag, from 10 a)"
     approach_speed_source: str = ""
+    # a settling approach's speed [m/s] at the outer start, on its motion with gravity
+    # (trajectory.settling_arrival); None: the approach is the outer flow's alone
+    settling_outer_start_speed: float | None = None
 
     def __post_init__(self):
         # a forced law the fluid has no constants for is refused here, before anything is solved

@@ -364,8 +364,9 @@ def at_settling(scene: Scene) -> Scene:
 
     from .trajectory import DEFAULT_RELEASE_GAP_OVER_A, settling_arrival
 
-    terminal, v0, law = settling_arrival(dataclasses.replace(scene, v0=1.0))
+    terminal, v0, at_start, law = settling_arrival(dataclasses.replace(scene, v0=1.0))
     return dataclasses.replace(scene, v0=v0, approach_speed=terminal,
+                               settling_outer_start_speed=at_start,
                                approach_speed_source=f"settling ({law} drag, from "
                                                      f"{DEFAULT_RELEASE_GAP_OVER_A:g} a)")
 

@@ -106,25 +106,37 @@ def auto_drag_law(scene, speed=None) -> str:
 
 
 def settling_arrival(scene) -> tuple:
-    """``(terminal speed, speed at x0 [m/s], drag law)`` of body 1 settling onto body 2: released
-    at ``DEFAULT_RELEASE_GAP_OVER_A a`` with the drag law's terminal speed, followed with
-    gravity, buoyancy, the added mass and the drag joined to the exact Stokes resistance
-    (solver/trajectory.py) down to ``x0``; 0 at x0 when it stops before (a sphere lighter than
-    the fluid rises: refused). An overdamped sphere (``QUASI_STEADY_BELOW``) arrives with the
-    speed at which the drag at ``x0`` balances its weight."""
-    from solver.trajectory import motion
-
+    """``(terminal speed, speed at x0, speed at the outer start [m/s], drag law)`` of body 1
+    settling onto body 2: released at ``DEFAULT_RELEASE_GAP_OVER_A a`` with the drag law's
+    terminal speed, followed with gravity, buoyancy, the added mass and the drag joined to the
+    exact Stokes resistance (solver/trajectory.py) down to ``x0``; 0 where it stops before (a
+    sphere lighter than the fluid rises: refused). An overdamped sphere (``QUASI_STEADY_BELOW``)
+    moves at the speed at which the drag balances its weight. The speed at the outer start is
+    the settling motion's (beyond the release: the terminal speed), not the outer flow's map of
+    ``v0``, which knows no gravity (a steel ball settling in glycerol at 23 mm/s read 2.9 m/s)."""
     law = auto_drag_law(scene)
     outer = _outer(scene, law)
     terminal = _terminal(outer)
     if not terminal > 0.0:
         raise SceneError("approach_speed = 'settling' needs body1 denser than the fluid (it "
                          "would rise, not settle): give the approach speed itself")
-    if scene.stokes_of(terminal) < QUASI_STEADY_BELOW:
-        return terminal, _balance_speed(outer, scene.x0, terminal), law
-    _, x, u, _, ended = motion(outer, DEFAULT_RELEASE_GAP_OVER_A * scene.reduced_radius,
-                               -terminal, until_gap=scene.x0)
-    return terminal, (abs(float(u[-1])) if ended == "gap" else 0.0), law
+    release = DEFAULT_RELEASE_GAP_OVER_A * scene.reduced_radius
+    overdamped = scene.stokes_of(terminal) < QUASI_STEADY_BELOW
+    start = scene.outer_start_distance
+    return (terminal, _settled_to(outer, release, terminal, scene.x0, overdamped),
+            terminal if start >= release else
+            _settled_to(outer, release, terminal, start, overdamped), law)
+
+
+def _settled_to(outer, release: float, terminal: float, gap: float, overdamped: bool) -> float:
+    """The speed [m/s] of a sphere released at ``release`` with its terminal speed when the gap
+    comes down to ``gap``; 0 where it stops before."""
+    from solver.trajectory import motion
+
+    if overdamped:
+        return _balance_speed(outer, gap, terminal)
+    _, _, u, _, ended = motion(outer, release, -terminal, until_gap=gap)
+    return abs(float(u[-1])) if ended == "gap" else 0.0
 
 
 # Below this Stokes number of the terminal speed a settling sphere is overdamped: its inertia
@@ -206,9 +218,12 @@ ON_TRAJECTORY = "the released trajectory"
 
 def approach_on_trajectory(d: dict, tr, scene) -> None:
     """Set the approach speed of ``ehd scene``'s JSON object ``d`` (``approach_speed_m_per_s``,
-    the speed at the outer start, and its source) to the released trajectory ``tr``'s."""
+    the speed at the outer start, with its source, and the results' ``outer_start_speed_m_per_s``)
+    to the released trajectory ``tr``'s."""
     d["approach_speed_m_per_s"] = _speed_at(tr, scene.outer_start_distance)
     d["inputs"]["approach_speed_source"] = ON_TRAJECTORY
+    if "outer_start_speed_m_per_s" in d:  # the results' row, not the outer flow's map of v0
+        d["outer_start_speed_m_per_s"] = d["approach_speed_m_per_s"]
 
 
 def _speed_at(tr, gap: float) -> float | None:
