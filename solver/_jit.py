@@ -29,6 +29,9 @@
 - ``hook``: ``jit`` with numba's ``inline="always"``, for the film contract's small answers on
   the loop's path: inlined, they cost their callers no reference counts (docs/solver.md,
   "Reference counting"), and the cold compile fell with them (0.91x, 3 alternated rounds).
+  numba binds an inlined hook's parameters by copying its caller's variables, a count for
+  each array or record, which LLVM's pruning leaves where the hook branches on a piece:
+  ``_BindingsForwarded`` reads the caller's variables in their place.
 - ``leaf``: ``jit`` compiled without numba's reference counting, for the functions called once
   per face or cell that read arrays and return numbers (the liquid's laws, the face flux):
   inlined instead, their bindings of ``phys`` were still counted in every call.
@@ -84,10 +87,11 @@ from pathlib import Path
 import llvmlite.binding as llvm
 import numba
 import numpy as np
-from numba.core import codegen, compiler, environment, registry, typed_passes
+from numba.core import (codegen, compiler, environment, ir, ir_utils, registry, typed_passes,
+                        untyped_passes)
 from numba.core import dispatcher as numba_dispatcher
 from numba.core.caching import FunctionCache
-from numba.core.compiler_machinery import AnalysisPass, register_pass
+from numba.core.compiler_machinery import AnalysisPass, FunctionPass, register_pass
 from numba.core.runtime import rtsys
 from numba.extending import overload
 
@@ -460,14 +464,85 @@ class _CalledFromCompiledCode(AnalysisPass):
         return False
 
 
+@register_pass(mutates_CFG=False, analysis_only=False)
+class _BindingsForwarded(FunctionPass):
+    """After numba has inlined the hooks (``hook``): each use of a variable that is only ever a
+    copy of another is a use of that other one. numba binds an inlined function's parameters
+    by copying its caller's variables (``param = var``), and lowers each copy of an array or a
+    record as a reference count (an increment, a decrement after the last use). In the loop
+    with every piece a hook's test of ``phys`` puts the two in different blocks, where LLVM's
+    pruning of reference counts leaves them (docs/solver.md, "Reference counting").
+
+    A copy ``t = s`` is forwarded where ``t`` has no other assignment, ``s`` has one that comes
+    before the copy on every path (dominates it), and the copy comes before every use of ``t``:
+    then ``s`` still holds the copied value at each use, since a path that assigned ``s`` again
+    after the copy passes the copy again before the use. A value carried from one iteration of
+    a loop to the next (``t`` assigned before the loop too) stays a copy."""
+
+    _name = "ehd_bindings_forwarded"
+
+    def __init__(self):
+        FunctionPass.__init__(self)
+
+    def run_pass(self, state):
+        blocks = state.func_ir.blocks
+        assigned, read = _assignments_and_reads(blocks)
+        dominators = ir_utils.compute_cfg_from_blocks(blocks).dominators()
+
+        def before(first, then):  # position ``first`` comes before ``then`` on every path
+            return (then[1] > first[1] if then[0] == first[0]
+                    else first[0] in dominators[then[0]])
+
+        forwarded = {}
+        for label, block in blocks.items():
+            for i, stmt in enumerate(block.body):
+                if not (isinstance(stmt, ir.Assign) and isinstance(stmt.value, ir.Var)):
+                    continue
+                copy, source = stmt.target.name, stmt.value.name
+                if (copy != source and len(assigned[copy]) == 1
+                        and len(assigned.get(source, ())) == 1
+                        and before(assigned[source][0], (label, i))
+                        and all(before((label, i), at) for at in read.get(copy, ()))):
+                    forwarded[copy] = source
+        if not forwarded:
+            return False
+        ir_utils.replace_var_names(blocks, forwarded)  # the copies become ``s = s``: dropped
+        for block in blocks.values():
+            block.body = [stmt for stmt in block.body if not (
+                isinstance(stmt, ir.Assign) and isinstance(stmt.value, ir.Var)
+                and stmt.target.name == stmt.value.name)]
+        state.func_ir._definitions = ir_utils.build_definitions(blocks)
+        return True
+
+
+def _assignments_and_reads(blocks) -> tuple[dict, dict]:
+    """``({name: [(block label, statement index), ...]}, same)``: where each variable of a
+    function's IR is assigned, and where it is read."""
+    assigned, read = {}, {}
+    for label, block in blocks.items():
+        for i, stmt in enumerate(block.body):
+            if not isinstance(stmt, ir.Assign):
+                used = stmt.list_vars()
+            elif isinstance(stmt.value, ir.Var):
+                used = [stmt.value]
+            else:
+                used = stmt.value.list_vars() if isinstance(stmt.value, ir.Expr) else []
+            for var in used:
+                read.setdefault(var.name, []).append((label, i))
+            if isinstance(stmt, ir.Assign):
+                assigned.setdefault(stmt.target.name, []).append((label, i))
+    return assigned, read
+
+
 class _Compiler(compiler.CompilerBase):
-    """numba's nopython pipeline with ``_InnerLibrary`` before the lowering (and
-    ``_CalledFromCompiledCode`` after it)."""
+    """numba's nopython pipeline with ``_BindingsForwarded`` after the inlining,
+    ``_InnerLibrary`` before the lowering (and ``_CalledFromCompiledCode`` after it)."""
 
     _library_pass = _InnerLibrary
 
     def define_pipelines(self):
         pipeline = compiler.DefaultPassBuilder.define_nopython_pipeline(self.state)
+        pipeline.add_pass_after(_BindingsForwarded, untyped_passes.InlineInlinables)
         pipeline.add_pass_after(self._library_pass, typed_passes.AnnotateTypes)
         pipeline.add_pass_after(_CalledFromCompiledCode, typed_passes.NativeLowering)
         pipeline.finalize()

@@ -1,7 +1,7 @@
 """The time loop compiled for the pieces of physics a scene asks for.
 
 ``stepper`` as imported holds every piece's code (model/kind.py), and compiling it cold takes
-18.8-20.4 s of CPU where the classic film's own code takes 11.4 s (benchmarks/compile.md).
+17.9-18.2 s of CPU where the classic film's own code takes 11.0 s (benchmarks/compile.md).
 ``loop_for`` hands out a copy of the loop compiled for the pieces the physics asks for alone:
 the modules that read model/kind.py's ``*_CODE`` constants, and every one between them and the
 loop's entry (``_COPIED``), loaded anew under a package of their own (``solver._loop_<pieces>``,
@@ -15,7 +15,7 @@ numba names a cached kernel by its source file and function, which the copies sh
 loaded once per process, when a scene first asks for its pieces. Only the classic film gets a
 copy (``MOST_PIECES`` = 0); a physics with any piece runs ``stepper`` itself, which holds every
 piece. Each copy compiles apart: a copy per piece alone (solver 1.16.0) took 13.6-14.8 s each
-against 18.8-20.4 s for the loop with every piece once, so a sweep or a process that met two
+against 18.8-20.4 s for the loop with every piece once (in one run), so a sweep or a process that met two
 pieces compiled more than it saved, and a fresh clone's ``.ci/run`` met the classic film, each
 piece and the combinations (1.16.1, docs/solver.md "Compiled code").
 """
