@@ -73,6 +73,7 @@
   own loader runs unchanged.
 """
 
+import collections
 import functools
 import hashlib
 import inspect
@@ -466,18 +467,21 @@ class _CalledFromCompiledCode(AnalysisPass):
 
 @register_pass(mutates_CFG=False, analysis_only=False)
 class _BindingsForwarded(FunctionPass):
-    """After numba has inlined the hooks (``hook``): each use of a variable that is only ever a
-    copy of another is a use of that other one. numba binds an inlined function's parameters
-    by copying its caller's variables (``param = var``), and lowers each copy of an array or a
-    record as a reference count (an increment, a decrement after the last use). In the loop
-    with every piece a hook's test of ``phys`` puts the two in different blocks, where LLVM's
-    pruning of reference counts leaves them (docs/solver.md, "Reference counting").
+    """After numba has inlined the hooks (``hook``) and unrolled its literal loops: each use of
+    a variable that is only ever a copy of another is a use of that other one. numba binds an
+    inlined function's parameters by copying its caller's variables (``param = var``), and
+    lowers each copy of an array or a record as a reference count (an increment, a decrement
+    after the last use). In the loop with every piece a hook's test of ``phys`` puts the two in
+    different blocks, where LLVM's pruning of reference counts leaves them (docs/solver.md,
+    "Reference counting").
 
     A copy ``t = s`` is forwarded where ``t`` has no other assignment, ``s`` has one that comes
     before the copy on every path (dominates it), and the copy comes before every use of ``t``:
     then ``s`` still holds the copied value at each use, since a path that assigned ``s`` again
     after the copy passes the copy again before the use. A value carried from one iteration of
-    a loop to the next (``t`` assigned before the loop too) stays a copy."""
+    a loop to the next (``t`` assigned before the loop too) stays a copy. So does a variable
+    with a declared type (numba's ``locals``), and one that numba's renaming would miss in a
+    statement (a ``print(*t)``'s argument)."""
 
     _name = "ehd_bindings_forwarded"
 
@@ -486,7 +490,8 @@ class _BindingsForwarded(FunctionPass):
 
     def run_pass(self, state):
         blocks = state.func_ir.blocks
-        assigned, read = _assignments_and_reads(blocks)
+        assigned, read, kept = _assignments_and_reads(blocks)
+        kept |= set(state.locals or ())
         dominators = ir_utils.compute_cfg_from_blocks(blocks).dominators()
 
         def before(first, then):  # position ``first`` comes before ``then`` on every path
@@ -499,8 +504,8 @@ class _BindingsForwarded(FunctionPass):
                 if not (isinstance(stmt, ir.Assign) and isinstance(stmt.value, ir.Var)):
                     continue
                 copy, source = stmt.target.name, stmt.value.name
-                if (copy != source and len(assigned[copy]) == 1
-                        and len(assigned.get(source, ())) == 1
+                if (copy != source and copy not in kept and source not in kept
+                        and len(assigned[copy]) == 1 and len(assigned.get(source, ())) == 1
                         and before(assigned[source][0], (label, i))
                         and all(before((label, i), at) for at in read.get(copy, ()))):
                     forwarded[copy] = source
@@ -515,34 +520,42 @@ class _BindingsForwarded(FunctionPass):
         return True
 
 
-def _assignments_and_reads(blocks) -> tuple[dict, dict]:
-    """``({name: [(block label, statement index), ...]}, same)``: where each variable of a
-    function's IR is assigned, and where it is read."""
-    assigned, read = {}, {}
+def _assignments_and_reads(blocks) -> tuple[dict, dict, set]:
+    """``({name: [(block label, statement index), ...]}, same, names)``: where each variable of
+    a function's IR is assigned, where it is read (every variable a statement holds but the one
+    it assigns), and the variables that numba's renaming (``ir_utils.visit_vars_stmt``) does not
+    reach in some statement."""
+    assigned, read, kept = {}, {}, set()
+
+    def visited(var, names):
+        names.append(var.name)
+        return var
+
     for label, block in blocks.items():
         for i, stmt in enumerate(block.body):
-            if not isinstance(stmt, ir.Assign):
-                used = stmt.list_vars()
-            elif isinstance(stmt.value, ir.Var):
-                used = [stmt.value]
-            else:
-                used = stmt.value.list_vars() if isinstance(stmt.value, ir.Expr) else []
-            for var in used:
-                read.setdefault(var.name, []).append((label, i))
-            if isinstance(stmt, ir.Assign):
-                assigned.setdefault(stmt.target.name, []).append((label, i))
-    return assigned, read
+            held = stmt.list_vars()
+            target = stmt.target if isinstance(stmt, ir.Assign) else None
+            for var in held:
+                if var is not target:
+                    read.setdefault(var.name, []).append((label, i))
+            if target is not None:
+                assigned.setdefault(target.name, []).append((label, i))
+            names = []
+            ir_utils.visit_vars_stmt(stmt, visited, names)
+            kept |= set(collections.Counter(var.name for var in held)
+                        - collections.Counter(names))
+    return assigned, read, kept
 
 
 class _Compiler(compiler.CompilerBase):
-    """numba's nopython pipeline with ``_BindingsForwarded`` after the inlining,
+    """numba's nopython pipeline with ``_BindingsForwarded`` after the inlining and unrolling,
     ``_InnerLibrary`` before the lowering (and ``_CalledFromCompiledCode`` after it)."""
 
     _library_pass = _InnerLibrary
 
     def define_pipelines(self):
         pipeline = compiler.DefaultPassBuilder.define_nopython_pipeline(self.state)
-        pipeline.add_pass_after(_BindingsForwarded, untyped_passes.InlineInlinables)
+        pipeline.add_pass_after(_BindingsForwarded, untyped_passes.LiteralUnroll)
         pipeline.add_pass_after(self._library_pass, typed_passes.AnnotateTypes)
         pipeline.add_pass_after(_CalledFromCompiledCode, typed_passes.NativeLowering)
         pipeline.finalize()

@@ -351,13 +351,61 @@ def test_a_copy_is_forwarded_only_where_it_holds_the_same_value():
             y = x
         return total + b[0]
 
-    state = SimpleNamespace(func_ir=compiler.run_frontend(carried))
+    state = SimpleNamespace(func_ir=compiler.run_frontend(carried), locals={})
     assert _jit._BindingsForwarded().run_pass(state)
     copies = {(s.target.name, s.value.name) for block in state.func_ir.blocks.values()
               for s in block.body if isinstance(s, ir.Assign) and isinstance(s.value, ir.Var)}
     assert ("b", "a") not in copies and ("y", "x") in copies
     a = np.array([1.0, 2.0, 4.0])
     assert _jit.jit(carried)(a) == carried(a) == 4.0
+
+
+def test_copies_a_generator_a_literal_unroll_a_print_or_a_declared_type_needs_stay(capfd):
+    """Four functions on which a review found the forwarding wrong (``_BindingsForwarded``):
+    ``yield t`` read ``s`` where the copy did not come first ([0, 1, 2, 3, 4]); numba's
+    ``literal_unroll`` lost the copies it substitutes the tuple's items in (102 instead of
+    30507); ``print(*t)`` kept ``t``, which numba's renaming misses there (a TypingError); and a
+    type declared for the copy (``locals``) was dropped (3.75 instead of 3). Each now gives
+    what Python, or numba's own pipeline, gives."""
+    import numba
+    from numba import literal_unroll
+
+    from solver import _jit
+
+    def gen(a):
+        for i in range(len(a)):
+            s = a[i]
+            if i % 2 == 0:
+                t = s
+            yield t
+
+    def unroll(n):
+        acc = 0
+        for v in literal_unroll((3, 5, n)):
+            acc = acc * 100 + v
+        return acc
+
+    def star_print(a, n):
+        t = (a, n)
+        u = t
+        print(*u)
+        return n
+
+    def declared(n):
+        s = n + 0.75
+        t = s
+        return t
+
+    def compiled(f, **flags):
+        return numba.njit(pipeline_class=_jit._Compiler, **flags)(f)
+
+    a = np.arange(5.0)
+    assert list(compiled(gen)(a)) == list(gen(a)) == [0.0, 0.0, 2.0, 2.0, 4.0]
+    assert compiled(unroll)(7) == unroll(7) == 30507
+    assert compiled(star_print)(np.arange(2.0), 3) == 3
+    assert capfd.readouterr().out.split() == ["[0.", "1.]", "3"]
+    assert compiled(declared, locals={"t": numba.int64})(3) == \
+        numba.njit(locals={"t": numba.int64})(declared)(3) == 3
 
 
 # A user's own numba functions that call the solver's inner compiled functions (linalg's LU,
