@@ -48,12 +48,12 @@ _NOTICED = set()  # the loops (solver/integration/kinds.py: compiled_pieces) alr
 
 def _loop_name(codes) -> str:
     """A loop (its pieces, ``kinds.compiled_pieces``) as the notice names it, with its cold
-    compile in CPU seconds on an idle core (benchmarks/compile.md: 11.0; 17.9-18.2): the
-    classic film's copy, or the loop with every piece, which any piece runs on
+    compile in CPU seconds (benchmarks/compile.md: 12.3; 19.7-20.3; a tenth less in a quieter
+    hour): the classic film's copy, or the loop with every piece, which any piece runs on
     (``kinds.MOST_PIECES`` is 0)."""
     if not codes:
         return "the loop for the classic film (about 11 s on an idle core)"
-    return "the loop for every piece of physics (about 18 s on an idle core)"
+    return "the loop for every piece of physics (about 20 s on an idle core)"
 
 
 def compile_notice(stream=None, physics=None) -> str | None:

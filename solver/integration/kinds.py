@@ -1,7 +1,7 @@
 """The time loop compiled for the pieces of physics a scene asks for.
 
 ``stepper`` as imported holds every piece's code (model/kind.py), and compiling it cold takes
-17.9-18.2 s of CPU where the classic film's own code takes 11.0 s (benchmarks/compile.md).
+18-20 s of CPU where the classic film's own code takes 11-12 s (benchmarks/compile.md).
 ``loop_for`` hands out a copy of the loop compiled for the pieces the physics asks for alone:
 the modules that read model/kind.py's ``*_CODE`` constants, and every one between them and the
 loop's entry (``_COPIED``), loaded anew under a package of their own (``solver._loop_<pieces>``,
