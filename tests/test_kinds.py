@@ -58,8 +58,8 @@ def test_a_copy_holds_the_pieces_asked_and_shares_the_rest_of_the_solver():
 @pytest.mark.parametrize("codes", list(PHYSICS))
 def test_the_classic_film_has_a_copy_and_any_piece_runs_the_loop_with_every_piece(codes):
     """Each copy compiles apart (13.6-14.8 s of CPU for a piece alone against 18.8-20.4 s for
-    the loop with every piece, in one run at 1.16.1), so only the classic film gets one; any piece runs the loop as imported,
-    which holds them all."""
+    the loop with every piece, in one run at 1.16.1), so only the classic film gets one; any
+    piece runs the loop as imported, which holds them all."""
     loop = kinds.loop_for(Physics(St=10.0, eps=1e-4, **PHYSICS[codes]).as_array())
     assert kinds.MOST_PIECES == 0
     if codes:

@@ -15,9 +15,9 @@ numba names a cached kernel by its source file and function, which the copies sh
 loaded once per process, when a scene first asks for its pieces. Only the classic film gets a
 copy (``MOST_PIECES`` = 0); a physics with any piece runs ``stepper`` itself, which holds every
 piece. Each copy compiles apart: a copy per piece alone (solver 1.16.0) took 13.6-14.8 s each
-against 18.8-20.4 s for the loop with every piece once (in one run), so a sweep or a process that met two
-pieces compiled more than it saved, and a fresh clone's ``.ci/run`` met the classic film, each
-piece and the combinations (1.16.1, docs/solver.md "Compiled code").
+against 18.8-20.4 s for the loop with every piece once (in one run), so a sweep or a process
+that met two pieces compiled more than it saved, and a fresh clone's ``.ci/run`` met the
+classic film, each piece and the combinations (1.16.1, docs/solver.md "Compiled code").
 """
 
 import importlib
