@@ -246,16 +246,28 @@ def _kirchhoff_errors(y_pred, y, err_fac, phys, perr, scale):
         scale[i] = kirchhoff_difference(0.0, y[i], phys)[0]
 
 
+# How many cells on either side of a cell that crossed a kink in time (``_kinks_in_time``) are
+# not smooth in time either: the kink reaches them through the fluxes and the solids, fading
+# with the distance, and the finer the grid and the tolerance, the more cells the error test
+# sees it in. In the rebound of Barus films the failing cell moved inwards with the tension
+# region's edge, beyond the one cell left out on either side (Barus beta 2, St 30, eps 1e-4,
+# fine: 247 rejected steps with one cell, 166 with 2, 93 with 3, 70 with 4; the classic film
+# 31), while X, V and the gap, which stay in the norm, moved the results by far less than the
+# presets' errors (docs/solver.md, Versions, 1.17.0).
+KINK_REACH = 3
+
+
 @leaf
 def _kinks_in_time(states, y, rtol, phys, perr):
     """``step_error``'s pressure errors ``perr`` to 0 at each cell whose pressure, over the
     ``states`` and ``y``, crossed a kink of the liquid's laws that departs from a smooth law by
-    more than ``rtol`` over that range (``liquid.kink_departure``), and at its two neighbours.
-    At a kink the viscosity's slope jumps, and with it the pressure's second derivative in time:
-    no order's predictor extrapolates across it, and the step's error test failed there at every
-    order (Barus beta 1, St 10, eps 1e-4, standard: 109 rejected steps, against the classic
-    film's 13, and 16 with these errors left out). A kink below ``rtol`` (beta 1e-9) cannot move
-    the error test: the film keeps the classic film's step decisions."""
+    more than ``rtol`` over that range (``liquid.kink_departure``), and at the ``KINK_REACH``
+    cells on either side. At a kink the viscosity's slope jumps, and with it the pressure's
+    second derivative in time: no order's predictor extrapolates across it, and the step's
+    error test failed there at every order (Barus beta 1, St 10, eps 1e-4, standard: 109
+    rejected steps, against the classic film's 13, and 16 with these errors left out). A kink
+    below ``rtol`` (beta 1e-9) cannot move the error test: the film keeps the classic film's
+    step decisions."""
     n = perr.size
     for i in range(n):
         lo, hi = y[i], y[i]
@@ -263,7 +275,7 @@ def _kinks_in_time(states, y, rtol, phys, perr):
             lo = min(lo, states[j, i])
             hi = max(hi, states[j, i])
         if kink_departure(lo, hi, phys) > rtol:
-            for c in range(max(0, i - 1), min(n, i + 2)):
+            for c in range(max(0, i - KINK_REACH), min(n, i + KINK_REACH + 1)):
                 perr[c] = 0.0
 
 
