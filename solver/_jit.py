@@ -481,7 +481,10 @@ class _BindingsForwarded(FunctionPass):
     after the copy passes the copy again before the use. A value carried from one iteration of
     a loop to the next (``t`` assigned before the loop too) stays a copy. So does a variable
     with a declared type (numba's ``locals``), and one that numba's renaming would miss in a
-    statement (a ``print(*t)``'s argument)."""
+    statement (a ``print(*t)``'s argument). numba's own copy propagation (``ir_utils.
+    copy_propagate``, the parallel accelerator's) reads the typed IR and leaves the copies in
+    place for a later dead-code pass; this one runs before the typing, so neither the typing
+    nor the lowering sees them."""
 
     _name = "ehd_bindings_forwarded"
 

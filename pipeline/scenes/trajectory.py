@@ -114,6 +114,8 @@ def settling_arrival(scene) -> tuple:
     moves at the speed at which the drag balances its weight. The speed at the outer start is
     the settling motion's (beyond the release: the terminal speed), not the outer flow's map of
     ``v0``, which knows no gravity (a steel ball settling in glycerol at 23 mm/s read 2.9 m/s)."""
+    from solver.trajectory import motion
+
     law = auto_drag_law(scene)
     outer = _outer(scene, law)
     terminal = _terminal(outer)
@@ -121,22 +123,14 @@ def settling_arrival(scene) -> tuple:
         raise SceneError("approach_speed = 'settling' needs body1 denser than the fluid (it "
                          "would rise, not settle): give the approach speed itself")
     release = DEFAULT_RELEASE_GAP_OVER_A * scene.reduced_radius
-    overdamped = scene.stokes_of(terminal) < QUASI_STEADY_BELOW
     start = scene.outer_start_distance
-    return (terminal, _settled_to(outer, release, terminal, scene.x0, overdamped),
-            terminal if start >= release else
-            _settled_to(outer, release, terminal, start, overdamped), law)
-
-
-def _settled_to(outer, release: float, terminal: float, gap: float, overdamped: bool) -> float:
-    """The speed [m/s] of a sphere released at ``release`` with its terminal speed when the gap
-    comes down to ``gap``; 0 where it stops before."""
-    from solver.trajectory import motion
-
-    if overdamped:
-        return _balance_speed(outer, gap, terminal)
-    _, _, u, _, ended = motion(outer, release, -terminal, until_gap=gap)
-    return abs(float(u[-1])) if ended == "gap" else 0.0
+    if scene.stokes_of(terminal) < QUASI_STEADY_BELOW:
+        return (terminal, _balance_speed(outer, scene.x0, terminal),
+                terminal if start >= release else _balance_speed(outer, start, terminal), law)
+    _, x, u, _, ended = motion(outer, release, -terminal, until_gap=scene.x0)
+    at_start = _approach_speed_where(x, -u, start)  # None: the outer start lies beyond the release
+    return (terminal, abs(float(u[-1])) if ended == "gap" else 0.0,
+            terminal if at_start is None else at_start, law)
 
 
 # Below this Stokes number of the terminal speed a settling sphere is overdamped: its inertia
@@ -222,8 +216,8 @@ def approach_on_trajectory(d: dict, tr, scene) -> None:
     to the released trajectory ``tr``'s."""
     d["approach_speed_m_per_s"] = _speed_at(tr, scene.outer_start_distance)
     d["inputs"]["approach_speed_source"] = ON_TRAJECTORY
-    if "outer_start_speed_m_per_s" in d:  # the results' row, not the outer flow's map of v0
-        d["outer_start_speed_m_per_s"] = d["approach_speed_m_per_s"]
+    # the results' row too, not the outer flow's map of v0
+    d["outer_start_speed_m_per_s"] = d["approach_speed_m_per_s"]
 
 
 def _speed_at(tr, gap: float) -> float | None:
@@ -231,11 +225,19 @@ def _speed_at(tr, gap: float) -> float | None:
     (None when it is released inside it): the speed at the outer start, in place of the one
     that would arrive at ``x0`` with ``v0`` through the outer flow alone, which knows neither
     the release nor gravity (a steel ball released at 23 mm/s read 2.9 m/s there)."""
+    end = tr.phases["near_field"]
+    return _approach_speed_where(tr.gap[:end], -tr.speed[:end], gap) if end else None
+
+
+def _approach_speed_where(gaps, speeds, gap: float) -> float | None:
+    """The speed [m/s] where an approach's ``gaps`` (falling, with its ``speeds``) come down to
+    ``gap``; None where it starts inside it. The samples are the integrator's own interpolant
+    at ``SUBSTEPS`` points a step (solver/trajectory.py), so a straight line between two is
+    close: 2.5e-8 of the speed an integration ended at the gap gives (a steel ball settling in
+    glycerol, at 1 a)."""
     import numpy as np
 
-    end = tr.phases["near_field"]
-    gaps, speeds = tr.gap[:end], -tr.speed[:end]
-    if end == 0 or gaps[0] < gap:
+    if gaps[0] < gap:
         return None
     # the approach's gap falls monotonically: interpolate in it, reversed to increase
     return float(np.interp(gap, gaps[::-1], speeds[::-1]))
