@@ -354,6 +354,21 @@ def test_jfo_returns_the_fluid_fraction_profiles():
     assert collide(Physics(St=10.0, eps=0.01, Pi=1e-3, cavitation="reynolds")).fluid_fraction is None
 
 
+def test_a_step_after_changes_of_the_set_expects_fewer_than_the_limit():
+    """``stepper._set_change_factor``: after an accepted step whose Newton met ``c`` changes of
+    the active set, the next step's expected changes (about ``f c``: the edge crosses cells at
+    a finite speed) stay below ``MAX_SET_CHANGES``, past which an attempt fails and is halved;
+    a step without changes is not bound."""
+    from solver.integration.stepper import MAX_SET_CHANGES, _set_change_factor
+
+    assert _set_change_factor(0) == np.inf
+    for c in range(1, 3 * MAX_SET_CHANGES):
+        f = _set_change_factor(c)
+        assert MAX_SET_CHANGES / 2 <= f * c < MAX_SET_CHANGES, c
+        assert f < _set_change_factor(c - 1)  # the more changes, the shorter the next step
+    assert _set_change_factor(MAX_SET_CHANGES - 1) == 1.0  # no growth from one short of it
+
+
 def test_a_cell_the_cavity_edge_crossed_leaves_the_gap_error_norm():
     """``cavity_step._edge_gaps``: the gap errors of a cell that cavitated or refilled in this
     step or fewer than ``degree`` accepted steps ago (the predictor's states), and of its two
