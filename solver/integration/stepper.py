@@ -14,7 +14,8 @@ The loop in parts, each a function of its own (in the spirit of SciPy's BDF, ``_
   (variable-step BDF of order ``k``, the variable-step BDF2 in closed form, ``_bdf2``; the first
   step is implicit Euler);
 - ``_predict``: the polynomial through the history at the new time, and the error factor;
-- ``_next_step``: the next step's size and, above order 2, its order (``_next_order``);
+- ``_next_step``: the next step's size (bound after changes of an active set:
+  ``_set_change_factor``) and, above order 2, its order (``_next_order``);
 - ``_newton``: a chord-Newton iteration whose LU is reused while ``b dt`` stays within 30 % of
   the factorised value; a stalled iteration first refreshes the Jacobian, then halves the step.
   With an active set, a converged iterate whose set would change goes on with the new set and
@@ -804,9 +805,10 @@ def _next_order(grid, phys, control, hist, dt, err, film, work):
 
 
 @jit
-def _next_step(grid, phys, control, hist, dt, err, film, work):
-    """After an accepted step of error ``err``: the next step's order into ``hist.order``, and
-    its size over this one's (``_step_factor``). Above order 2, once ``k + 1`` steps were taken
+def _next_step(grid, phys, control, hist, dt, err, set_changes, film, work):
+    """After an accepted step of error ``err`` whose Newton iteration met ``set_changes``
+    changes of the active set: the next step's order into ``hist.order``, and its size over this
+    one's (``_step_factor``, at most ``_set_change_factor``). Above order 2, once ``k + 1`` steps were taken
     at the order ``k``, ``_next_order`` chooses it again, and the choice (the same order or
     another) holds for ``k + 1`` steps, as SciPy's BDF does: checking after every step cost
     about one Newton iteration a step (two predictors and two error norms, each with an N x N
@@ -820,7 +822,7 @@ def _next_step(grid, phys, control, hist, dt, err, film, work):
         hist.order[0] = k
         hist.order[1] = -1
     hist.order[1] += 1
-    return _step_factor(err, k)
+    return min(_step_factor(err, k), _set_change_factor(set_changes))
 
 
 @jit
@@ -1081,8 +1083,7 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
             model.surface_gap(grid, phys, y0, film, w, h)
             continue
         k_step = min(hist.order[0], hist.n[0])
-        factor = min(_next_step(grid, phys, control, hist, dt, err, film, work),
-                     _set_change_factor(set_changes))
+        factor = _next_step(grid, phys, control, hist, dt, err, set_changes, film, work)
         _accept(grid, phys, hist, dt, film, work)
         control, factor = _control_from_now(control, hist, factor, film, phys)
         strain_new, diss_new = model.energies(grid, phys, y0, w, h, q, film)
