@@ -10,7 +10,7 @@ pressure (``split_update``); a Reynolds cavity's row is replaced by its constrai
 (``constrain_rows``).
 """
 
-from .._jit import copy_into, hook, jit
+from .._jit import copy_into, hook, jit, leaf
 from ..observables import SERIES_INDEX
 from ..physics import CAVITATION, PI, ST
 from .film import (JFO, cavity_edge, constrain, jfo_void, update_cavity, update_cavity_jfo,
@@ -63,21 +63,31 @@ def start_attempt(y, film, phys):
             y[i] = -phys[PI]
 
 
-@jit
+@hook
 def decide(p, res, film, phys):
     """Decide the iterate's active set from its film pressure ``p`` and residual ``res``: a JFO
     cavity from ``p`` and the liquid fractions (``film.update_cavity_jfo``; the set before is kept
     in ``active_was``), a Reynolds cavity from ``p`` and ``res`` (``film.update_cavity``). Returns
-    True when JFO slots switched, whose gap and rows must then be evaluated again."""
+    True when JFO slots switched, whose gap and rows must then be evaluated again. (A hook that
+    hands the record's arrays to a ``leaf``: as a ``jit`` function reading the record it made 17
+    of the 226 reference counts per Newton iteration of the loop with every piece;
+    docs/solver.md, "Reference counting".)"""
     cavity = film.cavity
+    return _decide(p, res, cavity.active, cavity.active_was, cavity.theta, phys)
+
+
+@leaf
+def _decide(p, res, active, active_was, theta, phys):
+    """``decide`` on the cavity's arrays."""
     if held(phys):
-        copy_into(cavity.active_was, cavity.active)
-        return update_cavity_jfo(p, cavity.theta, phys, cavity.active)
-    update_cavity(p, res, phys, cavity.active)
+        for i in range(active.size):
+            active_was[i] = active[i]
+        return update_cavity_jfo(p, theta, phys, active)
+    update_cavity(p, res, phys, active)
     return False
 
 
-@jit
+@hook
 def constrain_rows(p, res, film, phys):
     """Replace the rows of a Reynolds cavity's cells by their constraint (``film.constrain``);
     a JFO cavity's rows stay its conservation law."""
@@ -123,11 +133,12 @@ def error_in_time(film, phys, degree, perr, dh):
     if not on(phys):
         return False
     n = perr.size
-    not_smooth = _cavity_in_time(film.cavity, phys)
+    cavity = film.cavity
+    not_smooth = _cavity_in_time(cavity.r_edge, cavity.active, cavity.active0, phys)
     if not_smooth:
         for i in range(n):
             perr[i] = 0.0
-    if _refilled(film.cavity, phys):
+    if _refilled(cavity.active, cavity.active0, phys):
         for i in range(n):
             dh[i] = 0.0
     _edge_gaps(film.cavity, degree, dh)
@@ -151,35 +162,41 @@ def _edge_gaps(cavity, degree, dh):
                 dh[c] = 0.0
 
 
-@jit
+@hook
 def opened(film):
     """Whether the accepted state has a cavity."""
-    active0 = film.cavity.active0
-    for i in range(active0.size):
-        if active0[i]:
+    return _any(film.cavity.active0)
+
+
+@leaf
+def _any(cells):
+    """Whether any of the boolean ``cells`` is True."""
+    for i in range(cells.size):
+        if cells[i]:
             return True
     return False
 
 
-@jit
-def _refilled(cavity, phys):
-    """Whether a JFO cavity's cell refilled in this step (its pressure jumps: ``step_error``)."""
+@leaf
+def _refilled(active, active0, phys):
+    """Whether a JFO cavity's cell refilled in this step (its pressure jumps: ``step_error``),
+    from the cavity's sets of this step and of the accepted state."""
     refilled = False
     if held(phys):
-        active, active0 = cavity.active, cavity.active0
         for i in range(active.size):
             refilled = refilled or (active0[i] and not active[i])
     return refilled
 
 
-@jit
-def _cavity_in_time(cavity, phys):
+@leaf
+def _cavity_in_time(r_edge, active, active0, phys):
     """Whether the pressure is not smooth in time over this step (``step_error``): a cavity open
-    at its start or end, or a JFO cell that refilled in it."""
-    open_cavity = cavity.r_edge[0] > 0.0
-    for i in range(cavity.active.size):
-        open_cavity = open_cavity or cavity.active[i]
-    return open_cavity or _refilled(cavity, phys)
+    at its start (``r_edge[0]``, the accepted state's radius) or end (``active``), or a JFO cell
+    that refilled in it."""
+    open_cavity = r_edge[0] > 0.0
+    for i in range(active.size):
+        open_cavity = open_cavity or active[i]
+    return open_cavity or _refilled(active, active0, phys)
 
 
 @hook

@@ -125,7 +125,7 @@ def far_field_dissipation(x, s_last, p_last, h_last):
     return 6.0 * v_far * v_far * (1.0 / xs - x / (2.0 * xs * xs))
 
 
-@jit
+@leaf
 def cavitated(p, r_film, was_cavitated, phys):
     """Whether a cell is in the cavity under the Reynolds (Swift-Stieber) condition, the
     complementarity ``P + Pi >= 0``, ``r >= 0``, ``(P + Pi) r = 0`` (``r`` the cell's film-equation
@@ -140,7 +140,7 @@ def cavitated(p, r_film, was_cavitated, phys):
     return p + phys[PI] < 0.0
 
 
-@jit
+@leaf
 def cell_constraint(p, phys):
     """The row that replaces the film equation of a cavitated cell, ``P + Pi = 0``, and its
     derivative in ``P``."""
@@ -171,7 +171,7 @@ def compression_work(area, p, h, theta, phys):
     return 2.0 * total / (3.0 * phys[ST])
 
 
-@jit
+@leaf
 def jfo_cavitated(p, theta, was_cavitated, phys):
     """Whether a cell is in the cavity under the mass-conserving JFO / Elrod-Adams condition,
     ``(P + Pi)(1 - theta) = 0``, ``P >= -Pi``, ``theta <= 1``: a full cell cavitates when its
@@ -182,7 +182,7 @@ def jfo_cavitated(p, theta, was_cavitated, phys):
     return p + phys[PI] < 0.0
 
 
-@jit
+@leaf
 def cavity_edge(s, p, active, phys):
     """Radius of the outer edge of the cavity (0 without one). Outside a cavity edge ``s_c`` the
     film leaves the floor with zero slope, ``P + Pi ~ c (s - s_c)^2``, so ``sqrt(P + Pi)`` is
@@ -205,7 +205,7 @@ def cavity_edge(s, p, active, phys):
     return np.sqrt(2.0 * s_c)
 
 
-@jit
+@leaf
 def void_work(area, h_new, h_old, q_new, q_old, dt, active, phys):
     """Work done against the floor over a step, ``(2/(3 St)) Pi dV_void`` (relative to the initial
     kinetic energy; docs/model.md, "Energy"): the energy that goes into creating the void. The
@@ -221,7 +221,7 @@ def void_work(area, h_new, h_old, q_new, q_old, dt, active, phys):
     return 2.0 * phys[PI] * total / (3.0 * phys[ST])
 
 
-@jit
+@leaf
 def jfo_void(area, theta, h, active):
     """Void volume of a JFO film, ``sum_cav area (1 - theta) H``: the gap its cavitated cells'
     liquid does not fill. The film's discrete mass balance is exact, so the work against the floor
@@ -338,7 +338,7 @@ def residual(grid, phys, step, x, v, p, theta, h, q, res):
     res[n + 1] = v - step.v_hist + bh * film_force(grid.weight, p) / (3.0 * phys[ST])
 
 
-@jit
+@leaf
 def update_cavity(p, res, phys, active):
     """Update from the film rows ``res`` (before ``constrain``) which cells are cavitated, in
     ``active``; returns whether that changed."""
@@ -351,7 +351,7 @@ def update_cavity(p, res, phys, active):
     return changed
 
 
-@jit
+@leaf
 def update_cavity_jfo(p, theta, phys, active):
     """The JFO active set (``jfo_cavitated``) from the iterate's pressures and fractions, with
     the slot switch: a cell that cavitates starts at ``theta = 1`` with ``P = -Pi`` fixed; a cell
@@ -368,7 +368,7 @@ def update_cavity_jfo(p, theta, phys, active):
     return changed
 
 
-@jit
+@leaf
 def constrain(p, res, active, phys):
     """Replace the film rows of the cavitated cells by their constraint rows."""
     for i in range(active.size):

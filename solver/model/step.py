@@ -140,7 +140,7 @@ def smooth_in_time(phys):
     return not contact_step.on(phys)
 
 
-@jit
+@hook
 def smooth_from_now(film, phys):
     """Whether the solution stays smooth in time from the newest accepted state on: not once a
     cavity opened (its edge switches cell by cell, and where it refills only ``X`` and ``V``
