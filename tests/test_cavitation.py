@@ -354,6 +354,19 @@ def test_jfo_returns_the_fluid_fraction_profiles():
     assert collide(Physics(St=10.0, eps=0.01, Pi=1e-3, cavitation="reynolds")).fluid_fraction is None
 
 
+def test_a_jfo_film_refactorises_an_older_matrix_at_a_change_of_its_set():
+    """``step.refresh_at_set_change``: where a JFO cavity refills, a matrix factorised before the
+    step attempt and updated in the changed slots stalled Newton (its docstring has the counts);
+    a Reynolds film keeps the update, the classic film has no set."""
+    from solver.model.step import refresh_at_set_change
+
+    asked = {model: refresh_at_set_change(Physics(St=10.0, eps=1e-4, Pi=1e-3,
+                                                  cavitation=model).as_array())
+             for model in ("jfo", "reynolds")}
+    assert asked == {"jfo": True, "reynolds": False}
+    assert not refresh_at_set_change(Physics(St=10.0, eps=1e-4).as_array())
+
+
 def test_a_step_after_changes_of_the_set_expects_fewer_than_the_limit():
     """``stepper._set_change_factor``: after an accepted step whose Newton met ``c`` changes of
     the active set, the next step's expected changes (about ``f c``: the edge crosses cells at

@@ -358,12 +358,16 @@ def _factorise(grid, phys, bh, y, h, film, fac, work):
 
 
 @jit
-def _update_for_set(grid, phys, bh, y, h, film, fac, work):
+def _update_for_set(grid, phys, bh, y, h, film, fac, work, fresh):
     """After a change of the active set: the factorised matrix with the rows and columns of the
     slots that changed since it was factorised replaced by a fresh Jacobian's
     (linalg.lowrank_prepare), instead of a new factorisation; the other rows keep the factorised
     values (a chord iteration). False when more than ``MAX_SLOTS`` slots changed or the update is
-    singular: then the caller factorises afresh."""
+    singular, or when the matrix was factorised before this attempt (not ``fresh``) of a film
+    that refactorises it then (model/step.py: ``refresh_at_set_change``): then the caller
+    factorises afresh."""
+    if not fresh and model.refresh_at_set_change(phys):
+        return False
     model.step_jacobian(grid, phys, bh, y, h, film, fac.fresh, work.dres_dh)
     work.counters[JACOBIANS] += 1
     k = model.changed_slots(film, fac.slots)
@@ -471,7 +475,7 @@ def _newton(grid, phys, step, rtol, film, fac, work):
                     break
                 first = True
                 it = 1
-                if not _update_for_set(grid, phys, bh, y, h, film, fac, work):
+                if not _update_for_set(grid, phys, bh, y, h, film, fac, work, fresh):
                     _factorise(grid, phys, bh, y, h, film, fac, work)
                     fresh = True
                 if not fac.valid[0]:
