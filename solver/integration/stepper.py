@@ -816,9 +816,9 @@ def _next_step(grid, phys, control, hist, dt, err, set_changes, film, work):
     steps were taken at the order ``k``, ``_next_order`` chooses it again, and the choice (the
     same order or another) holds for ``k + 1`` steps, as SciPy's BDF does: checking after every
     step cost about one Newton iteration a step (two predictors and two error norms, each with
-    an N x N product): 0.77-0.79x the CPU time of a collision at order 5 with the same steps (standard
-    preset, 4 scenes St 2.5-100, one run of each after the other, not alternated). A film
-    whose solution is not smooth in time has ``max_order`` 2 (``_film_control``, and
+    an N x N product): 0.77-0.79x the CPU time of a collision at order 5 with the same steps
+    (standard preset, 4 scenes St 2.5-100, one run of each after the other, not alternated). A
+    film whose solution is not smooth in time has ``max_order`` 2 (``_film_control``, and
     ``_control_from_now`` from where it stops being so)."""
     k = hist.order[0]
     if control.max_order > 2 and hist.order[1] >= k + 1:

@@ -134,14 +134,16 @@ def error_in_time(film, phys, degree, perr, dh):
         return False
     n = perr.size
     cavity = film.cavity
-    not_smooth = _cavity_in_time(cavity.r_edge, cavity.active, cavity.active0, phys)
+    refilled = _refilled(cavity.active, cavity.active0, phys)
+    # a cavity open at the step's start (the accepted state's radius) or end, or a refill in it
+    not_smooth = cavity.r_edge[0] > 0.0 or _any(cavity.active) or refilled
     if not_smooth:
         for i in range(n):
             perr[i] = 0.0
-    if _refilled(cavity.active, cavity.active0, phys):
+    if refilled:
         for i in range(n):
             dh[i] = 0.0
-    _edge_gaps(film.cavity, degree, dh)
+    _edge_gaps(cavity, degree, dh)
     return not_smooth
 
 
@@ -188,17 +190,6 @@ def _refilled(active, active0, phys):
     return refilled
 
 
-@leaf
-def _cavity_in_time(r_edge, active, active0, phys):
-    """Whether the pressure is not smooth in time over this step (``step_error``): a cavity open
-    at its start (``r_edge[0]``, the accepted state's radius) or end (``active``), or a JFO cell
-    that refilled in it."""
-    open_cavity = r_edge[0] > 0.0
-    for i in range(active.size):
-        open_cavity = open_cavity or active[i]
-    return open_cavity or _refilled(active, active0, phys)
-
-
 @hook
 def record(row, grid, p, h, pmax, pmin, cavity, phys, floor_fraction):
     """The cavity's columns of the series row (radius and void volume; 0 for a film without a
@@ -227,10 +218,8 @@ def record(row, grid, p, h, pmax, pmin, cavity, phys, floor_fraction):
     if r_cav > 0.0:
         cavity.p_abs[0] = max(cavity.p_abs[0], floor_fraction * cavity.p_seen[0])
     r_event = r_cav
-    if jfo:
-        for i in range(active0.size):
-            if active0[i]:
-                r_event = max(r_event, 1e-300)
+    if jfo and _any(active0):
+        r_event = max(r_event, 1e-300)
     return r_event
 
 
