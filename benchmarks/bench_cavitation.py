@@ -3,7 +3,11 @@ preset, and the two cavitation models against each other.
 
 1. Speed: median wall time per collision (one core, compiled code warm) of the classic film and
    of both floor models at Pi = 1e-4 (the liquid scenes) and Pi = 1e-2, on the same scenes and
-   presets.
+   presets; and of the classic film with BDF2 throughout (``max_order=2``), the method a
+   cavitating film steps with once its first cavity opens (docs/solver.md, "Orders above 2"):
+   the ratio to it is at most the cost of the floor itself (the cavitating film takes the
+   orders above 2 until then), and the ratio to the classic film is about that cost times the
+   classic film's gain from the orders above 2.
 2. Accuracy: per scene, a reference from three resolutions beyond the presets (grid cells x2 and
    time tolerance /8 per level, as benchmarks/bench_accuracy.py), Richardson-extrapolated with
    the observed order; each preset's error against it.
@@ -48,13 +52,16 @@ def _physics(st, eps, pi, model):
 
 
 def timed(args):
-    st, eps, pi, model, preset = args
+    st, eps, pi, model, preset, max_order = args
     from solver import collide
 
-    collide(_physics(st, eps, pi, model), accuracy=preset, save_profiles=False)  # grid, compile
+    options = {} if max_order is None else {"max_order": max_order}
+    collide(_physics(st, eps, pi, model), accuracy=preset, save_profiles=False,
+            **options)  # grid, compile
     walls = []
     for _ in range(REPEATS):
-        c = collide(_physics(st, eps, pi, model), accuracy=preset, save_profiles=False)
+        c = collide(_physics(st, eps, pi, model), accuracy=preset, save_profiles=False,
+                    **options)
         walls.append(c.wall_s)
     return statistics.median(walls), c.status
 
@@ -87,10 +94,12 @@ def main():
     t0 = time.time()
     load_start = harness.load_now()
     with ProcessPoolExecutor(2) as pool:
-        pool.submit(timed, (5.0, 1e-2, 1e-4, "jfo", "fast")).result()  # compile once
-        speed_jobs = [(st, ep, pi, model, pr) for pr in PRESETS for pi in FLOORS
+        pool.submit(timed, (5.0, 1e-2, 1e-4, "jfo", "fast", None)).result()  # compile once
+        speed_jobs = [(st, ep, pi, model, pr, None) for pr in PRESETS for pi in FLOORS
                       for model in (MODELS if math.isfinite(pi) else ("off",))
                       for st, ep in SPEED_SCENES]
+        speed_jobs += [(st, ep, math.inf, "off", pr, 2) for pr in PRESETS
+                       for st, ep in SPEED_SCENES]
         speed = list(pool.map(timed, speed_jobs))
         cases = [(st, ep, pi, model) for st, ep, pi in ACCURACY_SCENES for model in MODELS]
         ref_jobs = [(*case, "fine", lv) for case in cases for lv in LEVELS]
@@ -98,9 +107,9 @@ def main():
         preset_jobs = [(*case, pr, {}) for case in cases for pr in PRESETS]
         presets = list(pool.map(solve, preset_jobs))
     res = {"speed": [], "accuracy": [], "seconds": 0.0}
-    for (st, ep, pi, model, pr), (wall, status) in zip(speed_jobs, speed):
-        res["speed"].append(dict(St=st, eps=ep, Pi=pi, model=model, preset=pr, wall_s=wall,
-                                 status=status))
+    for (st, ep, pi, model, pr, max_order), (wall, status) in zip(speed_jobs, speed):
+        res["speed"].append(dict(St=st, eps=ep, Pi=pi, model=model, preset=pr,
+                                 max_order=max_order, wall_s=wall, status=status))
     for k, (st, ep, pi, model) in enumerate(cases):
         levels = refs[3 * k: 3 * k + 3]
         row = dict(St=st, eps=ep, Pi=pi, model=model, reference={}, order={}, ref_error={},
@@ -127,15 +136,30 @@ def write_report(res):
              "| preset | classic | Reynolds Pi = 1e-2 | Reynolds Pi = 1e-4 | JFO Pi = 1e-2 | "
              "JFO Pi = 1e-4 | Reynolds / classic (Pi = 1e-4) | JFO / classic (Pi = 1e-4) |",
              "|---|---|---|---|---|---|---|---|"]
+    bdf2_rows = []
     for pr in PRESETS:
-        def med(pi, model):
+        def med(pi, model, max_order=None):
             return statistics.median(r["wall_s"] for r in res["speed"] if r["preset"] == pr
-                                     and r["Pi"] == pi and r["model"] == model)
+                                     and r["Pi"] == pi and r["model"] == model
+                                     and r.get("max_order") == max_order)
         c = med(math.inf, "off")
         lines.append(f"| {pr} | {c * 1e3:.1f} | {med(1e-2, 'reynolds') * 1e3:.1f} | "
                      f"{med(1e-4, 'reynolds') * 1e3:.1f} | {med(1e-2, 'jfo') * 1e3:.1f} | "
                      f"{med(1e-4, 'jfo') * 1e3:.1f} | {med(1e-4, 'reynolds') / c:.2f} | "
                      f"{med(1e-4, 'jfo') / c:.2f} |")
+        if any(r.get("max_order") == 2 for r in res["speed"]):
+            c2 = med(math.inf, "off", 2)
+            bdf2_rows.append(f"| {pr} | {c2 * 1e3:.1f} | {c2 / c:.2f} | "
+                             f"{med(1e-4, 'reynolds') / c2:.2f} | {med(1e-4, 'jfo') / c2:.2f} |")
+    if bdf2_rows:
+        lines += ["", "The classic film with BDF2 throughout (`max_order=2`), the method a "
+                  "cavitating film steps with from its first cavity on (docs/solver.md, \"Orders "
+                  "above 2\"). A cavitating film takes the orders above 2 until then, so its ratio "
+                  "to this film is at most the floor's own cost; its ratio to the classic film "
+                  "(above) is about that cost times the classic film's gain from the orders above 2.",
+                  "", "| preset | classic, BDF2 [ms] | classic BDF2 / classic | "
+                  "Reynolds / classic BDF2 (Pi = 1e-4) | JFO / classic BDF2 (Pi = 1e-4) |",
+                  "|---|---|---|---|---|", *bdf2_rows]
     bad = [r for r in res["speed"] if r["status"] != "ok"]
     lines += ["", f"Scenes: St in {{5, 10, 30, 100}} x eps in {{1e-2, 1e-6}}; "
               f"{len(bad)} of {len(res['speed'])} runs not ok.", "",

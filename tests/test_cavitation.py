@@ -103,6 +103,33 @@ def test_rigid_separation_force_and_cavity_converge_to_the_closed_form(key):
     assert edges[-1] < edges[0]
 
 
+@pytest.mark.parametrize("g", [float(g) for g in np.logspace(-14, np.log10(0.49), 41)]
+                         + [0.5 - d for d in (1e-3, 1e-6, 1e-9, 1e-12)])
+def test_cavity_fraction_solves_its_equation_from_any_start(g):
+    sigma = cavitation.cavity_fraction(g)
+    # the root to the rounding of f: its closed form loses up to 1e-13 of itself near sigma = 10
+    # (model/cavitation.py, _TOLERANCE), the series beyond is exact to a few ulps; 3e-13 of g
+    # leaves room for both, and a root off by 1e-12 relative misses it wherever f' ~ f/sigma
+    assert abs(cavitation._f(sigma) - g) <= 3e-13 * g + 1e-17, (g, sigma)
+    assert sigma > 0.0
+    # a start far either side (the departure's ODE passes the last root) ends at the same root:
+    # each stops within Newton's quadratic convergence of it (1e-16 relative) or on f's rounding
+    # (1e-15 relative in sigma near sigma = 10); 1e-13 is the brentq tolerance it replaced
+    for start in (sigma * 1e-3, sigma * 0.999, sigma * 1.001, sigma * 1e3):
+        assert cavitation.cavity_fraction(g, start) == pytest.approx(sigma, rel=1e-13), start
+
+
+def test_cavity_fraction_falls_with_g_and_meets_its_limits():
+    g = np.logspace(-14, np.log10(0.4999), 400)
+    sigma = np.array([cavitation.cavity_fraction(float(x)) for x in g])
+    assert np.all(np.diff(sigma) < 0.0)  # f falls: the wider the cavity, the smaller g
+    # large sigma: f = 1/(6 sigma^2) - 1/(4 sigma^3) + ..., so sigma sqrt(6 g) = 1 - 3/(4 sigma)
+    # + O(sigma^-2); at g = 1e-14 (sigma 4e6) the O(sigma^-2) term is 1e-13, under abs 1e-12,
+    # and the correction 3/(4 sigma) = 1.8e-7 is resolved 1e5 times over
+    assert sigma[0] * math.sqrt(6.0 * g[0]) == pytest.approx(1.0 - 0.75 / sigma[0], abs=1e-12)
+    assert cavitation.cavity_fraction(0.5) == 0.0 and cavitation.cavity_fraction(0.0) == math.inf
+
+
 def test_onset_is_exactly_where_the_axis_tension_reaches_the_floor():
     x, u = 0.5, 1.0
     onset = 3.0 * u / x**2
