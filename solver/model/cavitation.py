@@ -34,38 +34,33 @@ _SERIES_FROM = 10.0  # sigma above which f is summed as a series (the closed for
 
 
 def _f(sigma):
-    """``f(sigma)`` of the module docstring; for large ``sigma`` (``e = 1/sigma``) the series
-    ``sum_{n>=2} (-1)^n e^n (1/2 - 1/(n+1))`` = ``e^2/6 - e^3/4 + 3 e^4/10 - ...``, which avoids the
-    cancellation of two terms near 1."""
+    """``f(sigma)`` of the module docstring (``_f_and_slope``)."""
+    return _f_and_slope(sigma)[0]
+
+
+def _f_and_slope(sigma):
+    """``f(sigma)`` of the module docstring and its slope in ``ln sigma``, ``sigma f'(sigma) =
+    sigma/(2 (1 + sigma)^2) + sigma/(1 + sigma) - sigma ln(1 + 1/sigma)`` (< 0), in one pass
+    (``cavity_fraction`` needs both at each iterate). For large ``sigma`` (``e = 1/sigma``) both
+    from the series ``f = sum_{n>=2} (-1)^n e^n (1/2 - 1/(n+1))`` = ``e^2/6 - e^3/4 + 3 e^4/10 -
+    ...`` (``sigma f' = -sum n (...)``), which avoids the cancellation of the closed form's terms
+    near 1."""
     if sigma <= 0.0:
-        return 0.5
+        return 0.5, 0.0
     if sigma <= _SERIES_FROM:
-        return (1.0 + 2.0 * sigma) / (2.0 * (1.0 + sigma)) - sigma * math.log1p(1.0 / sigma)
+        log_term = sigma * math.log1p(1.0 / sigma)
+        return ((1.0 + 2.0 * sigma) / (2.0 * (1.0 + sigma)) - log_term,
+                0.5 * sigma / (1.0 + sigma) ** 2 + sigma / (1.0 + sigma) - log_term)
     e = 1.0 / sigma
-    total, power = 0.0, e
+    total, slope, power = 0.0, 0.0, e
     for n in range(2, 40):  # e <= 0.1: the terms fall 10x each, 40 reach 1e-38 relative
         power *= e
         term = (-1) ** n * power * (0.5 - 1.0 / (n + 1))
         total += term
+        slope -= n * term
         if abs(term) < 1e-18 * abs(total):  # the rest is below the rounding of the sum
             break
-    return total
-
-
-def _df(sigma):
-    """``df/dsigma = 1/(2 (1 + sigma)^2) + 1/(1 + sigma) - ln(1 + 1/sigma)`` (< 0); for large
-    ``sigma`` from the series of ``_f``, whose terms the closed form would cancel."""
-    if sigma <= _SERIES_FROM:
-        return 0.5 / (1.0 + sigma) ** 2 + 1.0 / (1.0 + sigma) - math.log1p(1.0 / sigma)
-    e = 1.0 / sigma
-    total, power = 0.0, 1.0
-    for n in range(2, 40):  # d/de of the series, times de/dsigma = -e^2
-        power *= e
-        term = (-1) ** n * n * power * (0.5 - 1.0 / (n + 1))
-        total += term
-        if abs(term) < 1e-18 * abs(total):
-            break
-    return -e * e * total
+    return total, slope
 
 
 # ``cavity_fraction`` returns after a Newton step in ``ln sigma`` below _TOLERANCE (relative in
@@ -101,14 +96,15 @@ def cavity_fraction(g, start=0.0):
     if lo < start < hi:
         sigma = start
     for _ in range(_MAX_ITERATIONS):
-        value = _f(sigma) - g
+        value, slope = _f_and_slope(sigma)
+        value -= g
         if value > 0.0:
             lo = sigma
         elif value < 0.0:
             hi = sigma
         else:
             return sigma
-        step = value / (_df(sigma) * sigma)  # Newton in ln sigma: d f / d ln sigma = sigma f'
+        step = value / slope  # Newton in ln sigma
         if abs(step) <= _TOLERANCE:
             return sigma * math.exp(-step)
         if hi - lo <= _BRACKET * hi:
