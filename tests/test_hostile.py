@@ -541,10 +541,14 @@ def test_ctrl_c_is_exit_130_one_line_and_keeps_every_finished_scene(tmp_path, ca
     env = _fault_setup(tmp_path)
     err_path = tmp_path / "err.txt"
     with err_path.open("w") as err_file:
+        # SIGINT at its default, as in a terminal: a suite started in the background by a
+        # shell without job control (`cmd &`) ignores it, its children inherit that, Python then
+        # installs no KeyboardInterrupt handler, and the sweep ran to its end (exit 0)
         proc = subprocess.Popen([sys.executable, "slow.py", "sweep", "f.toml", "--executor",
                                  executor, "--workers", "2"], cwd=tmp_path, env=env,
                                 stdout=subprocess.DEVNULL, stderr=err_file,
-                                start_new_session=True)
+                                start_new_session=True,
+                                preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
         _wait_for(proc, tmp_path)  # a few scenes done
         os.killpg(proc.pid, signal.SIGINT)  # Ctrl-C reaches the whole process group
         proc.wait(timeout=60)
