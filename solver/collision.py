@@ -153,7 +153,8 @@ def scene_grid(stokes, x_switch, numerics: Numerics, width=0.0, reach=0.0):
 
 
 def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 1.0,
-            outer: far_field.OuterFlow | None = None, **overrides) -> Collision:
+            outer: far_field.OuterFlow | None = None, attempt_log: bool = False,
+            **overrides) -> Collision:
     """Solve one head-on collision of two elastic spheres across a viscous film.
 
     Parameters
@@ -174,6 +175,11 @@ def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 
         How ``e_far`` and ``v_outer_start`` read the result from far away (geometry, ``x0/a``,
         ``x_ref/a``, the outer start, the density ratio); default ``far_field.DEFAULT``. A reading,
         not physics: the near-field solve does not depend on it.
+    attempt_log : bool
+        Keep one entry per step attempt of the coupled phase in ``Collision.attempts`` (its
+        time, step, order, outcome, Newton iterations, error and the error's largest term with
+        its node; docs/solver.md, "The attempt log"): where a solve spends its steps. A
+        diagnostic: the results are the same to the bit.
     **overrides
         Any field of ``settings.Numerics`` (e.g. ``switch=0.005``, ``n_inner=64``).
 
@@ -197,7 +203,7 @@ def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 
         if head.rests:
             result = _rigid_only(physics, accuracy, numerics, head, x_ref_x0)
         else:
-            result = _coupled(physics, accuracy, numerics, head, x_ref_x0)
+            result = _coupled(physics, accuracy, numerics, head, x_ref_x0, attempt_log)
             if numerics.extrapolate and result.status == "ok":
                 _pair(result, head, x_ref_x0, outer)
         read_far(result, outer)
@@ -408,7 +414,12 @@ def include_rigid_peaks(result, head):
                 setattr(result, t_name, head["t_" + t_name[4:]] * tau_per_t)
 
 
-def _integrate(physics, numerics, head, shortcuts):
+# Rows of the attempt log (collide's ``attempt_log``): a collision takes at most a few thousand
+# attempts (Barus beta 10, fine: 7700 Newton iterations); later ones are not kept
+ATTEMPT_LOG_ROWS = 100_000
+
+
+def _integrate(physics, numerics, head, shortcuts, attempt_log=False):
     """The coupled phase's grid and time loop (integration/stepper.py) from the hand-over state
     ``head`` until the shortcuts' end event (a film that refills: until it is full again): the
     grid, then ``stepper.integrate``'s results."""
@@ -423,7 +434,7 @@ def _integrate(physics, numerics, head, shortcuts):
     time_scale = x_switch / max(v_switch, 1e-3) * min(1.0, stokes)
     _, stop_params = rigid.release_event(numerics.release, stokes, physics)
     phys = physics.as_array()
-    loop = kinds.loop_for(phys)  # compiled for the pieces this physics asks for
+    loop = kinds.loop_for(phys, attempt_log)  # compiled for the pieces this physics asks for
     return (grid,) + loop.integrate(
         grid.nodes(), phys,
         loop.Start(float(head.t), float(x_switch), float(v_switch), p_init,
@@ -431,7 +442,8 @@ def _integrate(physics, numerics, head, shortcuts):
         loop.Control(float(numerics.rtol), float(1e-3 * time_scale), float(1e-12 * time_scale),
                      int(numerics.max_steps), int(numerics.max_order),
                      float(numerics.high_order_rtol_factor)),
-        shortcuts.end_event, stop_params, numerics.save_profiles)
+        shortcuts.end_event, stop_params, numerics.save_profiles,
+        ATTEMPT_LOG_ROWS if attempt_log else 0)
 
 
 def _save_profiles(result, t_c, x_c, p_hist, w_hist, theta_hist):
@@ -445,11 +457,26 @@ def _save_profiles(result, t_c, x_c, p_hist, w_hist, theta_hist):
     result.profile_x = x_c
 
 
-def _coupled(physics, accuracy, numerics, head, x_ref_x0):
+def _attempts(log, tau_per_t):
+    """The attempt log's rows (stepper.LOG_COLUMNS) as ``Collision.attempts``: time and step in
+    ``tau``, the codes as their names."""
+    col = {name: log[:, k] for k, name in enumerate(stepper.LOG_COLUMNS)}
+    largest = np.array(("", *stepper.LARGEST_TERMS))
+    return {"tau": col["t"] * tau_per_t, "dtau": col["dt"] * tau_per_t,
+            "order": col["order"].astype(int),
+            "outcome": np.array(stepper.ATTEMPT_OUTCOMES)[col["outcome"].astype(int)],
+            "newton": col["newton"].astype(int), "fresh_matrix": col["fresh"] != 0.0,
+            "set_changes": col["set_changes"].astype(int), "error": col["error"],
+            "largest": largest[np.where(np.isnan(col["largest"]), 0, col["largest"] + 1)
+                               .astype(int)],
+            "cell": np.where(np.isnan(col["cell"]), -1, col["cell"]).astype(int)}
+
+
+def _coupled(physics, accuracy, numerics, head, x_ref_x0, attempt_log=False):
     stokes, x_start, tau_per_t = physics.St, physics.x_start, physics.tau_per_t
     shortcuts = plan(physics)
-    grid, code, counters, rows, p_hist, w_hist, theta_hist = _integrate(physics, numerics, head,
-                                                                        shortcuts)
+    grid, code, counters, rows, p_hist, w_hist, theta_hist, log = _integrate(
+        physics, numerics, head, shortcuts, attempt_log)
     name = next(k for k, (c, _) in STATUS.items() if c == code)
     message = STATUS[name][1]
     cols = {c.name: rows[:, k] for k, c in enumerate(SERIES)}
@@ -470,6 +497,8 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0):
         lu_factorizations=int(counters[stepper.LU]),
         higher_order_steps=int(counters[stepper.HIGHER_ORDER]),
         tau_handover=head.t * tau_per_t, radius=grid.radius, x_ref_x0=x_ref_x0)
+    if attempt_log:
+        result.attempts = _attempts(log, tau_per_t)
     if numerics.save_profiles:
         _save_profiles(result, t_c, x_c, p_hist, w_hist, theta_hist)
     if name != "ok":

@@ -207,6 +207,9 @@ def _fields():
         ("deformation", np.ndarray, field(**arrays)),  # (rows, N) W
         ("fluid_fraction", np.ndarray, field(**arrays)),  # (rows, N-1) theta of the cells, JFO
         ("profile_x", np.ndarray, field(**arrays)),  # (rows,) X at profile times
+        # the coupled phase's step attempts, one entry per attempt, when collide(...,
+        # attempt_log=True) asked (docs/solver.md, "The attempt log"); empty otherwise
+        ("attempts", dict, field(default_factory=dict, repr=False)),
     ]
 
 

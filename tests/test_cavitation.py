@@ -149,7 +149,7 @@ def _classic_on_the_loop_with_every_piece(monkeypatch):
     from solver.integration import kinds, stepper
 
     with monkeypatch.context() as m:
-        m.setattr(kinds, "loop_for", lambda phys: stepper)
+        m.setattr(kinds, "loop_for", lambda phys, log=False: stepper)
         return collide(Physics(St=10.0, eps=0.01))
 
 

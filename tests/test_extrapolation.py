@@ -97,10 +97,10 @@ def test_a_pair_whose_coarse_solve_raises_or_fails_keeps_the_finer_solve_and_say
     fine = collide(SCENE, extrapolate=False, save_profiles=False)
     original = collision._coupled
 
-    def coarse_raises(physics, accuracy, numerics, head, x_ref_x0):
+    def coarse_raises(physics, accuracy, numerics, head, x_ref_x0, attempt_log=False):
         if numerics.n_inner < fine.numerics.n_inner:
             raise FloatingPointError("a defect in the half grid")
-        return original(physics, accuracy, numerics, head, x_ref_x0)
+        return original(physics, accuracy, numerics, head, x_ref_x0, attempt_log)
 
     monkeypatch.setattr(collision, "_coupled", coarse_raises)
     kept = collide(SCENE, extrapolate=True, save_profiles=False)
@@ -109,8 +109,8 @@ def test_a_pair_whose_coarse_solve_raises_or_fails_keeps_the_finer_solve_and_say
     assert kept.message == ("not extrapolated: the half grid's solve raised FloatingPointError: "
                             "a defect in the half grid")
 
-    def coarse_fails(physics, accuracy, numerics, head, x_ref_x0):
-        result = original(physics, accuracy, numerics, head, x_ref_x0)
+    def coarse_fails(physics, accuracy, numerics, head, x_ref_x0, attempt_log=False):
+        result = original(physics, accuracy, numerics, head, x_ref_x0, attempt_log)
         if numerics.n_inner < fine.numerics.n_inner:
             result.status, result.message = "max_steps", "no time left"
         return result

@@ -72,7 +72,7 @@ def test_a_copy_refuses_a_physics_whose_code_it_lacks(monkeypatch):
     """The classic film's copy asked to run a cavitating film raises at its start (its hooks would
     answer as the classic film): ``loop_for`` never hands it one."""
     classic = kinds.loop_for(Physics(St=10.0, eps=1e-4).as_array())
-    monkeypatch.setattr(kinds, "loop_for", lambda phys: classic)
+    monkeypatch.setattr(kinds, "loop_for", lambda phys, log=False: classic)
     with pytest.raises(ValueError, match="lacks the code of a piece"):
         collide(Physics(St=10.0, eps=1e-4, Pi=1e-3, cavitation="jfo"), accuracy="fast")
 
@@ -87,7 +87,7 @@ def test_a_copy_gives_the_loop_with_every_piece_its_answer(monkeypatch):
     moves (e_wet 0 here without the floor, 0.265 with it)."""
     physics = Physics(St=10.0, eps=1e-4)
     own = collide(physics, accuracy="standard")
-    monkeypatch.setattr(kinds, "loop_for", lambda phys: stepper)
+    monkeypatch.setattr(kinds, "loop_for", lambda phys, log=False: stepper)
     general = collide(physics, accuracy="standard")
     assert own.status == general.status == "ok"
     for name in ("e_wet", "v_r", "h_m_x1", "ln_x_e_x1", "p_max"):

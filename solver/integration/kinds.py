@@ -18,6 +18,10 @@ piece. Each copy compiles apart: a copy per piece alone (solver 1.16.0) took 13.
 against 18.8-20.4 s for the loop with every piece once (in one run), so a sweep or a process
 that met two pieces compiled more than it saved, and a fresh clone's ``.ci/run`` met the
 classic film, each piece and the combinations (1.16.1, docs/solver.md "Compiled code").
+
+A collision that asks for the attempt log (``collide(..., attempt_log=True)``) runs a copy with
+model/kind.py's ``LOG_CODE`` True too (``loop-<pieces>-log``, every piece's included): the log's
+code is in no other loop.
 """
 
 import importlib
@@ -42,7 +46,7 @@ _PACKAGES = ("model", "integration")  # loaded anew too: a package holds its mod
 MOST_PIECES = 0  # the most pieces a copy is compiled for; more run the loop as imported
 
 _lock = threading.Lock()
-_loops = {}  # pieces (model/kind.py: CODES) -> the copy's stepper module
+_loops = {}  # (pieces (model/kind.py: CODES), with the attempt log) -> the copy's stepper module
 
 
 def compiled_pieces(phys) -> tuple:
@@ -53,26 +57,29 @@ def compiled_pieces(phys) -> tuple:
     return kind.CODES if len(codes) > MOST_PIECES else codes
 
 
-def loop_for(phys):
+def loop_for(phys, log=False):
     """The stepper module (``integrate``, ``Start``, ``Control``) compiled for
     ``compiled_pieces(phys)``: ``stepper`` itself for every piece, else a copy loaded the first
-    time a process asks for it."""
+    time a process asks for it; with ``log``, a copy that keeps the attempt log (model/kind.py:
+    ``LOG_CODE``; every piece's too)."""
     codes = compiled_pieces(phys)
-    if codes == kind.CODES:
+    if codes == kind.CODES and not log:
         return stepper
     with _lock:
-        if codes not in _loops:
-            _loops[codes] = _load(codes)
-        return _loops[codes]
+        if (codes, log) not in _loops:
+            _loops[codes, log] = _load(codes, log)
+        return _loops[codes, log]
 
 
-def cache_folder(codes) -> str | None:
+def cache_folder(codes, log=False) -> str | None:
     """The compile cache folder of the loop compiled for ``codes`` (``compiled_pieces``): the
     solver's own (``_jit.CACHE_DIR``) for the loop with every piece, its ``loop-<pieces>`` for a
-    copy; None where nothing is cached."""
+    copy (``loop-<pieces>-log`` with the attempt log); None where nothing is cached."""
     if _jit.CACHE_DIR is None:
         return None
-    return _jit.CACHE_DIR if codes == kind.CODES else f"{_jit.CACHE_DIR}/loop-{_tag(codes)}"
+    if codes == kind.CODES and not log:
+        return _jit.CACHE_DIR
+    return f"{_jit.CACHE_DIR}/loop-{_tag(codes, log)}"
 
 
 def is_cached(codes) -> bool:
@@ -92,14 +99,14 @@ def is_cached(codes) -> bool:
     return bool(glob.glob(pattern))
 
 
-def _tag(codes) -> str:
-    return "_".join(codes) or "classic"
+def _tag(codes, log=False) -> str:
+    return ("_".join(codes) or "classic") + ("-log" if log else "")
 
 
-def _load(codes):
+def _load(codes, log=False):
     root = sys.modules["solver"]
-    tag = _tag(codes)
-    name = f"solver._loop_{tag}"
+    tag = _tag(codes, log)
+    name = f"solver._loop_{tag.replace('-', '_')}"
     package = types.ModuleType(name, f"The time loop compiled for {codes or 'the classic film'}.")
     package.__path__ = list(root.__path__)
     package.__package__ = name
@@ -111,7 +118,7 @@ def _load(codes):
             shared[f"{name}.{relative}"] = module
     sys.modules[name] = package
     sys.modules.update(shared)
-    folder = cache_folder(codes)
+    folder = cache_folder(codes, log)
     saved = numba.config.CACHE_DIR
     try:
         if folder is not None:
@@ -119,6 +126,7 @@ def _load(codes):
         constants = importlib.import_module(f"{name}.model.kind")
         for code in kind.CODES:
             setattr(constants, f"{code.upper()}_CODE", code in codes)
+        constants.LOG_CODE = log
         loop = importlib.import_module(f"{name}.integration.stepper")
     except BaseException:
         for full in [full for full in sys.modules if full == name or full.startswith(name + ".")]:

@@ -44,7 +44,7 @@ import numpy as np
 
 from .._jit import copy_into, entry, filled, hook, jit, leaf
 from ..model import step as model
-from ..model.kind import holds_asked
+from ..model.kind import LOG_CODE, holds_asked
 from ..model.state import Step, array_record
 from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
 from .events import reached
@@ -103,6 +103,21 @@ _H0_AT_V0, _T_AT_V0 = SERIES_INDEX["H0_at_v0"], SERIES_INDEX["T_at_v0"]
 # the highest order's interpolant (``_dissipated_in_step``)
 GAUSS3 = ((-math.sqrt(0.6), 5.0 / 9.0), (0.0, 8.0 / 9.0), (math.sqrt(0.6), 5.0 / 9.0))
 BISECTIONS = 50  # halvings of a step's interval to locate a cell's extremum in it (2^-50)
+
+# The attempt log (``integrate``'s ``log_rows`` > 0): one row per step attempt, these columns.
+# ``outcome``: ATTEMPT_OUTCOMES' codes; ``error``: the local error in units of the tolerance
+# (NaN where none was computed); ``largest``: LARGEST_TERMS' code of the error's largest term and
+# ``cell`` its node (NaN for X and V). Diagnostics only: nothing the loop decides reads them.
+LOG_COLUMNS = ("t", "dt", "order", "outcome", "newton", "fresh", "set_changes", "error",
+               "largest", "cell")
+N_LOG = len(LOG_COLUMNS)
+ATTEMPT_OUTCOMES = ("accepted", "rejected_error", "diverged_fresh", "diverged_older",
+                    "gap_not_positive")
+# (floats, as the log holds them: int constants are literal types to numba, and each would
+# compile ``_log_attempt`` once more)
+ACCEPTED, REJECTED_ERROR, DIVERGED_FRESH, DIVERGED_OLDER, GAP_NOT_POSITIVE = (
+    float(code) for code in range(len(ATTEMPT_OUTCOMES)))
+LARGEST_TERMS = ("pressure", "gap", "X", "V")
 
 
 # ---- the records: what the caller hands in, and what the loop allocates once -------------------
@@ -181,9 +196,12 @@ History = array_record("History", ("y", "h", "c", "t", "r", "n", "order"),
 # (``_coefficients``); ``basis`` (4, SLOTS): the Lagrange basis of the newest states, its values
 # and slopes at a point, its slopes at the step's start and end (``_extremum_in_step``, which
 # keeps a cell's Newton coefficients in the slopes' row, ``_dissipated_in_step``); ``counters``:
-# ``COUNTERS``.
+# ``COUNTERS``; ``log`` (rows, N_LOG): the attempt log (0 rows: none kept), ``log_n`` (1,): its
+# rows written, ``own_scale`` (1,): 1 where the last local error measured the pressures against
+# ``scale``, not the slots (``_local_error``).
 Work = array_record("Work", ("y", "y_pred", "res", "w", "h", "q", "c_hist", "dh", "kdp",
-                               "scale", "dres_dh", "a", "basis", "counters"),
+                               "scale", "dres_dh", "a", "basis", "counters", "log", "log_n",
+                               "own_scale"),
                       "The time loop's work arrays (integration/stepper.py).", __name__)
 
 # The Newton matrix: ``jac`` (factorised in place) and its pivots ``piv``, ``base`` its copy
@@ -333,13 +351,34 @@ def _factorisation(m):
 
 
 @jit
-def _work(n):
-    """The loop's work arrays (``Work``) for ``n`` nodes."""
+def _work(n, log_rows):
+    """The loop's work arrays (``Work``) for ``n`` nodes, an attempt log of ``log_rows`` rows."""
     m = n + 2
     return Work(np.empty(m), np.empty(m), np.empty(m), np.empty(n), np.empty(n),
                 np.empty(n - 1), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
                 np.empty((n, 3)), filled(SLOTS, 0.0), filled((4, SLOTS), 0.0),
-                filled(len(COUNTERS), 0))
+                filled(len(COUNTERS), 0), filled((log_rows, N_LOG), np.nan), filled(1, 0),
+                filled(1, 0.0))
+
+
+@jit
+def _log_attempt(work, film, t, dt, k, outcome, newton, fresh, set_changes, err):
+    """One row of the attempt log (``LOG_COLUMNS``; with an error ``err``, its largest term from
+    the terms ``_local_error`` left in ``work``); nothing once the log is full. Only in a copy of
+    the loop compiled with the log (model/kind.py: ``LOG_CODE``)."""
+    row = work.log_n[0]
+    if row >= work.log.shape[0]:
+        return
+    log = work.log[row]
+    log[0], log[1], log[2], log[3] = t, dt, k, outcome
+    log[4], log[5], log[6], log[7] = newton, fresh, set_changes, err
+    log[8], log[9] = np.nan, np.nan
+    if not np.isnan(err):
+        y, n = work.y, work.h.size
+        _largest_term(work.res[:n], work.res[n], work.res[n + 1], work.dh,
+                      work.scale if work.own_scale[0] == 1.0 else y[:n], y[n], y[n + 1], work.h,
+                      model.pressure_scale(film), log[8:])
+    work.log_n[0] = row + 1
 
 
 @jit
@@ -532,7 +571,9 @@ def _local_error(grid, phys, err_fac, states, rtol, film, work):
     """The step's local error in units of the tolerance (``_norm`` of ``err_fac (y - y_pred)``,
     the pressures' part as the film model measures it: model/step.py, ``step_error``; ``states``
     the accepted states the predictor went through); 0 for the first step, which has no history
-    to compare with. ``res``, ``kdp``, ``dh`` and ``scale`` of ``work`` are work space."""
+    to compare with. ``res``, ``kdp``, ``dh`` and ``scale`` of ``work`` are work space; they keep
+    the error's terms, and ``work.own_scale`` whether ``scale`` holds the pressures' scale, for
+    the attempt log (``_log_attempt``)."""
     if err_fac == 0.0:
         return 0.0
     y, y_pred, h, res, kdp, dh = work.y, work.y_pred, work.h, work.res, work.kdp, work.dh
@@ -543,10 +584,38 @@ def _local_error(grid, phys, err_fac, states, rtol, film, work):
     matvec(grid.influence, res[:n], kdp)
     for i in range(n):
         dh[i] = res[n] + kdp[i]
-    p_scale = work.scale if model.step_error(y, y_pred, states, err_fac, rtol, h, film, phys,
-                                             res[:n], dh, work.scale) else y[:n]
+    own_scale = model.step_error(y, y_pred, states, err_fac, rtol, h, film, phys, res[:n], dh,
+                                 work.scale)
+    if LOG_CODE:
+        work.own_scale[0] = 1.0 if own_scale else 0.0
+    p_scale = work.scale if own_scale else y[:n]
     return _norm(res[:n], res[n], res[n + 1], dh, p_scale, y[n], y[n + 1], h, 1.0,
                  model.pressure_scale(film)) / rtol
+
+
+@jit
+def _largest_term(dp, dx, dv, dh, p, x, v, h, p_abs, where):
+    """Which term of ``_norm`` (the same arguments, ``rtol`` 1) is the largest: its code
+    (``LARGEST_TERMS``) and node (NaN for ``X`` and ``V``) into ``where`` (2,)."""
+    pmax = 0.0
+    for i in range(p.size):
+        pmax = max(pmax, abs(p[i]))
+    p_small = PRESSURE_SCALE * pmax + p_abs
+    best = abs(dx) / (1.0 + abs(x))
+    where[0], where[1] = 2.0, np.nan
+    e = abs(dv) / (0.1 + abs(v))
+    if e > best:
+        best = e
+        where[0] = 3.0
+    for i in range(h.size):
+        e = abs(dh[i]) / (abs(h[i]) + GAP_SCALE)
+        if e > best:
+            best = e
+            where[0], where[1] = 1.0, float(i)
+        e = abs(dp[i]) / (abs(p[i]) + p_small)
+        if e > best:
+            best = e
+            where[0], where[1] = 0.0, float(i)
 
 
 @jit
@@ -842,8 +911,7 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
     -------
     status, accepted, dt, err, set_changes
         ``RUNNING`` or the failure; whether a step was accepted, its size and error, and the
-        changes of the active set its Newton iteration made (``_newton``).
-    """
+        changes of the active set its Newton iteration made (``_newton``)."""
     counters = work.counters
     y, t = hist.y, hist.t
     n_hist = hist.n[0]
@@ -872,12 +940,16 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
         step = Step(b * dt, work.c_hist, x_hist, v_hist)
         newton_before = counters[NEWTON]
         outcome, fresh, set_changes = _newton(grid, phys, step, control.rtol, film, fac, work)
-        if k > 2 and not fresh and counters[NEWTON] - newton_before >= SLOW_NEWTON:
+        newton = counters[NEWTON] - newton_before
+        if k > 2 and not fresh and newton >= SLOW_NEWTON:
             fac.valid[0] = False  # a fresh Jacobian for the next attempt (docs at SLOW_NEWTON)
         if outcome == SINGULAR:
             status = NONFINITE
             break
         if outcome == DIVERGED:
+            if LOG_CODE:
+                _log_attempt(work, film, t[0], dt, k, DIVERGED_FRESH if fresh else DIVERGED_OLDER,
+                             newton, fresh, set_changes, np.nan)
             if fresh:
                 dt *= 0.5
                 counters[REJECTED] += 1
@@ -885,6 +957,9 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
             fac.valid[0] = False
             continue
         if not _positive(work.h):
+            if LOG_CODE:
+                _log_attempt(work, film, t[0], dt, k, GAP_NOT_POSITIVE, newton, fresh,
+                             set_changes, np.nan)
             dt *= 0.5
             counters[REJECTED] += 1
             _lower_order(hist)
@@ -893,6 +968,9 @@ def _attempt(grid, phys, control, hist, dt, film, fac, work):
         if not np.isfinite(err):
             status = NONFINITE
             break
+        if LOG_CODE:
+            _log_attempt(work, film, t[0], dt, k, REJECTED_ERROR if err > 1.0 else ACCEPTED,
+                         newton, fresh, set_changes, err)
         if err > 1.0:
             dt *= max(0.2, SAFETY * err ** (-1.0 / (max(k, 2) + 1.0)))
             counters[REJECTED] += 1
@@ -1019,7 +1097,7 @@ def _initial_film(grid, phys, hist, work):
 
 @entry
 @jit
-def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles):
+def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles, log_rows):
     """Integrate on the grid ``grid`` (grid.py: ``Nodes``) from ``start`` (``Start``) with the
     step control ``control`` (``Control``) until the terminal event ``stop_kind`` with
     ``stop_params`` (events.py) or a failure. ``phys`` is ``Physics.as_array()``.
@@ -1029,8 +1107,7 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
     status : int
         ``OK``, ``MAX_STEPS``, ``STEP_UNDERFLOW`` or ``NONFINITE``.
     counters : (7,) int64
-        ``COUNTERS``: accepted steps, rejected steps, Newton iterations, LU factorisations,
-        Jacobians, low-rank updates, accepted steps above order 2.
+        ``COUNTERS`` (accepted and rejected steps, Newton iterations, factorisations...).
     series : (rows, N_SERIES) float
         One row per accepted step (the first is the initial state); columns ``SERIES``.
     pressure, deformation : (rows, N) float
@@ -1038,12 +1115,13 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
     fluid_fraction : (rows, N-1) float
         The cells' fluid fraction ``theta`` at each row (model/step.py: 1 in full cells) when
         ``save_profiles``, else (0, N-1).
-    """
+    attempts : (attempts, N_LOG) float
+        The attempt log: a row per step attempt (``LOG_COLUMNS``), the first ``log_rows``."""
     _refuse_absent_pieces(phys)
     n = grid.s.size
     control = _film_control(control, phys)
     hist = _history(grid, start, control.max_order)
-    work = _work(n)
+    work = _work(n, log_rows)
     fac = _factorisation(n + 2)
     w, h, q = work.w, work.h, work.q
     y0 = hist.y[0]  # the newest accepted state: _shift writes each new one into this row
@@ -1098,4 +1176,4 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles)
         dt *= factor
     kept = min(n_rows, p_hist.shape[0])
     return (status, work.counters, series[:n_rows], p_hist[:kept], w_hist[:kept],
-            theta_hist[:kept])
+            theta_hist[:kept], work.log[:work.log_n[0]])

@@ -29,6 +29,11 @@ CAVITATION_CODE = True  # a floor on the pressure (Reynolds, JFO): model/cavity_
 CONTACT_CODE = True  # rough surfaces' asperity contact: model/contact_step.py
 LIQUID_CODE = True  # a viscosity or density that depends on pressure: model/liquid.py
 SLIP_CODE = True  # slip at the surfaces: model/slip.py
+# whether this copy keeps the attempt log (integration/stepper.py: ``_log_attempt``): not a piece
+# of physics, and False in the loop as imported, so that no loop but one asked for it compiles
+# it (compiled into every loop it cost the cold compile 3-6 %); integration/kinds.py loads a
+# copy with it where a collision asks for the log
+LOG_CODE = False
 
 # the pieces in the order ``asked_codes`` names them, each with its constant's name above
 CODES = ("cavitation", "contact", "liquid", "slip")
