@@ -73,3 +73,6 @@ def test_each_row_says_why(pair):
     assert np.all((a["cell"][film] >= 0) & (a["cell"][film] < c.radius.size))
     assert np.all(a["cell"][~film] == -1)
     assert np.all(np.isin(a["largest"][rejected], ("pressure", "gap", "X", "V")))
+    # the first step has no history to measure an error against: error 0, no largest term
+    first = int(np.argmax(accepted))
+    assert a["error"][first] == 0.0 and a["largest"][first] == "" and a["cell"][first] == -1

@@ -198,7 +198,7 @@ History = array_record("History", ("y", "h", "c", "t", "r", "n", "order"),
 # keeps a cell's Newton coefficients in the slopes' row, ``_dissipated_in_step``); ``counters``:
 # ``COUNTERS``; ``log`` (rows, N_LOG): the attempt log (0 rows: none kept), ``log_n`` (1,): its
 # rows written, ``own_scale`` (1,): 1 where the last local error measured the pressures against
-# ``scale``, not the slots (``_local_error``).
+# ``scale``, 0 against the slots, -1 where it measured nothing (the first step; ``_local_error``).
 Work = array_record("Work", ("y", "y_pred", "res", "w", "h", "q", "c_hist", "dh", "kdp",
                                "scale", "dres_dh", "a", "basis", "counters", "log", "log_n",
                                "own_scale"),
@@ -373,7 +373,7 @@ def _log_attempt(work, film, t, dt, k, outcome, newton, fresh, set_changes, err)
     log[0], log[1], log[2], log[3] = t, dt, k, outcome
     log[4], log[5], log[6], log[7] = newton, fresh, set_changes, err
     log[8], log[9] = np.nan, np.nan
-    if not np.isnan(err):
+    if not np.isnan(err) and work.own_scale[0] >= 0.0:
         y, n = work.y, work.h.size
         _largest_term(work.res[:n], work.res[n], work.res[n + 1], work.dh,
                       work.scale if work.own_scale[0] == 1.0 else y[:n], y[n], y[n + 1], work.h,
@@ -575,6 +575,8 @@ def _local_error(grid, phys, err_fac, states, rtol, film, work):
     the error's terms, and ``work.own_scale`` whether ``scale`` holds the pressures' scale, for
     the attempt log (``_log_attempt``)."""
     if err_fac == 0.0:
+        if LOG_CODE:
+            work.own_scale[0] = -1.0  # no terms to report
         return 0.0
     y, y_pred, h, res, kdp, dh = work.y, work.y_pred, work.h, work.res, work.kdp, work.dh
     n = h.size
