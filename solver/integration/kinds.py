@@ -20,7 +20,7 @@ that met two pieces compiled more than it saved, and a fresh clone's ``.ci/run``
 classic film, each piece and the combinations (1.16.1, docs/solver.md "Compiled code").
 
 A collision that asks for the attempt log (``collide(..., attempt_log=True)``) runs a copy with
-model/kind.py's ``LOG_CODE`` True too (``loop-<pieces>-log``, every piece's included): the log's
+model/kind.py's ``LOG_CODE`` True too (``loop-<pieces>_log``, every piece's included): the log's
 code is in no other loop.
 """
 
@@ -74,7 +74,7 @@ def loop_for(phys, log=False):
 def cache_folder(codes, log=False) -> str | None:
     """The compile cache folder of the loop compiled for ``codes`` (``compiled_pieces``): the
     solver's own (``_jit.CACHE_DIR``) for the loop with every piece, its ``loop-<pieces>`` for a
-    copy (``loop-<pieces>-log`` with the attempt log); None where nothing is cached."""
+    copy (``loop-<pieces>_log`` with the attempt log); None where nothing is cached."""
     if _jit.CACHE_DIR is None:
         return None
     if codes == kind.CODES and not log:
@@ -100,13 +100,13 @@ def is_cached(codes) -> bool:
 
 
 def _tag(codes, log=False) -> str:
-    return ("_".join(codes) or "classic") + ("-log" if log else "")
+    return ("_".join(codes) or "classic") + ("_log" if log else "")
 
 
 def _load(codes, log=False):
     root = sys.modules["solver"]
     tag = _tag(codes, log)
-    name = f"solver._loop_{tag.replace('-', '_')}"
+    name = f"solver._loop_{tag}"
     package = types.ModuleType(name, f"The time loop compiled for {codes or 'the classic film'}.")
     package.__path__ = list(root.__path__)
     package.__package__ = name

@@ -67,6 +67,7 @@ CONVERGED, DIVERGED, SINGULAR = 0, 1, 2
 
 GAP_SCALE = 1e-2  # x1 units: below this the gap error counts as absolute
 PRESSURE_SCALE = 0.05  # fraction of max|P| below which the pressure error counts as absolute
+X_FLOOR, V_FLOOR = 1.0, 0.1  # below these |X| and |V| their errors count as absolute
 NEWTON_KAPPA = 0.05  # Newton stops when its predicted remaining error is this fraction of tol
 MAX_NEWTON = 7
 # Above order 2, a step whose Newton took this many iterations on a matrix factorised at an
@@ -233,17 +234,31 @@ def _grow(a, rows):
 @jit
 def _norm(dp, dx, dv, dh, p, x, v, h, rtol, p_abs):
     """Max-norm of a change, each component relative to ``rtol`` times its own scale; pressures
-    below ``PRESSURE_SCALE`` of the largest one (plus ``p_abs``) count as absolute."""
+    below ``PRESSURE_SCALE`` of the largest one (plus ``p_abs``) count as absolute (the terms:
+    ``_term``; which is largest: ``_largest_term``)."""
+    p_small = _pressure_floor(p, p_abs)
+    e = _term(dx, x, X_FLOOR)
+    e = max(e, _term(dv, v, V_FLOOR))
+    for i in range(h.size):
+        e = max(e, _term(dh[i], h[i], GAP_SCALE))
+        e = max(e, _term(dp[i], p[i], p_small))
+    return e / rtol
+
+
+@leaf
+def _term(change, value, floor):
+    """One term of ``_norm``: ``change`` relative to ``|value|``, absolute below ``floor``."""
+    return abs(change) / (abs(value) + floor)
+
+
+@leaf
+def _pressure_floor(p, p_abs):
+    """Where ``_norm`` measures the pressures' changes as absolute: ``PRESSURE_SCALE`` of the
+    largest ``|p|``, plus ``p_abs``."""
     pmax = 0.0
     for i in range(p.size):
         pmax = max(pmax, abs(p[i]))
-    p_small = PRESSURE_SCALE * pmax + p_abs
-    e = abs(dx) / (1.0 + abs(x))
-    e = max(e, abs(dv) / (0.1 + abs(v)))
-    for i in range(h.size):
-        e = max(e, abs(dh[i]) / (abs(h[i]) + GAP_SCALE))
-        e = max(e, abs(dp[i]) / (abs(p[i]) + p_small))
-    return e / rtol
+    return PRESSURE_SCALE * pmax + p_abs
 
 
 @jit
@@ -599,25 +614,19 @@ def _local_error(grid, phys, err_fac, states, rtol, film, work):
 def _largest_term(dp, dx, dv, dh, p, x, v, h, p_abs, where):
     """Which term of ``_norm`` (the same arguments, ``rtol`` 1) is the largest: its code
     (``LARGEST_TERMS``) and node (NaN for ``X`` and ``V``) into ``where`` (2,)."""
-    pmax = 0.0
-    for i in range(p.size):
-        pmax = max(pmax, abs(p[i]))
-    p_small = PRESSURE_SCALE * pmax + p_abs
-    best = abs(dx) / (1.0 + abs(x))
+    p_small = _pressure_floor(p, p_abs)
+    best = _term(dx, x, X_FLOOR)
     where[0], where[1] = 2.0, np.nan
-    e = abs(dv) / (0.1 + abs(v))
+    e = _term(dv, v, V_FLOOR)
     if e > best:
-        best = e
-        where[0] = 3.0
+        best, where[0] = e, 3.0
     for i in range(h.size):
-        e = abs(dh[i]) / (abs(h[i]) + GAP_SCALE)
+        e = _term(dh[i], h[i], GAP_SCALE)
         if e > best:
-            best = e
-            where[0], where[1] = 1.0, float(i)
-        e = abs(dp[i]) / (abs(p[i]) + p_small)
+            best, where[0], where[1] = e, 1.0, float(i)
+        e = _term(dp[i], p[i], p_small)
         if e > best:
-            best = e
-            where[0], where[1] = 0.0, float(i)
+            best, where[0], where[1] = e, 0.0, float(i)
 
 
 @jit
