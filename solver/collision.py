@@ -197,6 +197,10 @@ def collide(physics, eps=None, *, accuracy: str = "standard", x_ref_x0: float = 
         raise ValueError(f"x_ref_x0 = {x_ref_x0!r}: the reference separation must be a finite "
                          "number, at least the start x0 (x_ref_x0 >= 1)")
     x_ref_x0 = float(x_ref_x0)  # an int or numpy scalar is stored as the float it means
+    if not isinstance(attempt_log, (bool, np.bool_)):
+        raise TypeError(f"attempt_log = {attempt_log!r}: True or False (keep the step attempts "
+                        "in Collision.attempts, or not)")
+    attempt_log = bool(attempt_log)
     wall = time.perf_counter()
     with deferred_interrupt():  # Ctrl-C or SIGTERM inside compiled code: taken on return
         head = rigid_head(physics, numerics)

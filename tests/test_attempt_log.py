@@ -76,3 +76,9 @@ def test_each_row_says_why(pair):
     # the first step has no history to measure an error against: error 0, no largest term
     first = int(np.argmax(accepted))
     assert a["error"][first] == 0.0 and a["largest"][first] == "" and a["cell"][first] == -1
+
+
+@pytest.mark.parametrize("bad", ["no", 1, None])
+def test_the_log_is_asked_for_with_a_bool(bad):
+    with pytest.raises(TypeError, match="attempt_log = .*True or False"):
+        collide(Physics(St=10.0, eps=1e-4), accuracy="fast", attempt_log=bad)
