@@ -431,6 +431,28 @@ def test_a_cell_the_cavity_edge_crossed_leaves_the_gap_error_norm():
     assert dh.tolist() == [1, 1, 1, 0, 0, 0, 1, 1, 1, 1]
 
 
+@pytest.mark.parametrize("model, kept", [("reynolds", False), ("jfo", True)])
+def test_a_reynolds_cavity_cell_leaves_the_gap_error_norm(model, kept):
+    """``cavity_step.passive_gaps``: with the Reynolds condition the gap errors of every cell of
+    this step's cavity leave the norm (the condition drops its mass balance); a JFO cavity cell's
+    stay (its liquid is conserved). Cells that switched long ago: the edge's own rule
+    (``error_in_time``, ``_edge_gaps``) leaves nothing out here."""
+    from solver.model.cavity_step import error_in_time, passive_gaps
+    from solver.model.state import NEVER_SWITCHED, new_film
+
+    film = new_film(np.zeros(9))
+    cav = film.cavity
+    cav.active[:] = [True, True, True, False, False, False, False, False, False]
+    cav.active0[:] = cav.active
+    cav.since_switch[:] = NEVER_SWITCHED
+    phys = Physics(St=10.0, eps=1e-4, Pi=1e-3, cavitation=model).as_array()
+    perr, dh = np.ones(10), np.ones(10)
+    assert error_in_time(film, phys, 2, perr, dh)  # a cavity is open: the pressure kinks
+    assert not perr.any() and dh.all()
+    passive_gaps(film, phys, dh)
+    assert dh.tolist() == [1 if kept else 0] * 3 + [1] * 7
+
+
 @pytest.mark.parametrize("model, steps, rejected, newton, lu",
                          [("jfo", 487, 120, 2286, 176), ("reynolds", 473, 104, 1683, 148)])
 def test_the_cavity_edge_costs_few_rejected_steps(model, steps, rejected, newton, lu):
