@@ -453,6 +453,31 @@ def test_a_reynolds_cavity_cell_leaves_the_gap_error_norm(model, kept):
     assert dh.tolist() == [1 if kept else 0] * 3 + [1] * 7
 
 
+@pytest.mark.parametrize("physics, kept", [
+    (dict(cavitation="reynolds"), False),
+    (dict(cavitation="reynolds", roughness=1.0), True),  # the gap sets the asperities' load
+    (dict(cavitation="jfo"), True)])
+def test_the_step_error_leaves_out_the_gaps_of_a_reynolds_cavity_on_smooth_surfaces(physics,
+                                                                                      kept):
+    """``step.step_error``, the film's part of the local error, calls ``passive_gaps`` for a
+    film whose surfaces carry no asperity load: the gap errors of a Reynolds cavity's cells leave
+    the norm there, and stay on rough surfaces and in a JFO cavity."""
+    from solver.model.state import NEVER_SWITCHED, new_film
+    from solver.model.step import step_error
+
+    film = new_film(np.zeros(9))
+    cav = film.cavity
+    cav.active[:] = [True, True, True, False, False, False, False, False, False]
+    cav.active0[:] = cav.active
+    cav.since_switch[:] = NEVER_SWITCHED
+    phys = Physics(St=10.0, eps=1e-4, Pi=1e-3, **physics).as_array()
+    y = np.full(12, 0.5)
+    states = np.tile(y, (3, 1))
+    perr, dh, scale = np.ones(10), np.ones(10), np.zeros(10)
+    step_error(y, y, states, 1.0, 1e-4, np.ones(10), film, phys, perr, dh, scale)
+    assert dh.tolist() == [1 if kept else 0] * 3 + [1] * 7
+
+
 @pytest.mark.parametrize("model, steps, rejected, newton, lu",
                          [("jfo", 487, 120, 2286, 176), ("reynolds", 473, 104, 1683, 148)])
 def test_the_cavity_edge_costs_few_rejected_steps(model, steps, rejected, newton, lu):

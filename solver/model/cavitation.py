@@ -89,7 +89,7 @@ def cavity_fraction(g, start=0.0):
     f(hi)`` by bisection where it would leave it, until a step below ``_TOLERANCE`` (above: why
     that is enough). Compiled (``_root``), 0.3 us a call from Python, where the same arithmetic
     in Python took 5.5 us and SciPy's ``brentq`` before it 42 us; 3.7 evaluations of ``f`` a
-    call from a cold start (``g`` in [1e-8, 0.49]). The departure's ODE calls it some 500 times
+    call from a cold start (``g`` in [1e-8, 0.49]). A departure's ODE calls it some 530-610 times
     (docs/solver.md, Versions, 1.18.2 and 1.18.3)."""
     return _root(float(g), float(start))
 
@@ -148,8 +148,9 @@ def _open_cavity_speed(stokes, pi):
     return speed
 
 
-# How the departure's ODE is solved (SciPy's solve_ivp). The eighth-order DOP853 takes 30 steps
-# where RK45 took 96 at the same tolerance (St 10, Pi 1e-4, from X 1e-3, U 0.5): with the root
+# How the departure's ODE is solved (SciPy's solve_ivp). The eighth-order DOP853 takes 29 steps
+# and 533 evaluations where RK45 took 95 and 608 at the same tolerance (SciPy 1.17.1;
+# departure(1e-3, 0.5, 3.0, 10.0, 1e-4)): with the root
 # compiled, a departure and its speed_at took 0.67-0.96x RK45's time over five departures (St
 # 5-300, Pi 1e-6 to 1e-2), as accurate (the closing state and speed_at within 5.1e-9 of DOP853 at
 # rtol 1e-13, RK45 within 3.9e-9; docs/solver.md, Versions, 1.18.3).

@@ -166,20 +166,22 @@ def _edge_gaps(cavity, degree, dh):
 
 @hook
 def passive_gaps(film, phys, dh):
-    """``dh`` to 0 at each cell of this step's cavity where the floor is the Reynolds condition
-    (``step.step_error`` asks where no asperity load reads the gap). Such a cell carries no
-    equation (the condition drops its mass balance): its gap is ``X`` plus the elastic deflection
-    of the other cells' loads, whose errors the film's own gaps carry, and it kinks in time
-    wherever any cell meets or leaves the floor, through the elastic kernel. In the norm, those
-    kinks set the step: the largest gap error lay within 3 cells of the cavity's edge in most
-    steps (St 10, eps 1e-4, Pi 1e-3, standard). Without them, 10-21 % fewer steps and 26-56 %
-    fewer factorisations at the standard preset, every error against benchmarks/cavitation.md's
-    references within 1.12x of what it was (docs/solver.md, Versions, 1.18.4). Kept in the norm:
-    a JFO cavity cell's gap (its liquid content is an unknown of its own, conserved; without
-    those gaps too, JFO's ``e_wet`` at St 10, eps 1e-2, Pi 1e-2 moved 1.2x further from the
-    reference), and a rough film's (the gap sets the asperities' load: without them, a Reynolds
-    film on rough surfaces at St 300, eps 1e-2, Pi 1e-6 ended 1.5x (fast) and 2.2x (standard)
-    further from its fine preset's ``e_wet``)."""
+    """``dh`` to 0 at each cell of this step's cavity where the floor is the Reynolds condition.
+    For ``step.step_error``, which asks only where no asperity load reads the gap (a rough
+    film's cavity cells keep theirs). A choice by measurement (docs/solver.md, Versions,
+    1.18.4): the condition puts the floor in such a cell's row instead of its mass balance, and
+    its gap error kinks in time wherever any cell meets or leaves the floor, through the elastic
+    kernel (as the film cells' near the edge do, which stay). In the norm, those errors set the
+    step: the largest gap error lay within 3 cells of the cavity's edge in most steps (St 10,
+    eps 1e-4, Pi 1e-3, standard). Without them, 10-21 % fewer steps and 26-56 % fewer
+    factorisations at the standard preset, every error against benchmarks/cavitation.md's
+    references (as solver 1.18.3 computed them) within 1.12x of what it was. The gap is still
+    read where the cell's residual decides whether it refills, in the flux at the cavity's edge
+    and in the void's volume and work. Kept in the norm: a JFO cavity cell's gap (it holds
+    liquid that is conserved; without those gaps too, JFO's ``e_wet`` at St 10, eps 1e-2, Pi
+    1e-2 moved 1.2x further from the reference), and a rough film's (the gap sets the
+    asperities' load: without them, a Reynolds film on rough surfaces at St 300, eps 1e-2, Pi
+    1e-6 ended 1.5x (fast) and 2.2x (standard) further from its fine preset's ``e_wet``)."""
     if not on(phys) or held(phys):
         return
     active = film.cavity.active
