@@ -150,10 +150,10 @@ def _open_cavity_speed(stokes, pi):
 
 # How the departure's ODE is solved (SciPy's solve_ivp). The eighth-order DOP853 takes 29 steps
 # and 533 evaluations where RK45 took 95 and 608 at the same tolerance (SciPy 1.17.1;
-# departure(1e-3, 0.5, 3.0, 10.0, 1e-4)): with the root
-# compiled, a departure and its speed_at took 0.67-0.96x RK45's time over five departures (St
-# 5-300, Pi 1e-6 to 1e-2), as accurate (the closing state and speed_at within 5.1e-9 of DOP853 at
-# rtol 1e-13, RK45 within 3.9e-9; docs/solver.md, Versions, 1.18.3).
+# departure(1e-3, 0.5, 3.0, 10.0, 1e-4)): with the root compiled, a departure and its speed_at
+# took 0.67-0.96x RK45's time over five departures (St 5-300, Pi 1e-6 to 1e-2), as accurate (the
+# closing state and speed_at within 5.1e-9 of DOP853 at rtol 1e-13, RK45 within 3.9e-9;
+# docs/solver.md, Versions, 1.18.3).
 _ODE = dict(method="DOP853", rtol=1e-10, atol=1e-14)
 
 
