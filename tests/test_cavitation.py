@@ -431,13 +431,9 @@ def test_a_cell_the_cavity_edge_crossed_leaves_the_gap_error_norm():
     assert dh.tolist() == [1, 1, 1, 0, 0, 0, 1, 1, 1, 1]
 
 
-@pytest.mark.parametrize("model, kept", [("reynolds", False), ("jfo", True)])
-def test_a_reynolds_cavity_cell_leaves_the_gap_error_norm(model, kept):
-    """``cavity_step.passive_gaps``: with the Reynolds condition the gap errors of every cell of
-    this step's cavity leave the norm (the condition drops its mass balance); a JFO cavity cell's
-    stay (its liquid is conserved). Cells that switched long ago: the edge's own rule
-    (``error_in_time``, ``_edge_gaps``) leaves nothing out here."""
-    from solver.model.cavity_step import error_in_time, passive_gaps
+def _film_with_a_cavity_at_the_axis():
+    """A film state of 9 cells (10 nodes) whose cells 0-2 are cavitated, in this step and the
+    accepted state alike, since long before the predictor's states."""
     from solver.model.state import NEVER_SWITCHED, new_film
 
     film = new_film(np.zeros(9))
@@ -445,6 +441,18 @@ def test_a_reynolds_cavity_cell_leaves_the_gap_error_norm(model, kept):
     cav.active[:] = [True, True, True, False, False, False, False, False, False]
     cav.active0[:] = cav.active
     cav.since_switch[:] = NEVER_SWITCHED
+    return film
+
+
+@pytest.mark.parametrize("model, kept", [("reynolds", False), ("jfo", True)])
+def test_a_reynolds_cavity_cell_leaves_the_gap_error_norm(model, kept):
+    """``cavity_step.passive_gaps``: with the Reynolds condition the gap errors of every cell of
+    this step's cavity leave the norm (the condition drops its mass balance); a JFO cavity cell's
+    stay (its liquid is conserved). Cells that switched long ago: the edge's own rule
+    (``error_in_time``, ``_edge_gaps``) leaves nothing out here."""
+    from solver.model.cavity_step import error_in_time, passive_gaps
+
+    film = _film_with_a_cavity_at_the_axis()
     phys = Physics(St=10.0, eps=1e-4, Pi=1e-3, cavitation=model).as_array()
     perr, dh = np.ones(10), np.ones(10)
     assert error_in_time(film, phys, 2, perr, dh)  # a cavity is open: the pressure kinks
@@ -462,14 +470,9 @@ def test_the_step_error_leaves_out_the_gaps_of_a_reynolds_cavity_on_smooth_surfa
     """``step.step_error``, the film's part of the local error, calls ``passive_gaps`` for a
     film whose surfaces carry no asperity load: the gap errors of a Reynolds cavity's cells leave
     the norm there, and stay on rough surfaces and in a JFO cavity."""
-    from solver.model.state import NEVER_SWITCHED, new_film
     from solver.model.step import step_error
 
-    film = new_film(np.zeros(9))
-    cav = film.cavity
-    cav.active[:] = [True, True, True, False, False, False, False, False, False]
-    cav.active0[:] = cav.active
-    cav.since_switch[:] = NEVER_SWITCHED
+    film = _film_with_a_cavity_at_the_axis()
     phys = Physics(St=10.0, eps=1e-4, Pi=1e-3, **physics).as_array()
     y = np.full(12, 0.5)
     states = np.tile(y, (3, 1))

@@ -247,10 +247,11 @@ def step_error(y, y_pred, states, err_fac, rtol, h, film, phys, perr, dh, scale)
 
     Returns True when ``scale`` holds the Kirchhoff pressures, False when the errors are measured
     against the slots themselves (``scale`` untouched)."""
+    loaded = contact_step.on(phys)  # the gap sets the asperities' load
     not_smooth = cavity_step.error_in_time(film, phys, states.shape[0] - 1, perr, dh)
-    if not contact_step.on(phys):
+    if not loaded:
         cavity_step.passive_gaps(film, phys, dh)
-    if isoviscous(phys) or not_smooth or contact_step.on(phys):
+    if isoviscous(phys) or not_smooth or loaded:
         return False
     _kirchhoff_errors(y_pred, y, err_fac, phys, perr, scale)
     _kinks_in_time(states, y, rtol, phys, perr)
