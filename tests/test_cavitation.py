@@ -204,6 +204,90 @@ def test_speed_at_joins_the_classic_departure_once_the_cavity_closes():
     assert cavitation.speed_at(x, u, st, pi, far) > u - math.log(far / x) / st
 
 
+def _departure_reference(x, u, t, st, pi):
+    """The departure's ODE (model/cavitation.py) solved by SciPy's DOP853 at rtol 1e-13, an
+    independent integrator: the closing state and the solution as a function of ``ln X``."""
+    from scipy.integrate import solve_ivp
+
+    def rhs(lnx, y):
+        x_now = math.exp(lnx)
+        sigma = cavitation.cavity_fraction(pi * x_now * x_now / (6.0 * y[0]))
+        return [-1.0 / (st * (1.0 + sigma)), x_now / y[0]]
+
+    def closes(lnx, y):
+        return pi * math.exp(2.0 * lnx) - 3.0 * y[0]
+
+    closes.terminal, closes.direction = True, 1.0
+    sol = solve_ivp(rhs, (math.log(x), 0.5 * math.log(3.0 * u / pi) + 1.0), [u, t],
+                    method="DOP853", rtol=1e-13, atol=1e-16, events=closes, dense_output=True)
+    ln_c = float(sol.t_events[0][0])
+    return math.exp(ln_c), float(sol.y_events[0][0][0]), float(sol.y_events[0][0][1]), sol.sol
+
+
+DEPARTURES = [(1e-3, 0.5, 3.0, 10.0, 1e-4), (1e-2, 0.3, 0.0, 5.0, 1e-6),
+              (0.05, 0.8, 1.0, 300.0, 1e-2), (1e-4, 0.9, 0.0, 30.0, 1e-4),
+              (0.5, 0.5, 0.0, 10.0, 1e-3), (2e-3, 0.2, 0.0, 100.0, 1e-3)]
+
+
+@pytest.mark.parametrize("x, u, t, st, pi", DEPARTURES)
+def test_the_departure_with_a_floor_meets_an_independent_integrator(x, u, t, st, pi):
+    """The compiled departure (Dormand-Prince 5(4) at ``RTOL`` 1e-10) against SciPy's DOP853 at
+    rtol 1e-13: the closing state, the path's samples and ``speed_at`` inside the open cavity.
+    Measured over these six: ``X_c``, ``U_c`` and ``T_c`` within 1.5e-10 relative, the path's
+    ``U`` within 3.0e-10 and ``speed_at`` within 7.4e-14 (a short span); the bounds are 1e-9
+    (10 RTOL: a global error of a few times the local tolerance, as step control gives) and
+    1e-10 for the speed."""
+    x_c, u_c, t_c, solution = _departure_reference(x, u, t, st, pi)
+    got_x, got_u, got_t, path = cavitation.departure(x, u, t, st, pi)
+    assert got_x == pytest.approx(x_c, rel=1e-9) and got_u == pytest.approx(u_c, rel=1e-9)
+    assert got_t == pytest.approx(t_c, rel=1e-9)
+    u_ref, t_ref = solution(np.log(path[0]))
+    assert np.allclose(path[1], u_ref, rtol=1e-9, atol=0.0)
+    assert np.allclose(path[2], t_ref, rtol=1e-9, atol=1e-12)
+    inside = math.sqrt(x * got_x)  # a gap where the cavity is still open
+    assert cavitation.speed_at(x, u, st, pi, inside) == pytest.approx(
+        float(solution(math.log(inside))[0]), rel=1e-10)
+
+
+def test_the_departure_error_falls_with_the_tolerance():
+    """Step control: the closing speed's error against the rtol 1e-13 reference falls as the
+    tolerance does (measured 2.5e-9, 7.0e-11, 2.5e-13 at rtol 1e-8, 1e-10, 1e-12: roughly in
+    proportion, as a controlled fifth-order pair gives); asserted: each at least 10x below the
+    last, and the finest within 10 of its tolerance."""
+    x, u, t, st, pi = DEPARTURES[0]
+    _, u_c, _, _ = _departure_reference(x, u, t, st, pi)
+    errors = []
+    for rtol in (1e-8, 1e-10, 1e-12):
+        lnx, u_end, _, closed, _ = cavitation._integrate(
+            math.log(x), 0.5 * math.log(3.0 * u / pi) + 1.0, u, t, st, pi, rtol,
+            cavitation.ATOL, np.empty(0), np.empty((2, 0)))
+        assert closed and pi * math.exp(2.0 * lnx) == pytest.approx(3.0 * u_end, rel=1e-13)
+        errors.append(abs(u_end / u_c - 1.0))
+    assert errors[1] < 0.1 * errors[0] and errors[2] < 0.1 * errors[1], errors
+    assert errors[2] < 10 * 1e-12, errors
+
+
+def test_the_departure_step_has_orders_five_and_four():
+    """One Dormand-Prince step (``_rk_step``) against the rtol 1e-13 reference: the local error
+    of ``T`` falls as ``h^6`` and the step's error estimate (the orders' difference) as ``h^5``,
+    which a wrong coefficient of the tableau would break (measured 5.78, 5.94 and 5.35, 5.17 at
+    h 0.8 to 0.4 to 0.2 in ``ln X``; the estimate's approaches 5 from above)."""
+    x, u, t, st, pi = DEPARTURES[0]
+    ln0 = math.log(x)
+    _, _, _, solution = _departure_reference(x, u, t, st, pi)
+    k1u, k1t, _ = cavitation._slope(ln0, u, st, pi, 0.0)
+    errors, estimates = [], []
+    for h in (0.8, 0.4, 0.2):
+        u_ref, t_ref = solution(ln0 + h)  # dense output: within rtol 1e-13 of the solution
+        _, t_new, _, err_t, _, _, _ = cavitation._rk_step(ln0, u, t, h, k1u, k1t, st, pi, 0.0)
+        errors.append(abs(t_new - t_ref))
+        estimates.append(abs(err_t))
+    orders = np.log2(np.array(errors[:-1]) / errors[1:])
+    estimate_orders = np.log2(np.array(estimates[:-1]) / estimates[1:])
+    assert np.all((orders > 5.5) & (orders < 6.5)), orders
+    assert np.all((estimate_orders > 4.8) & (estimate_orders < 5.6)), estimate_orders
+
+
 @pytest.mark.parametrize("st, pi", [(1.0, 1e-6), (10.0, 1e-6), (100.0, 1e-4), (1000.0, 1e-3),
                                     (30.0, 10.0), (3.0, 0.1)])
 def test_extremes_finish_with_closed_energy(st, pi):

@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-from .._jit import entry, leaf
+from .._jit import entry, jit, leaf
 
 __all__ = ["cavity_fraction", "separation_force", "departure", "speed_at", "restitution",
            "exact_for"]
@@ -89,8 +89,8 @@ def cavity_fraction(g, start=0.0):
     f(hi)`` by bisection where it would leave it, until a step below ``_TOLERANCE`` (above: why
     that is enough). Compiled (``_root``), 0.3 us a call from Python, where the same arithmetic
     in Python took 5.5 us and SciPy's ``brentq`` before it 42 us; 3.7 evaluations of ``f`` a
-    call from a cold start (``g`` in [1e-8, 0.49]). A departure's ODE calls it some 530-610 times
-    (docs/solver.md, Versions, 1.18.2 and 1.18.3)."""
+    call from a cold start (``g`` in [1e-8, 0.49]). The departure's compiled ODE calls ``_root``
+    itself (``_slope``)."""
     return _root(float(g), float(start))
 
 
@@ -133,39 +133,135 @@ def separation_force(x, u, pi):
     return 0.0 if math.isinf(sigma) else -3.0 * u / (x * (1.0 + sigma))
 
 
-def _open_cavity_speed(stokes, pi):
-    """``dU/d ln X = -1/(St (1 + sigma))`` while the cavity is open (module docstring), as a
-    function of ``ln X`` and ``U``; each call starts ``cavity_fraction`` from the root of the one
-    before (an ODE solver's calls lie close together: 3.1 evaluations of ``f`` a call instead of
-    3.7 from a cold start, over three departures St 10-100)."""
-    last = [0.0]
+# --- the departure's ODE, compiled ------------------------------------------------------------
+# Solved by Dormand and Prince's explicit Runge-Kutta pair of orders 5 and 4 (J. R. Dormand,
+# P. J. Prince, J. Comput. Appl. Math. 6 (1980) 19-26; the tableau of SciPy's RK45), with the
+# classic step control, in ``ln X``, compiled with the cavity's root (``_root``): SciPy's
+# ``solve_ivp`` spent 1.4-4.0 ms of Python work on a departure and its ``speed_at`` (29 DOP853
+# steps, 533 calls of a Python right-hand side), 4-16 % of a standard-preset collision; now
+# 0.13-0.32 ms. How close: docs/solver.md, Versions, 1.18.5; tests/test_cavitation.py against
+# ``solve_ivp`` at rtol 1e-13.
+RTOL, ATOL = 1e-10, 1e-14  # on (U, T)
+_C2, _C3, _C4, _C5 = 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0
+_A21 = 1.0 / 5.0
+_A31, _A32 = 3.0 / 40.0, 9.0 / 40.0
+_A41, _A42, _A43 = 44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0
+_A51, _A52, _A53, _A54 = 19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0
+_A61, _A62, _A63 = 9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0
+_A64, _A65 = 49.0 / 176.0, -5103.0 / 18656.0
+# the fifth-order weights (the seventh stage is the next step's first: its state)
+_B1, _B3, _B4, _B5, _B6 = 35.0 / 384.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0
+# the fifth-order weights less the fourth-order ones: the local error's estimate
+_E1, _E3, _E4 = 71.0 / 57600.0, -71.0 / 16695.0, 71.0 / 1920.0
+_E5, _E6, _E7 = -17253.0 / 339200.0, 22.0 / 525.0, -1.0 / 40.0
+_MAX_STEPS = 100_000
+_EVENT_ITERATIONS = 100
 
-    def speed(lnx, u):
-        x = math.exp(lnx)
-        last[0] = cavity_fraction(pi * x * x / (6.0 * u), last[0])
-        return -1.0 / (stokes * (1.0 + last[0]))
 
-    return speed
-
-
-# How the departure's ODE is solved (SciPy's solve_ivp). The eighth-order DOP853 takes 29 steps
-# and 533 evaluations where RK45 took 95 and 608 at the same tolerance (SciPy 1.17.1;
-# departure(1e-3, 0.5, 3.0, 10.0, 1e-4)): with the root compiled, a departure and its speed_at
-# took 0.67-0.96x RK45's time over five departures (St 5-300, Pi 1e-6 to 1e-2), as accurate (the
-# closing state and speed_at within 5.1e-9 of DOP853 at rtol 1e-13, RK45 within 3.9e-9;
-# docs/solver.md, Versions, 1.18.3).
-_ODE = dict(method="DOP853", rtol=1e-10, atol=1e-14)
+@leaf
+def _slope(lnx, u, stokes, pi, sigma):
+    """The departure's right-hand side at ``ln X``, ``U``: ``dU/d ln X = -1/(St (1 + sigma))``
+    while the cavity is open (``sigma`` = 0 once it has closed), ``dT/d ln X = X/U``; and the
+    cavity's ``sigma``, found from ``sigma`` (the last call's: an ODE's calls lie close
+    together, 3.1 evaluations of ``f`` a call instead of 3.7 from a cold start)."""
+    x = math.exp(lnx)
+    sigma = _root(pi * x * x / (6.0 * u), sigma)
+    return -1.0 / (stokes * (1.0 + sigma)), x / u, sigma
 
 
-def _cavity_closes(pi):
-    """The event where the cavity closes (``3U/X^2 = Pi``, crossed upwards in ``ln X``), terminal,
-    for SciPy's ``solve_ivp`` on ``(U, ...)``."""
-    def closes(lnx, y):
-        return pi * math.exp(2.0 * lnx) - 3.0 * y[0]
+@leaf
+def _rk_step(lnx, u, t, h, k1u, k1t, stokes, pi, sigma):
+    """One Dormand-Prince step of ``h`` from ``(ln X, U, T)`` whose slopes are ``k1u, k1t``:
+    the fifth-order state, its error estimate, the slopes there (the next step's first stage)
+    and the last root."""
+    k2u, k2t, sigma = _slope(lnx + _C2 * h, u + h * _A21 * k1u, stokes, pi, sigma)
+    k3u, k3t, sigma = _slope(lnx + _C3 * h, u + h * (_A31 * k1u + _A32 * k2u), stokes, pi, sigma)
+    k4u, k4t, sigma = _slope(lnx + _C4 * h, u + h * (_A41 * k1u + _A42 * k2u + _A43 * k3u),
+                             stokes, pi, sigma)
+    k5u, k5t, sigma = _slope(lnx + _C5 * h, u + h * (_A51 * k1u + _A52 * k2u + _A53 * k3u
+                                                     + _A54 * k4u), stokes, pi, sigma)
+    k6u, k6t, sigma = _slope(lnx + h, u + h * (_A61 * k1u + _A62 * k2u + _A63 * k3u + _A64 * k4u
+                                               + _A65 * k5u), stokes, pi, sigma)
+    u_new = u + h * (_B1 * k1u + _B3 * k3u + _B4 * k4u + _B5 * k5u + _B6 * k6u)
+    t_new = t + h * (_B1 * k1t + _B3 * k3t + _B4 * k4t + _B5 * k5t + _B6 * k6t)
+    k7u, k7t, sigma = _slope(lnx + h, u_new, stokes, pi, sigma)
+    err_u = h * (_E1 * k1u + _E3 * k3u + _E4 * k4u + _E5 * k5u + _E6 * k6u + _E7 * k7u)
+    err_t = h * (_E1 * k1t + _E3 * k3t + _E4 * k4t + _E5 * k5t + _E6 * k6t + _E7 * k7t)
+    return u_new, t_new, err_u, err_t, k7u, k7t, sigma
 
-    closes.terminal = True
-    closes.direction = 1.0
-    return closes
+
+@leaf
+def _closing(lnx, u, pi):
+    """Where the cavity closes: ``Pi X^2 - 3U`` crosses 0 upwards (``3U/X^2 = Pi``)."""
+    return pi * math.exp(2.0 * lnx) - 3.0 * u
+
+
+@leaf
+def _step_to_closing(lnx, u, t, h, k1u, k1t, stokes, pi, sigma):
+    """The step ``s`` in ``(0, h]`` from ``(ln X, U, T)`` whose end is where the cavity closes
+    (``_closing`` below 0 at the start, not below at ``h``), by the Illinois variant of the
+    false position on ``s`` (each value a step of ``s`` itself, so the state there is as accurate
+    as a step's), to the rounding of ``ln X``; returns ``s`` and the state there."""
+    lo, hi, side = 0.0, h, 0
+    u_hi, t_hi, _, _, _, _, _ = _rk_step(lnx, u, t, h, k1u, k1t, stokes, pi, sigma)
+    f_lo, f_hi = _closing(lnx, u, pi), _closing(lnx + h, u_hi, pi)
+    for _ in range(_EVENT_ITERATIONS):
+        if hi - lo <= 4e-16 * max(1.0, abs(lnx)):
+            break
+        s = hi - f_hi * (hi - lo) / (f_hi - f_lo)
+        if not lo < s < hi:
+            s = 0.5 * (lo + hi)
+        u_s, t_s, _, _, _, _, _ = _rk_step(lnx, u, t, s, k1u, k1t, stokes, pi, sigma)
+        f_s = _closing(lnx + s, u_s, pi)
+        if f_s >= 0.0:
+            hi, f_hi, u_hi, t_hi = s, f_s, u_s, t_s
+            if side == 1:
+                f_lo *= 0.5
+            side = 1
+        else:
+            lo, f_lo = s, f_s
+            if side == -1:
+                f_hi *= 0.5
+            side = -1
+    return hi, u_hi, t_hi
+
+
+@entry
+@jit
+def _integrate(ln_from, ln_to, u, t, stokes, pi, rtol, atol, samples, path):
+    """The departure from ``(ln X, U, T) = (ln_from, u, t)`` towards ``ln_to``, until the cavity
+    closes (``_closing``); steps end on each of ``samples`` (ascending, in ``(ln_from, ln_to)``)
+    and ``path[:, k]`` takes ``U, T`` there. Returns ``(ln X, U, T)`` where it stopped, whether
+    the cavity closed there, and the number of samples passed; ``ln X`` is NaN after
+    ``_MAX_STEPS`` steps."""
+    lnx, k, closed = ln_from, 0, False
+    k1u, k1t, sigma = _slope(lnx, u, stokes, pi, 0.0)
+    # the first step: 1 % of the local scale of U (its slope's), within the span
+    h = min(ln_to - ln_from, 0.01 * max(abs(u), atol) / max(abs(k1u), 1e-300))
+    for _ in range(_MAX_STEPS):
+        if lnx >= ln_to:
+            return lnx, u, t, closed, k
+        end = samples[k] if k < samples.size else ln_to
+        landing = lnx + h >= end
+        step = end - lnx if landing else h
+        u_new, t_new, err_u, err_t, k7u, k7t, sigma_new = _rk_step(lnx, u, t, step, k1u, k1t,
+                                                                   stokes, pi, sigma)
+        scale_u = atol + rtol * max(abs(u), abs(u_new))
+        scale_t = atol + rtol * max(abs(t), abs(t_new))
+        error = math.sqrt(0.5 * ((err_u / scale_u) ** 2 + (err_t / scale_t) ** 2))
+        if not error <= 1.0:  # NaN too (a trial stage past U = 0)
+            h = step * max(0.2, 0.9 * error ** -0.2) if error == error else 0.2 * step
+            continue
+        if _closing(lnx, u, pi) < 0.0 <= _closing(lnx + step, u_new, pi):
+            s, u, t = _step_to_closing(lnx, u, t, step, k1u, k1t, stokes, pi, sigma)
+            return lnx + s, u, t, True, k
+        lnx = end if landing else lnx + step
+        u, t, k1u, k1t, sigma = u_new, t_new, k7u, k7t, sigma_new
+        if landing and k < samples.size:
+            path[0, k], path[1, k] = u, t
+            k += 1
+        h = step * min(10.0, 0.9 * max(error, 1e-10) ** -0.2)
+    return math.nan, u, t, closed, k
 
 
 def departure(x_from, u_from, t_from, stokes, pi, samples=40):
@@ -184,24 +280,27 @@ def departure(x_from, u_from, t_from, stokes, pi, samples=40):
         return math.inf, u_from, math.inf, np.array([[x_from], [u_from], [t_from]])
     if 3.0 * u_from <= pi * x_from * x_from:  # no cavity: nothing to integrate
         return x_from, u_from, t_from, np.array([[x_from], [u_from], [t_from]])
-
-    speed = _open_cavity_speed(stokes, pi)
-
-    def rhs(lnx, y):
-        return [speed(lnx, y[0]), math.exp(lnx) / y[0]]
-
-    closes = _cavity_closes(pi)
     ln0 = math.log(x_from)
     ln1 = 0.5 * math.log(3.0 * u_from / pi) + 1.0  # U only falls: the cavity closes before
-    from scipy.integrate import solve_ivp  # here: a run without this piece never imports it
-    sol = solve_ivp(rhs, (ln0, ln1), [u_from, t_from], events=closes, dense_output=True, **_ODE)
-    if sol.status != 1 or not sol.t_events[0].size:
-        raise RuntimeError(f"the cavity of the rigid departure did not close: {sol.message}")
-    ln_c = float(sol.t_events[0][0])
-    u_c, t_c = (float(v) for v in sol.y_events[0][0])
+    none = np.empty(0)
+    ln_c, u_c, t_c, closed, _ = _integrate(ln0, ln1, float(u_from), float(t_from), float(stokes),
+                                           float(pi), RTOL, ATOL, none, np.empty((2, 0)))
+    if not closed:
+        raise RuntimeError(f"the cavity of the rigid departure did not close (stopped at ln X = "
+                           f"{ln_c:.6g}, U = {u_c:.6g})")
     grid = np.linspace(ln0, ln_c, samples)
-    u, t = sol.sol(grid)
-    return math.exp(ln_c), u_c, t_c, np.vstack([np.exp(grid), u, t])
+    path = np.empty((3, samples))
+    path[0] = np.exp(grid)
+    path[1:, 0] = u_from, t_from
+    path[1:, -1] = u_c, t_c
+    # the samples between, on a second pass whose steps end on them (the first's steps do not)
+    inner = path[1:, 1:-1]
+    _, _, _, _, passed = _integrate(ln0, ln_c, float(u_from), float(t_from), float(stokes),
+                                    float(pi), RTOL, ATOL, grid[1:-1].copy(), inner)
+    if passed != samples - 2:
+        raise RuntimeError("the rigid departure's samples were not all reached")
+    path[1:, 1:-1] = inner
+    return math.exp(ln_c), u_c, t_c, path
 
 
 def speed_at(x_from, u_from, stokes, pi, x_target):
@@ -213,18 +312,14 @@ def speed_at(x_from, u_from, stokes, pi, x_target):
     if pi <= 0.0:
         return u_from  # no suction at all
     if 3.0 * u_from > pi * x_from * x_from:  # a cavity is open: integrate while it is
-        speed = _open_cavity_speed(stokes, pi)
-
-        def rhs(lnx, y):
-            return [speed(lnx, y[0])]
-
-        closes = _cavity_closes(pi)
-        from scipy.integrate import solve_ivp  # here: a run without this piece never imports it
-        sol = solve_ivp(rhs, (math.log(x_from), math.log(x_target)), [u_from], events=closes,
-                        **_ODE)
-        if not sol.t_events[0].size:  # still open at x_target
-            return float(sol.y[0, -1])
-        x_from, u_from = math.exp(float(sol.t_events[0][0])), float(sol.y_events[0][0][0])
+        ln_end, u_end, _, closed, _ = _integrate(
+            math.log(x_from), math.log(x_target), float(u_from), 0.0, float(stokes), float(pi),
+            RTOL, ATOL, np.empty(0), np.empty((2, 0)))
+        if math.isnan(ln_end):
+            raise RuntimeError("the rigid departure with a floor took too many steps")
+        if not closed:  # still open at x_target
+            return u_end
+        x_from, u_from = math.exp(ln_end), u_end
     return max(0.0, u_from - math.log(x_target / x_from) / stokes)
 
 
