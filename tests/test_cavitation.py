@@ -233,8 +233,8 @@ DEPARTURES = [(1e-3, 0.5, 3.0, 10.0, 1e-4), (1e-2, 0.3, 0.0, 5.0, 1e-6),
 def test_the_departure_with_a_floor_meets_an_independent_integrator(x, u, t, st, pi):
     """The compiled departure (Dormand-Prince 5(4) at ``RTOL`` 1e-10) against SciPy's DOP853 at
     rtol 1e-13: the closing state, the path's samples and ``speed_at`` inside the open cavity.
-    Measured over these six: ``X_c``, ``U_c`` and ``T_c`` within 1.5e-10 relative, the path's
-    ``U`` within 3.0e-10 and ``speed_at`` within 7.4e-14 (a short span); the bounds are 1e-9
+    Measured over these six: ``X_c``, ``U_c`` and ``T_c`` within 2.8e-10 relative, the path's
+    ``U`` within 2.9e-10 and ``speed_at`` within 7.5e-14 (a short span); the bounds are 1e-9
     (10 RTOL: a global error of a few times the local tolerance, as step control gives) and
     1e-10 for the speed."""
     x_c, u_c, t_c, solution = _departure_reference(x, u, t, st, pi)
@@ -251,7 +251,7 @@ def test_the_departure_with_a_floor_meets_an_independent_integrator(x, u, t, st,
 
 def test_the_departure_error_falls_with_the_tolerance():
     """Step control: the closing speed's error against the rtol 1e-13 reference falls as the
-    tolerance does (measured 2.5e-9, 7.0e-11, 2.5e-13 at rtol 1e-8, 1e-10, 1e-12: roughly in
+    tolerance does (measured 1.4e-8, 4.1e-11, 8.8e-13 at rtol 1e-8, 1e-10, 1e-12: roughly in
     proportion, as a controlled fifth-order pair gives); asserted: each at least 10x below the
     last, and the finest within 10 of its tolerance."""
     x, u, t, st, pi = DEPARTURES[0]
@@ -265,6 +265,34 @@ def test_the_departure_error_falls_with_the_tolerance():
         errors.append(abs(u_end / u_c - 1.0))
     assert errors[1] < 0.1 * errors[0] and errors[2] < 0.1 * errors[1], errors
     assert errors[2] < 10 * 1e-12, errors
+
+
+def test_a_departure_that_closes_within_rounding_gives_its_path():
+    """A start whose cavity closes within 1e-15 of ``ln X`` (the axis tension 3U/X^2 above Pi by
+    a few rounding units): the path's samples repeat the start, not an error (they did: every
+    sample equal to the start made a zero step, and the step sized from it stayed 0)."""
+    x, st, pi = 0.1, 10.0, 100.0
+    u = pi * x * x / 3.0 * (1.0 + 1e-15)
+    x_c, u_c, _, path = cavitation.departure(x, u, 0.0, st, pi)
+    assert path.shape == (3, 40) and np.all(np.isfinite(path))
+    assert x_c == pytest.approx(x, rel=1e-13) and u_c == pytest.approx(u, rel=1e-13)
+
+
+def test_a_departure_that_stops_at_the_rounding_of_its_speed_ends_there():
+    """A start at U = 1e-12 with Pi 1e-12: U falls to the rounding of its scale while the cavity
+    (open until 3U/X^2 = Pi ~ 1e-20) stays open, and the steps would fall below the rounding of
+    ``ln X``: the spheres have stopped where they stand (they looped until the step limit)."""
+    x, u, st, pi = 1e-4, 1e-12, 1.0, 1e-12
+    x_c, u_c, _, _ = cavitation.departure(x, u, 0.0, st, pi)
+    assert x_c == pytest.approx(x, rel=1e-11)  # U/St of ln X at most: 1e-12
+    assert 0.0 <= u_c < 1e-12
+    target = math.exp(0.5 * (math.log(x) + math.log(x_c)))
+    assert 0.0 <= cavitation.speed_at(x, u, st, pi, target) <= u
+
+
+def test_the_departure_path_needs_two_samples():
+    with pytest.raises(ValueError, match="at least 2 samples"):
+        cavitation.departure(1e-3, 0.5, 0.0, 10.0, 1e-4, samples=1)
 
 
 def test_the_departure_step_has_orders_five_and_four():

@@ -230,24 +230,36 @@ def _step_to_closing(lnx, u, t, h, k1u, k1t, stokes, pi, sigma):
 @jit
 def _integrate(ln_from, ln_to, u, t, stokes, pi, rtol, atol, samples, path):
     """The departure from ``(ln X, U, T) = (ln_from, u, t)`` towards ``ln_to``, until the cavity
-    closes (``_closing``); steps end on each of ``samples`` (ascending, in ``(ln_from, ln_to)``)
+    closes (``_closing``); steps end on each of ``samples`` (ascending, in ``[ln_from, ln_to]``)
     and ``path[:, k]`` takes ``U, T`` there. Returns ``(ln X, U, T)`` where it stopped, whether
-    the cavity closed there, and the number of samples passed; ``ln X`` is NaN after
-    ``_MAX_STEPS`` steps."""
+    the cavity closed there (or the spheres stopped, below), and the number of samples passed;
+    ``ln X`` is NaN after ``_MAX_STEPS`` steps.
+
+    The step is controlled on ``U`` and on ``T``, whose error is measured against its own
+    increment too: as ``U`` falls to the rounding, ``dT/d ln X = X/U`` grows without bound, and
+    measured against ``T`` alone its error forced steps below the rounding of ``ln X``."""
     lnx, k, closed = ln_from, 0, False
     k1u, k1t, sigma = _slope(lnx, u, stokes, pi, 0.0)
-    # the first step: 1 % of the local scale of U (its slope's), within the span
-    h = min(ln_to - ln_from, 0.01 * max(abs(u), atol) / max(abs(k1u), 1e-300))
+    h = _first_step(lnx, u, k1u, ln_to - ln_from, stokes, pi, sigma, rtol, atol)
     for _ in range(_MAX_STEPS):
         if lnx >= ln_to:
             return lnx, u, t, closed, k
         end = samples[k] if k < samples.size else ln_to
-        landing = lnx + h >= end
+        if end <= lnx:  # a sample at the start, or repeated
+            path[0, k], path[1, k] = u, t
+            k += 1
+            continue
+        landing = h >= end - lnx
         step = end - lnx if landing else h
+        if not landing and lnx + step == lnx:
+            # steps below the rounding of ln X: U has fallen to the rounding of its scale (a
+            # start at U ~ 1e-12 falls towards 0 while the cavity, open until 3U/X^2 = Pi, stays
+            # open): the spheres have stopped here, and the cavity closes where they stand
+            return lnx, u, t, True, k
         u_new, t_new, err_u, err_t, k7u, k7t, sigma_new = _rk_step(lnx, u, t, step, k1u, k1t,
                                                                    stokes, pi, sigma)
         scale_u = atol + rtol * max(abs(u), abs(u_new))
-        scale_t = atol + rtol * max(abs(t), abs(t_new))
+        scale_t = atol + rtol * max(abs(t), abs(t_new), abs(t_new - t))
         error = math.sqrt(0.5 * ((err_u / scale_u) ** 2 + (err_t / scale_t) ** 2))
         if not error <= 1.0:  # NaN too (a trial stage past U = 0)
             h = step * max(0.2, 0.9 * error ** -0.2) if error == error else 0.2 * step
@@ -260,8 +272,24 @@ def _integrate(ln_from, ln_to, u, t, stokes, pi, rtol, atol, samples, path):
         if landing and k < samples.size:
             path[0, k], path[1, k] = u, t
             k += 1
-        h = step * min(10.0, 0.9 * max(error, 1e-10) ** -0.2)
+        grown = step * min(10.0, 0.9 * max(error, 1e-10) ** -0.2)
+        h = max(h, grown) if landing else grown  # a landing step is no measure of the step
     return math.nan, u, t, closed, k
+
+
+@leaf
+def _first_step(lnx, u, k1u, span, stokes, pi, sigma, rtol, atol):
+    """The first step (Hairer, Norsett and Wanner, Solving ODEs I, sec. II.4): where an Euler
+    step of 1 % of ``U``'s scale over its slope changes the slope by a local error of ``rtol``
+    at fifth order, within ``span``."""
+    scale = atol + rtol * abs(u)
+    d0, d1 = abs(u) / scale, abs(k1u) / scale
+    h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
+    h0 = min(h0, span)
+    k2u, _, _ = _slope(lnx + h0, u + h0 * k1u, stokes, pi, sigma)
+    d2 = abs(k2u - k1u) / scale / h0
+    h1 = max(1e-6, h0 * 1e-3) if max(d1, d2) <= 1e-15 else (0.01 / max(d1, d2)) ** 0.2
+    return min(100.0 * h0, h1, span)
 
 
 def departure(x_from, u_from, t_from, stokes, pi, samples=40):
@@ -276,6 +304,8 @@ def departure(x_from, u_from, t_from, stokes, pi, samples=40):
     path : (3, samples) array
         ``X, U, T`` along the way (for time series).
     """
+    if samples < 2:
+        raise ValueError(f"the departure's path takes at least 2 samples (got {samples})")
     if pi <= 0.0:
         return math.inf, u_from, math.inf, np.array([[x_from], [u_from], [t_from]])
     if 3.0 * u_from <= pi * x_from * x_from:  # no cavity: nothing to integrate
@@ -286,8 +316,8 @@ def departure(x_from, u_from, t_from, stokes, pi, samples=40):
     ln_c, u_c, t_c, closed, _ = _integrate(ln0, ln1, float(u_from), float(t_from), float(stokes),
                                            float(pi), RTOL, ATOL, none, np.empty((2, 0)))
     if not closed:
-        raise RuntimeError(f"the cavity of the rigid departure did not close (stopped at ln X = "
-                           f"{ln_c:.6g}, U = {u_c:.6g})")
+        raise RuntimeError(f"the cavity of the rigid departure did not close in "
+                           f"{_MAX_STEPS} steps (U = {u_c:.6g})")
     grid = np.linspace(ln0, ln_c, samples)
     path = np.empty((3, samples))
     path[0] = np.exp(grid)
@@ -295,10 +325,13 @@ def departure(x_from, u_from, t_from, stokes, pi, samples=40):
     path[1:, -1] = u_c, t_c
     # the samples between, on a second pass whose steps end on them (the first's steps do not)
     inner = path[1:, 1:-1]
-    _, _, _, _, passed = _integrate(ln0, ln_c, float(u_from), float(t_from), float(stokes),
-                                    float(pi), RTOL, ATOL, grid[1:-1].copy(), inner)
-    if passed != samples - 2:
+    ln_end, _, _, _, passed = _integrate(ln0, ln_c, float(u_from), float(t_from), float(stokes),
+                                         float(pi), RTOL, ATOL, grid[1:-1].copy(), inner)
+    # samples the second pass did not reach lie between its closing and the first's (a
+    # departure shorter than the passes' difference, ~RTOL): the closing state
+    if passed < samples - 2 and not abs(ln_end - ln_c) <= 1e-8 * max(1.0, abs(ln_c)):
         raise RuntimeError("the rigid departure's samples were not all reached")
+    inner[0, passed:], inner[1, passed:] = u_c, t_c
     path[1:, 1:-1] = inner
     return math.exp(ln_c), u_c, t_c, path
 
