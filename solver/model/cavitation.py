@@ -279,9 +279,10 @@ def _integrate(ln_from, ln_to, u, t, stokes, pi, rtol, atol, samples, path):
 
 @leaf
 def _first_step(lnx, u, k1u, span, stokes, pi, sigma, rtol, atol):
-    """The first step (Hairer, Norsett and Wanner, Solving ODEs I, sec. II.4): where an Euler
-    step of 1 % of ``U``'s scale over its slope changes the slope by a local error of ``rtol``
-    at fifth order, within ``span``."""
+    """The first step in ``ln X`` (Hairer, Norsett and Wanner, Solving Ordinary Differential
+    Equations I, sec. II.4), in the error's scale of ``U``: a trial ``h0``, 1 % of ``U`` over its
+    slope; then ``h1``, where ``h1^5`` times the larger of the slope and its change over an Euler
+    step of ``h0`` is 0.01; the smaller of ``100 h0`` and ``h1``, within ``span``."""
     scale = atol + rtol * abs(u)
     d0, d1 = abs(u) / scale, abs(k1u) / scale
     h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
@@ -312,9 +313,8 @@ def departure(x_from, u_from, t_from, stokes, pi, samples=40):
         return x_from, u_from, t_from, np.array([[x_from], [u_from], [t_from]])
     ln0 = math.log(x_from)
     ln1 = 0.5 * math.log(3.0 * u_from / pi) + 1.0  # U only falls: the cavity closes before
-    none = np.empty(0)
     ln_c, u_c, t_c, closed, _ = _integrate(ln0, ln1, float(u_from), float(t_from), float(stokes),
-                                           float(pi), RTOL, ATOL, none, np.empty((2, 0)))
+                                           float(pi), RTOL, ATOL, np.empty(0), np.empty((2, 0)))
     if not closed:
         raise RuntimeError(f"the cavity of the rigid departure did not close in "
                            f"{_MAX_STEPS} steps (U = {u_c:.6g})")
