@@ -40,14 +40,13 @@ from bench_accuracy import SINGLE_GRID  # the references' single grids
 HERE = Path(__file__).parent
 REFERENCES = HERE / "cavitation_references.json"
 SPEED_SCENES = [(st, ep) for ep in (1e-2, 1e-6) for st in (5.0, 10.0, 30.0, 100.0)]
-FLOORS = (math.inf, 1e-2, 1e-4)
+FLOORS = (1e-2, 1e-4)
 MODELS = ("reynolds", "jfo")
 PRESETS = ("fast", "standard", "fine")
 REPEATS = 5
 # the timed variants of a scene: (label, Pi, model, max_order); Pi inf: no floor
 VARIANTS = [("classic", math.inf, "off", None), ("classic_bdf2", math.inf, "off", 2)] + [
-    (f"{model}_{pi:g}", pi, model, None) for pi in FLOORS if math.isfinite(pi)
-    for model in MODELS]
+    (f"{model}_{pi:g}", pi, model, None) for pi in FLOORS for model in MODELS]
 ACCURACY_SCENES = [(10.0, 1e-2, 1e-4), (30.0, 1e-6, 1e-4), (10.0, 1e-2, 1e-2), (100.0, 1e-4, 1e-3)]
 KEYS = ("v_r", "h_m_x1", "ln_x_e_x1", "cavity_radius_max", "e_wet")
 LEVELS = [dict(SINGLE_GRID, n_inner=64 * 2**k, stretch=1.0 + 0.2 / 2**k, max_rel=0.3 / 2**k,
@@ -76,13 +75,11 @@ def timed(args):
         physics = _physics(st, eps, pi, model)
         options = {} if max_order is None else {"max_order": max_order}
 
-        def run():
-            cpu = time.process_time()
+        def solve_once():
             status[label] = collide(physics, accuracy=preset, save_profiles=False,
                                     **options).status
-            return {"cpu_s": time.process_time() - cpu}
 
-        return run
+        return lambda: harness.time_call(solve_once)
 
     runs = harness.alternate({v[0]: side(*v) for v in VARIANTS}, REPEATS)
     return {label: [r["cpu_s"] for r in rounds] for label, rounds in runs.items()}, status

@@ -9,6 +9,7 @@ switched off (``W = 0``) and the kinematics prescribed (``dH/dT = U`` everywhere
 primal-dual active set the time loop uses.
 """
 
+import functools
 import itertools
 import math
 
@@ -204,6 +205,7 @@ def test_speed_at_joins_the_classic_departure_once_the_cavity_closes():
     assert cavitation.speed_at(x, u, st, pi, far) > u - math.log(far / x) / st
 
 
+@functools.lru_cache(maxsize=None)
 def _departure_reference(x, u, t, st, pi):
     """The departure's ODE (model/cavitation.py) solved by SciPy's DOP853 at rtol 1e-13, an
     independent integrator: the closing state and the solution as a function of ``ln X``."""

@@ -197,13 +197,13 @@ def _closing(lnx, u, pi):
 
 
 @leaf
-def _step_to_closing(lnx, u, t, h, k1u, k1t, stokes, pi, sigma):
+def _step_to_closing(lnx, u, t, h, u_hi, t_hi, k1u, k1t, stokes, pi, sigma):
     """The step ``s`` in ``(0, h]`` from ``(ln X, U, T)`` whose end is where the cavity closes
-    (``_closing`` below 0 at the start, not below at ``h``), by the Illinois variant of the
-    false position on ``s`` (each value a step of ``s`` itself, so the state there is as accurate
-    as a step's), to the rounding of ``ln X``; returns ``s`` and the state there."""
+    (``_closing`` below 0 at the start, not below at the step ``h``'s end ``u_hi, t_hi``), by the
+    Illinois variant of the false position on ``s`` (each value a step of ``s`` itself, so the
+    state there is as accurate as a step's), to the rounding of ``ln X``; returns ``s`` and the
+    state there."""
     lo, hi, side = 0.0, h, 0
-    u_hi, t_hi, _, _, _, _, _ = _rk_step(lnx, u, t, h, k1u, k1t, stokes, pi, sigma)
     f_lo, f_hi = _closing(lnx, u, pi), _closing(lnx + h, u_hi, pi)
     for _ in range(_EVENT_ITERATIONS):
         if hi - lo <= 4e-16 * max(1.0, abs(lnx)):
@@ -265,7 +265,8 @@ def _integrate(ln_from, ln_to, u, t, stokes, pi, rtol, atol, samples, path):
             h = step * max(0.2, 0.9 * error ** -0.2) if error == error else 0.2 * step
             continue
         if _closing(lnx, u, pi) < 0.0 <= _closing(lnx + step, u_new, pi):
-            s, u, t = _step_to_closing(lnx, u, t, step, k1u, k1t, stokes, pi, sigma)
+            s, u, t = _step_to_closing(lnx, u, t, step, u_new, t_new, k1u, k1t, stokes, pi,
+                                       sigma)
             return lnx + s, u, t, True, k
         lnx = end if landing else lnx + step
         u, t, k1u, k1t, sigma = u_new, t_new, k7u, k7t, sigma_new
