@@ -111,8 +111,13 @@ def richardson(values):
 def references(cases, pool):
     """The pinned references of ``cases`` (module docstring), recomputed (and pinned again) with
     ``--recompute-references`` or where the file lacks a case."""
-    pinned = json.loads(REFERENCES.read_text()) if REFERENCES.exists() else {"cases": []}
-    rows = {(r["St"], r["eps"], r["Pi"], r["model"]): r for r in pinned["cases"]}
+    try:
+        pinned = json.loads(REFERENCES.read_text()) if REFERENCES.exists() else {"cases": []}
+        rows = {(r["St"], r["eps"], r["Pi"], r["model"]): r for r in pinned["cases"]}
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise SystemExit(f"bench_cavitation: the pinned references {REFERENCES} are unreadable "
+                         f"({type(exc).__name__}: {exc}); restore the file from git, or "
+                         "recompute them with --recompute-references") from None
     if "--recompute-references" not in sys.argv and all(c in rows for c in cases):
         return pinned, [rows[c] for c in cases]
     ref_jobs = [(*case, "fine", lv) for case in cases for lv in LEVELS]
