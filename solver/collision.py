@@ -31,9 +31,9 @@ from .observables import OBSERVABLES, SERIES, STATUS, failure_message
 from .physics import Physics, is_real_number
 from . import pieces
 from .result import JSON_KEYS, SOLVER_VERSION, Collision
-from .rigid_phases import KEPT, RigidHead, rigid_block, rigid_path
+from .rigid_phases import KEPT, ReleaseFilm, RigidHead, rigid_block, rigid_path
 from .settings import Numerics, resolve
-from .shortcuts import plan
+from .shortcuts import plan, run_on
 
 __all__ = ["collide", "Collision", "SOLVER_VERSION", "hertz_overlap", "JSON_KEYS", "read_far"]
 
@@ -476,9 +476,9 @@ def _attempts(log, tau_per_t):
             "cell": np.where(np.isnan(col["cell"]), -1, col["cell"]).astype(int)}
 
 
-def _coupled(physics, accuracy, numerics, head, x_ref_x0, attempt_log=False):
+def _coupled(physics, accuracy, numerics, head, x_ref_x0, attempt_log=False, shortcuts=None):
     stokes, x_start, tau_per_t = physics.St, physics.x_start, physics.tau_per_t
-    shortcuts = plan(physics)
+    shortcuts = shortcuts or plan(physics)
     grid, code, counters, rows, p_hist, w_hist, theta_hist, log = _integrate(
         physics, numerics, head, shortcuts, attempt_log)
     name = next(k for k, (c, _) in STATUS.items() if c == code)
@@ -486,6 +486,11 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0, attempt_log=False):
     cols = {c.name: rows[:, k] for k, c in enumerate(SERIES)}
     cols["F"] = cols["F"] / 3.0  # force unit 6 pi mu a^2 v0 / x1
     t_c, x_c, v_c = cols["T"], cols["X"], cols["V"]
+    film = ReleaseFilm(grid.s_face, theta_hist[-1])
+    departed = _own_departure(physics, shortcuts, cols, film) if name == "ok" else None
+    if departed is pieces.RUN_ON:  # the piece's departure does not hold from this release
+        return _coupled(physics, accuracy, numerics, head, x_ref_x0, attempt_log,
+                        run_on(shortcuts))
 
     # rigid approach (analytic, or a piece's own rigid approach) up to the hand-over
     blocks = [head.block] if head.block is not None and len(head.block["T"]) else []
@@ -518,16 +523,16 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0, attempt_log=False):
         _premise_first(result, cols)
         return result
 
-    ln_x_e, resting = _depart(physics, shortcuts, cols, blocks)
+    ln_x_e, resting = _depart(physics, cols, blocks, departed)
     result.series = _concat(blocks)
     result.tau_release = t_c[-1] * tau_per_t
     result.ln_x_e_x1 = ln_x_e
     if resting:  # they stick
         result.e_wet = result.e_x0 = 0.0
     else:
-        result.e_wet = _wet_restitution(physics, shortcuts, cols, x_ref_x0 * x_start)
+        result.e_wet = _wet_restitution(physics, shortcuts, cols, x_ref_x0 * x_start, film)
         result.e_x0 = result.e_wet if x_ref_x0 == 1.0 else _wet_restitution(
-            physics, shortcuts, cols, x_start)
+            physics, shortcuts, cols, x_start, film)
     if result.e_wet == 0.0:
         result.message = _drawn_back(physics, cols, x_ref_x0 * x_start) or result.message
     _coupled_observables(result, cols, tau_per_t, ln_x_e, v_c[-1])
@@ -554,17 +559,32 @@ def _premise_first(result, cols):
     result.status, result.message = "start_deformed", premise
 
 
-def _depart(physics, shortcuts, cols, blocks):
+def _released_energy(cols):
+    """The energy lost by the release: dissipated, done against the floor and lost in the
+    solids."""
+    return cols["dissipated"][-1] + cols["void_work"][-1] + cols["solid_loss"][-1]
+
+
+def _own_departure(physics, shortcuts, cols, film):
+    """The departure piece's own rigid departure from the coupled phase's release state (its
+    film ``film``, a ReleaseFilm) where the plan gives one: ``(x, v, t, series block)``, None
+    (the classic departure) or ``pieces.RUN_ON``."""
+    own = shortcuts.departure_piece
+    if own is None:
+        return None
+    return own.depart(physics, cols["X"][-1], cols["V"][-1], cols["T"][-1],
+                      _released_energy(cols), film)
+
+
+def _depart(physics, cols, blocks, departed):
     """The rigid departure from the coupled phase's release state, its series appended to
-    ``blocks``: a piece's own departure where the plan gives one (until it hands back to the
-    classic path), then the classic closed form; or rest, where a piece holds the spheres (e.g.
-    on their asperities: the gap they hold is the equilibrium). Returns ``(ln x_e, resting)``."""
+    ``blocks``: a piece's own departure ``departed`` (``_own_departure``, until it hands back to
+    the classic path), then the classic closed form; or rest, where a piece holds the spheres
+    (e.g. on their asperities: the gap they hold is the equilibrium). Returns ``(ln x_e,
+    resting)``."""
     stokes, tau_per_t = physics.St, physics.tau_per_t
     t_rel, x_rel, v_rel = cols["T"][-1], cols["X"][-1], cols["V"][-1]
-    # energy lost by the release
-    lost = cols["dissipated"][-1] + cols["void_work"][-1] + cols["solid_loss"][-1]
-    own = shortcuts.departure_piece
-    departed = own.depart(physics, x_rel, v_rel, t_rel, lost) if own is not None else None
+    lost = _released_energy(cols)
     if departed is not None:
         x_rel, v_rel, t_rel, block = departed
         blocks.append(block)
@@ -625,7 +645,7 @@ def _pulled_back_from_afar(result):
                        "they stick is outside the model")
 
 
-def _wet_restitution(physics, shortcuts, cols, x_ref):
+def _wet_restitution(physics, shortcuts, cols, x_ref, film):
     """``e_wet`` at ``x_ref`` from the coupled phase's end: the rigid departure (rigid.restitution)
     from the release state; when the coupled phase ends beyond ``x_ref`` (the deformation relaxed,
     or the film filled again, only after the spheres passed it, moving out or already turned
@@ -636,7 +656,7 @@ def _wet_restitution(physics, shortcuts, cols, x_ref):
     ``e_wet`` 0.43 with a largest separation speed ``v_r`` of 0.19; docs/solver.md, Versions,
     1.15.4.)
     A piece whose departure or refill the plan gives reads it its own way
-    (``Piece.restitution``). Every rigid departure is of spheres apart: where that row's mean
+    (``Piece.restitution``; ``film``, the release state's ReleaseFilm). Every rigid departure is of spheres apart: where that row's mean
     planes still overlap (``X <= 0``: surfaces whose asperities still unload) and the coupled
     phase crosses ``x_ref``, its own speed there is read (``pieces.crossing_speed``; a departure
     from ``X <= 0`` took ``ln X`` and raised: docs/solver.md, Versions, 1.15.3)."""
@@ -650,7 +670,7 @@ def _wet_restitution(physics, shortcuts, cols, x_ref):
     if speed is not None:
         return rigid.restitution_of_speed(speed, physics, x_ref)
     if shortcuts.reader is not None:
-        return shortcuts.reader.restitution(physics, x_c, v_c, j, x_ref, cols)
+        return shortcuts.reader.restitution(physics, x_c, v_c, j, x_ref, cols, film)
     return rigid.restitution(x_c[j], v_c[j], physics, x_ref)
 
 

@@ -22,10 +22,16 @@ from typing import Callable
 
 import numpy as np
 
-from .model import cavitation, contact, liquid, piezoviscous, rigid, slip
+from .model import cavitation, contact, liquid, piezoviscous, refill, rigid, slip
 from .rigid_phases import RigidHead, rigid_block
 
-__all__ = ["Piece", "PIECES", "CAVITY_REACH", "WIDEST_CAVITY", "SLIP_REACH", "cavity_reach"]
+__all__ = ["Piece", "PIECES", "RUN_ON", "CAVITY_REACH", "WIDEST_CAVITY", "SLIP_REACH",
+           "cavity_reach"]
+
+# What a piece's ``depart`` answers where its departure does not hold from the release state
+# and the coupled phase must run on until the film is full again (``events.RELAXED_FULL``;
+# shortcuts.run_on): a JFO cavity that would grow again, or spheres that stop with it open
+RUN_ON = "run on"
 
 
 def _none(*_):
@@ -59,16 +65,21 @@ class Piece:
     # rigid approach at gap x and speed v, or None: the classic film's 3 V/(X + s)^2
     start_pressure: Callable = _none
     # its own rigid departure: the plan's label, physics -> it is exact, and
-    # (physics, x, v, t, lost) -> (x, v, t, series block) from the release state, or None when
-    # it does not apply there (e.g. still approaching)
+    # (physics, x, v, t, lost, film) -> (x, v, t, series block) from the release state (``film``
+    # a rigid_phases.ReleaseFilm), or None when it does not apply there (e.g. still approaching),
+    # or RUN_ON
     departure: str = ""
     departure_exact: Callable = _false
     depart: Callable = _none
+    # physics -> its departure starts from spheres apart: with a cavity open, the coupled phase
+    # ends at the release only once they separate (events.RELAXED_APART)
+    departs_apart: Callable = _false
     # physics -> the coupled phase runs until the film is full again (events.RELAXED_FULL), after
     # which the classic departure is exact
     refills: Callable = _false
-    # (physics, x_c, v_c, j, x_ref, cols) -> the restitution at x_ref read from row j of the
-    # coupled phase, for the physics whose departure or refill is this piece's
+    # (physics, x_c, v_c, j, x_ref, cols, film) -> the restitution at x_ref read from row j of
+    # the coupled phase (``film``: its last row's, a ReleaseFilm), for the physics whose
+    # departure or refill is this piece's
     restitution: Callable = _none
     film_width: Callable = _zero  # physics -> a radius the grid's inner region covers
     film_reach: Callable = _zero  # physics -> a radius the grid reaches
@@ -171,17 +182,29 @@ def _floor_reach(physics):
 
 
 def _refills(physics):
-    # a JFO cavity has a memory: the coupled phase goes on until the film is full again
-    return physics.cavitation == "jfo" and not cavitation.exact_for(physics)
+    # a JFO cavity has a memory: where its refill departure does not hold (a compressible
+    # liquid), the coupled phase goes on until the film is full again
+    return (physics.cavitation == "jfo" and not cavitation.exact_for(physics)
+            and not refill.exact_for(physics))
 
 
-def _floor_departure(physics, x, v, t, lost):
-    """The rigid departure with the floor (model/cavitation.py) from the release state, until the
-    cavity closes; its series: the force ``-U/(X + s_c)``, the axis at the floor while the cavity
-    ``R_c = sqrt(2 s_c)`` is open, the energy lost (viscous and to the void) from the kinetic
-    energy."""
+def _floor_exact(physics):
+    return cavitation.exact_for(physics) or refill.exact_for(physics)
+
+
+def _refill_departs(physics):
+    return refill.exact_for(physics) and not cavitation.exact_for(physics)
+
+
+def _floor_departure(physics, x, v, t, lost, film):
+    """The rigid departure with the floor from the release state, until the cavity closes: the
+    Reynolds condition's (model/cavitation.py), or a JFO cavity's refill (``_refill_departure``).
+    Its series: the force ``-U/(X + s_c)``, the axis at the floor while the cavity ``R_c = sqrt(2
+    s_c)`` is open, the energy lost (viscous and to the void) from the kinetic energy."""
     if v >= 0.0:
         return None
+    if _refill_departs(physics):
+        return _refill_departure(physics, x, v, t, lost, film)
     x_end, u_end, t_end, (xs, us, ts) = cavitation.departure(x, -v, t, physics.St, physics.Pi)
     sigma = np.array([cavitation.cavity_fraction(physics.Pi * xi * xi / (6.0 * ui))
                       for xi, ui in zip(xs, us)])
@@ -190,6 +213,28 @@ def _floor_departure(physics, x, v, t, lost):
     block["F"] = vs / (xs * (1.0 + sigma))
     block["P_min"] = np.where(sigma > 0.0, -physics.Pi, block["P_min"])
     block["cavity_radius"] = np.sqrt(2.0 * sigma * xs)
+    return x_end, -u_end, t_end, block
+
+
+def _refill_departure(physics, x, v, t, lost, film):
+    """A JFO cavity's refill departure (model/refill.py) from the release state ``film``; None
+    where the film is full there (the classic departure), RUN_ON where the cavity would grow or
+    the spheres stop with it open. Its series as ``_floor_departure``'s, with the void the
+    cavity's cells leave empty."""
+    code, x_end, u_end, t_end, path = refill.departure(x, -v, t, physics.St, physics.Pi,
+                                                       film.s_face, film.theta)
+    if code != refill.CLOSED:
+        return RUN_ON
+    if path.shape[1] == 1:  # no cavity at the release
+        return None
+    xs, us, ts, qs = path
+    vs = -us
+    block = rigid_block(ts, xs, vs, physics.tau_per_t, 2, lost + (v**2 - vs * vs))
+    block["F"] = refill.force(xs, us, qs, physics.Pi)
+    block["P_min"] = np.where(qs > 0.0, -physics.Pi, block["P_min"])
+    block["cavity_radius"] = np.sqrt(2.0 * qs)
+    block["void_volume"] = refill.void_volume(xs, qs, x, -v, physics.Pi, film.s_face,
+                                              film.theta)
     return x_end, -u_end, t_end, block
 
 
@@ -210,12 +255,12 @@ def crossing_speed(x_c, v_c, x_ref):
     return outward_crossing(x_c, v_c, x_ref) if x_c[-1] > x_ref else None
 
 
-def _cavity_restitution(physics, x_c, v_c, j, x_ref, cols):
+def _cavity_restitution(physics, x_c, v_c, j, x_ref, cols, film):
     """``e`` at ``x_ref`` with a floor: by the floor's departure from row ``j``; or, for a film
-    that refills (the coupled phase ran until the film is full again, from where the classic
-    rigid departure is exact), by the classic departure where the film is full from row ``j``
-    on, else from the coupled phase's own speed where it crosses ``x_ref`` (possibly with a
-    cavity open), interpolated."""
+    that refills (from where the classic rigid departure is exact), by the classic departure
+    where the film is full from row ``j`` on, else from the coupled phase's own speed where it
+    crosses ``x_ref`` (possibly with a cavity open), interpolated, else by the refill departure
+    from the release state ``film`` (model/refill.py) where the cavity is still open there."""
     if cavitation.exact_for(physics):
         return cavitation.restitution(x_c[j], v_c[j], physics, x_ref)
     open_cavity = cols["cavity_radius"] + cols["void_volume"]
@@ -226,6 +271,11 @@ def _cavity_restitution(physics, x_c, v_c, j, x_ref, cols):
     if speed is not None:
         return rigid.restitution_of_speed(speed, physics, x_ref)
     last = len(x_c) - 1
+    if _refill_departs(physics) and open_cavity[last] > 0.0 and v_c[last] < 0.0 \
+            and x_c[last] <= x_ref:
+        speed = refill.speed_at(x_c[last], -v_c[last], physics.St, physics.Pi, film.s_face,
+                                film.theta, x_ref)
+        return rigid.restitution_of_speed(speed, physics, x_ref)
     return rigid.restitution_of_speed(
         rigid.departure_speed(x_c[last], v_c[last], physics.St, x_ref), physics, x_ref)
 
@@ -237,9 +287,12 @@ def _observe_cavity(result, cols, tau, blocks):
     if cavity.size:
         result.tau_cavitation_onset = float(tau[cavity[0]])
     result.void_volume_max = float(np.max(cols["void_volume"]))
-    if blocks[-1]["phase"][0] == 2:  # the departure's cavity (with a floor) may be the widest
-        widest = max(float(np.max(b["cavity_radius"])) for b in blocks if b["phase"][0] == 2)
+    if blocks[-1]["phase"][0] == 2:  # the departure's cavity (with a floor) may be the widest,
+        departing = [b for b in blocks if b["phase"][0] == 2]  # a refill's void the largest
+        widest = max(float(np.max(b["cavity_radius"])) for b in departing)
         result.cavity_radius_max = max(result.cavity_radius_max, widest)
+        result.void_volume_max = max(result.void_volume_max,
+                                     max(float(np.max(b["void_volume"])) for b in departing))
         result.cavitated = result.cavitated or widest > 0.0
 
 
@@ -247,8 +300,9 @@ def _jfo(physics):
     return physics.cavitation == "jfo"
 
 
-CAVITATION = Piece("cavitation", departure="floor", departure_exact=cavitation.exact_for,
-                   depart=_floor_departure, refills=_refills, restitution=_cavity_restitution,
+CAVITATION = Piece("cavitation", departure="floor", departure_exact=_floor_exact,
+                   depart=_floor_departure, departs_apart=_refill_departs, refills=_refills,
+                   restitution=_cavity_restitution,
                    film_reach=_floor_reach, observe=_observe_cavity,
                    observables=("cavitated", "cavity_radius_max", "tau_cavitation_onset",
                                 "void_volume_max"),
@@ -322,7 +376,7 @@ def _slip_block(path, keep, tau_per_t, phase, dissipated):
     return block
 
 
-def _slip_departure(physics, x, v, t, lost):
+def _slip_departure(physics, x, v, t, lost, film):
     """The rigid slip departure from the release state (model/slip.py): out to 0.99 of the way
     to its rest in ``ln X`` or to where slip no longer counts (``slip.departure``), from where
     the classic departure goes on (its rest separation, ``ln_x_e``, is then the classic one's
@@ -337,7 +391,7 @@ def _slip_departure(physics, x, v, t, lost):
     return float(path.x[-1]), float(path.v[-1]), float(path.t[-1]), block
 
 
-def _slip_restitution(physics, x_c, v_c, j, x_ref, cols):
+def _slip_restitution(physics, x_c, v_c, j, x_ref, cols, film):
     """``e`` at ``x_ref``: the rigid slip departure's speed there from row ``j`` over the rigid
     slip approach's speed there (which arrives at ``x0`` with speed 1)."""
     c = slip.mobility_gap(physics)

@@ -12,7 +12,7 @@ import numpy as np
 from .model import rigid
 from .observables import SERIES
 
-__all__ = ["RigidHead", "KEPT", "rigid_path", "rigid_block"]
+__all__ = ["RigidHead", "ReleaseFilm", "KEPT", "rigid_path", "rigid_block"]
 
 KEPT = tuple(c for c in SERIES if c.kept)  # the series columns a result keeps
 
@@ -30,6 +30,16 @@ class RigidHead:
     block: dict  # its time series (phase 0), without the end state when a coupled phase follows
     peaks: dict  # rigid.approach_peaks keys, and x_p_max (the gap at the largest pressure)
     pressure: object  # P(s) of the film at the end state, the coupled phase's start
+
+
+@dataclass(frozen=True)
+class ReleaseFilm:
+    """The film where the coupled phase ends (the release state), as a departure that remembers
+    it reads it: the cells' outer faces in ``s`` (grid.py) and their liquid fractions ``theta``
+    (1 in full cells; a JFO cavity's below 1, model/refill.py)."""
+
+    s_face: np.ndarray
+    theta: np.ndarray
 
 
 def rigid_path(x_from, v_from, t_from, stokes, x):

@@ -11,19 +11,21 @@ approach up to the hand-over, the release, the closed-form departure, the master
 may stop the classic rigid approach earlier (``Piece.approach_stop``,
 collision.handover_separation), bring a rigid approach or a departure of its own where that is
 exact, or keep the coupled phase running until its film is full again (``events.RELAXED_FULL``);
-any piece that is on takes the master curve away.
+a departure that starts from spheres apart ends the coupled phase there
+(``events.RELAXED_APART``), and where it does not hold from that state the coupled phase runs on
+until the film is full again (``run_on``); any piece that is on takes the master curve away.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
-from .integration.events import RELAXED, RELAXED_FULL
+from .integration.events import RELAXED, RELAXED_APART, RELAXED_FULL
 from .model import rigid
 from . import pieces
 from .pieces import Piece
 
-__all__ = ["Shortcuts", "plan"]
+__all__ = ["Shortcuts", "plan", "run_on"]
 
 
 @dataclass(frozen=True)
@@ -34,8 +36,10 @@ class Shortcuts:
         The piece whose own rigid approach is exact (``Piece.rigid_approach``), or None: the
         classic closed form of model/rigid.py, up to the hand-over or to where a piece stops it.
     end_event
-        The coupled phase's terminal event (integration/events.py): ``RELAXED``, or
-        ``RELAXED_FULL`` where the departure is exact only once the film is full again.
+        The coupled phase's terminal event (integration/events.py): ``RELAXED``;
+        ``RELAXED_FULL`` where the departure is exact only once the film is full again;
+        ``RELAXED_APART`` where the departure piece's starts from spheres apart
+        (``Piece.departs_apart``).
     departure_piece
         The piece whose own rigid departure is exact (``Piece.depart``), or None: the classic
         closed form (rigid.restitution).
@@ -70,10 +74,18 @@ def plan(physics) -> Shortcuts:
     approach = next((p for p in pieces.PIECES if p.approach_exact(physics)), None)
     departure = next((p for p in pieces.PIECES if p.departure_exact(physics)), None)
     refill = next((p for p in pieces.PIECES if p.refills(physics)), None)
+    apart = departure is not None and departure.departs_apart(physics)
     return Shortcuts(
         approach_piece=approach,
-        end_event=RELAXED_FULL if refill else RELAXED,
+        end_event=RELAXED_FULL if refill else RELAXED_APART if apart else RELAXED,
         departure_piece=departure,
         reader=departure or refill,
         classic=rigid.exact_for(physics),
     )
+
+
+def run_on(shortcuts: Shortcuts) -> Shortcuts:
+    """The plan where the departure piece's own departure does not hold from the release state
+    (its ``depart`` answered ``pieces.RUN_ON``): the coupled phase runs on until the film is full
+    again, and the classic departure follows; the piece still reads ``e``."""
+    return replace(shortcuts, end_event=RELAXED_FULL, departure_piece=None)

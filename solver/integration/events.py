@@ -8,7 +8,7 @@ coupled phase: today the classic model's release (solver/model/rigid.py, ``relea
 
 from .._jit import jit
 
-__all__ = ["RELAXED", "RELAXED_FULL", "ENDED", "HELD", "reached"]
+__all__ = ["RELAXED", "RELAXED_FULL", "RELAXED_APART", "ENDED", "HELD", "reached"]
 
 # The deformation has relaxed and the remaining motion can only relax it further: from here the
 # rigid departure is exact (docs/model.md, "Rigid solution"). params = (release, V_peak,
@@ -21,6 +21,10 @@ RELAXED = 1
 # The same, and no cavity left: for a film whose cavity has a memory (JFO), the rigid departure is
 # exact only once the film is full again.
 RELAXED_FULL = 2
+# The same as RELAXED, but with a cavity open only once the spheres separate: a JFO film's rigid
+# departure with its cavity's memory (model/refill.py) starts from spheres apart; approaching,
+# the coupled phase runs on.
+RELAXED_APART = 3
 # what a film may answer instead of its active radius (model/step.py, ``record``): the motion has
 # ended (a rough film at rest on its asperities), or the phase must go on whatever the event
 # (a rough film near contact)
@@ -46,4 +50,6 @@ def reached(kind, params, steps, x, v, w_absmax, active_radius):
         return relaxed
     if kind == RELAXED_FULL:
         return relaxed and active_radius == 0.0
+    if kind == RELAXED_APART:
+        return relaxed and (active_radius == 0.0 or v < 0.0)
     return False

@@ -1080,9 +1080,19 @@ def _accept(grid, phys, hist, dt, film, work):
 
 @jit
 def _series(rows, n, save_profiles):
-    """The series and the profiles (``integrate``), NaN until written, ``rows`` rows each."""
-    n_prof = rows if save_profiles else 0
+    """The series and the profiles (``integrate``), NaN until written, ``rows`` rows each; the
+    profiles one row (the newest state's) unless ``save_profiles``."""
+    n_prof = rows if save_profiles else 1
     return _rows(rows, N_SERIES), _rows(n_prof, n), _rows(n_prof, n), _rows(n_prof, n - 1)
+
+
+@jit
+def _keep_profiles(row, p_hist, w_hist, theta_hist, y0, w, film, phys):
+    """The accepted state's pressure, deflection and fluid fractions into ``row`` of the
+    profiles (``integrate``: every row's, or the newest state's alone in row 0)."""
+    copy_into(p_hist[row], model.film_pressure(y0, film, phys))
+    copy_into(w_hist[row], w)
+    copy_into(theta_hist[row], model.fluid_fraction(film))
 
 
 @jit
@@ -1122,10 +1132,11 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles,
     series : (rows, N_SERIES) float
         One row per accepted step (the first is the initial state); columns ``SERIES``.
     pressure, deformation : (rows, N) float
-        Profiles at each row when ``save_profiles``, else (0, N).
+        Profiles at each row when ``save_profiles``, else the last row's alone (1, N): the
+        release state's, where a departure needs it (model/refill.py).
     fluid_fraction : (rows, N-1) float
         The cells' fluid fraction ``theta`` at each row (model/step.py: 1 in full cells) when
-        ``save_profiles``, else (0, N-1).
+        ``save_profiles``, else the last row's alone (1, N-1).
     attempts : (attempts, N_LOG) float
         The attempt log: a row per step attempt (``LOG_COLUMNS``), the first ``log_rows``."""
     _refuse_absent_pieces(phys)
@@ -1155,10 +1166,8 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles,
         wmax, r_event = _record(series[n_rows], hist.t[0], grid, phys, y0, w, h, strain,
                                 dissipated, film)
         _record_step(series[n_rows], hist, k_step, work.basis)
-        if save_profiles:
-            copy_into(p_hist[n_rows], model.film_pressure(y0, film, phys))
-            copy_into(w_hist[n_rows], w)
-            copy_into(theta_hist[n_rows], model.fluid_fraction(film))
+        _keep_profiles(n_rows if save_profiles else 0, p_hist, w_hist, theta_hist, y0, w, film,
+                       phys)
         n_rows += 1
         if status != RUNNING:
             break

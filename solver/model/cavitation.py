@@ -28,6 +28,8 @@ import math
 import numpy as np
 
 from .._jit import entry, jit, leaf
+from .dopri import (A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
+                    B1, B3, B4, B5, B6, C2, C3, C4, C5, E1, E3, E4, E5, E6, E7)
 
 __all__ = ["cavity_fraction", "separation_force", "departure", "speed_at", "restitution",
            "exact_for"]
@@ -134,26 +136,13 @@ def separation_force(x, u, pi):
 
 
 # --- the departure's ODE, compiled ------------------------------------------------------------
-# Solved by Dormand and Prince's explicit Runge-Kutta pair of orders 5 and 4 (J. R. Dormand,
-# P. J. Prince, J. Comput. Appl. Math. 6 (1980) 19-26; the tableau of SciPy's RK45), with the
-# classic step control, in ``ln X``, compiled with the cavity's root (``_root``): SciPy's
+# Solved by Dormand and Prince's explicit Runge-Kutta pair of orders 5 and 4 (model/dopri.py),
+# with the classic step control, in ``ln X``, compiled with the cavity's root (``_root``): SciPy's
 # ``solve_ivp`` spent 1.4-4.0 ms of Python work on a departure and its ``speed_at`` (29 DOP853
 # steps, 533 calls of a Python right-hand side), 4-16 % of a standard-preset collision; now
 # 0.13-0.32 ms. How close: docs/solver.md, Versions, 1.18.5; tests/test_cavitation.py against
 # ``solve_ivp`` at rtol 1e-13.
 RTOL, ATOL = 1e-10, 1e-14  # on (U, T)
-_C2, _C3, _C4, _C5 = 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0
-_A21 = 1.0 / 5.0
-_A31, _A32 = 3.0 / 40.0, 9.0 / 40.0
-_A41, _A42, _A43 = 44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0
-_A51, _A52, _A53, _A54 = 19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0
-_A61, _A62, _A63 = 9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0
-_A64, _A65 = 49.0 / 176.0, -5103.0 / 18656.0
-# the fifth-order weights (the seventh stage is the next step's first: its state)
-_B1, _B3, _B4, _B5, _B6 = 35.0 / 384.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0
-# the fifth-order weights less the fourth-order ones: the local error's estimate
-_E1, _E3, _E4 = 71.0 / 57600.0, -71.0 / 16695.0, 71.0 / 1920.0
-_E5, _E6, _E7 = -17253.0 / 339200.0, 22.0 / 525.0, -1.0 / 40.0
 _MAX_STEPS = 100_000
 _EVENT_ITERATIONS = 100
 
@@ -174,19 +163,19 @@ def _rk_step(lnx, u, t, h, k1u, k1t, stokes, pi, sigma):
     """One Dormand-Prince step of ``h`` from ``(ln X, U, T)`` whose slopes are ``k1u, k1t``:
     the fifth-order state, its error estimate, the slopes there (the next step's first stage)
     and the last root."""
-    k2u, k2t, sigma = _slope(lnx + _C2 * h, u + h * _A21 * k1u, stokes, pi, sigma)
-    k3u, k3t, sigma = _slope(lnx + _C3 * h, u + h * (_A31 * k1u + _A32 * k2u), stokes, pi, sigma)
-    k4u, k4t, sigma = _slope(lnx + _C4 * h, u + h * (_A41 * k1u + _A42 * k2u + _A43 * k3u),
+    k2u, k2t, sigma = _slope(lnx + C2 * h, u + h * A21 * k1u, stokes, pi, sigma)
+    k3u, k3t, sigma = _slope(lnx + C3 * h, u + h * (A31 * k1u + A32 * k2u), stokes, pi, sigma)
+    k4u, k4t, sigma = _slope(lnx + C4 * h, u + h * (A41 * k1u + A42 * k2u + A43 * k3u),
                              stokes, pi, sigma)
-    k5u, k5t, sigma = _slope(lnx + _C5 * h, u + h * (_A51 * k1u + _A52 * k2u + _A53 * k3u
-                                                     + _A54 * k4u), stokes, pi, sigma)
-    k6u, k6t, sigma = _slope(lnx + h, u + h * (_A61 * k1u + _A62 * k2u + _A63 * k3u + _A64 * k4u
-                                               + _A65 * k5u), stokes, pi, sigma)
-    u_new = u + h * (_B1 * k1u + _B3 * k3u + _B4 * k4u + _B5 * k5u + _B6 * k6u)
-    t_new = t + h * (_B1 * k1t + _B3 * k3t + _B4 * k4t + _B5 * k5t + _B6 * k6t)
+    k5u, k5t, sigma = _slope(lnx + C5 * h, u + h * (A51 * k1u + A52 * k2u + A53 * k3u
+                                                     + A54 * k4u), stokes, pi, sigma)
+    k6u, k6t, sigma = _slope(lnx + h, u + h * (A61 * k1u + A62 * k2u + A63 * k3u + A64 * k4u
+                                               + A65 * k5u), stokes, pi, sigma)
+    u_new = u + h * (B1 * k1u + B3 * k3u + B4 * k4u + B5 * k5u + B6 * k6u)
+    t_new = t + h * (B1 * k1t + B3 * k3t + B4 * k4t + B5 * k5t + B6 * k6t)
     k7u, k7t, sigma = _slope(lnx + h, u_new, stokes, pi, sigma)
-    err_u = h * (_E1 * k1u + _E3 * k3u + _E4 * k4u + _E5 * k5u + _E6 * k6u + _E7 * k7u)
-    err_t = h * (_E1 * k1t + _E3 * k3t + _E4 * k4t + _E5 * k5t + _E6 * k6t + _E7 * k7t)
+    err_u = h * (E1 * k1u + E3 * k3u + E4 * k4u + E5 * k5u + E6 * k6u + E7 * k7u)
+    err_t = h * (E1 * k1t + E3 * k3t + E4 * k4t + E5 * k5t + E6 * k6t + E7 * k7t)
     return u_new, t_new, err_u, err_t, k7u, k7t, sigma
 
 

@@ -1,0 +1,17 @@
+"""Dormand and Prince's explicit Runge-Kutta pair of orders 5 and 4 (J. R. Dormand, P. J. Prince,
+J. Comput. Appl. Math. 6 (1980) 19-26; the tableau of SciPy's RK45): the coefficients the rigid
+departures' compiled ODEs step with (model/cavitation.py, the Reynolds floor; model/refill.py, a
+JFO cavity's refill). The seventh stage is the next step's first: the slopes at the new state."""
+
+C2, C3, C4, C5 = 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0
+A21 = 1.0 / 5.0
+A31, A32 = 3.0 / 40.0, 9.0 / 40.0
+A41, A42, A43 = 44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0
+A51, A52, A53, A54 = 19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0
+A61, A62, A63 = 9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0
+A64, A65 = 49.0 / 176.0, -5103.0 / 18656.0
+# the fifth-order weights
+B1, B3, B4, B5, B6 = 35.0 / 384.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0
+# the fifth-order weights less the fourth-order ones: the local error's estimate
+E1, E3, E4 = 71.0 / 57600.0, -71.0 / 16695.0, 71.0 / 1920.0
+E5, E6, E7 = -17253.0 / 339200.0, 22.0 / 525.0, -1.0 / 40.0
