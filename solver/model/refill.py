@@ -54,6 +54,9 @@ REACHED, CLOSED, GROWS, STOPPED, TOO_MANY = 0, 1, 2, 3, -1
 RTOL, ATOL = 1e-10, 1e-14  # on (U, T); q's error against RTOL times the cavity's extent at the start
 _MAX_STEPS = 100_000
 _EVENT_ITERATIONS = 100
+# A face is reached once the front is this fraction of q's error scale (RTOL times the cavity's
+# extent) past it: the front then moves on from the face, an error far below a step's
+_FACE_TOLERANCE = 1e-3
 _SERIES_FROM = 10.0  # sig above which I is summed as a series (the closed form cancels)
 # The front's last stretch to the axis: as q -> 0, I ~ ln(X/q)/X^3, so s0 ~ 1/ln(X/q) and the
 # slope dq/d ln X has a derivative in q that grows as 1/(q ln^2): an explicit step shrinks with
@@ -152,16 +155,17 @@ def _step(lnx, u, t, q, h, k1, stokes, pi, theta, x_rel):
 
 
 @leaf
-def _step_to_face(lnx, u, t, q, h, q_hi, u_hi, t_hi, face, k1, stokes, pi, theta, x_rel):
+def _step_to_face(lnx, u, t, q, h, q_hi, u_hi, t_hi, face, k1, stokes, pi, theta, x_rel,
+                  q_tol):
     """The step ``s`` in ``(0, h]`` from ``(ln X, U, T, q)`` whose end puts the front on
     ``face`` (``q`` above it at the start, not above at the step ``h``'s end ``q_hi``), by the
     Illinois variant of the false position on ``s`` (each value a step of ``s`` itself, as
-    model/cavitation.py locates the Reynolds cavity's closing), to the rounding of ``ln X``;
-    returns ``s`` and ``U, T`` there."""
+    model/cavitation.py locates the Reynolds cavity's closing), until the front is within
+    ``q_tol`` of the face or to the rounding of ``ln X``; returns ``s`` and ``U, T`` there."""
     lo, hi, side = 0.0, h, 0
     f_lo, f_hi = q - face, q_hi - face
     for _ in range(_EVENT_ITERATIONS):
-        if hi - lo <= 4e-16 * max(1.0, abs(lnx)):
+        if hi - lo <= 4e-16 * max(1.0, abs(lnx)) or -f_hi <= q_tol:
             break
         s = hi - f_hi * (hi - lo) / (f_hi - f_lo)
         if not lo < s < hi:
@@ -230,14 +234,14 @@ def _integrate(ln_from, ln_to, u, t, x_rel, stokes, pi, faces, thetas, samples, 
             return CLOSED, lnx + step, u_new, t_new, 0.0, k
         if q_new <= face:  # the front reaches the cell's inner face within the step
             s, u, t = _step_to_face(lnx, u, t, q, step, q_new, u_new, t_new, face, k1, stokes,
-                                    pi, theta, x_rel)
+                                    pi, theta, x_rel, _FACE_TOLERANCE * RTOL * q_scale)
             lnx, q = lnx + s, face
             if cell == 0:
                 return CLOSED, lnx, u, t, 0.0, k
             cell -= 1
             face = faces[cell - 1] if cell > 0 else 0.0
             k1 = _slope(lnx, u, q, stokes, pi, thetas[cell], x_rel)
-            h = max(s, 1e-6)
+            h = step  # the controller's step, which the next cell's error test then judges
             continue
         lnx = end if landing else lnx + step
         u, t, q, k1 = u_new, t_new, q_new, k7
