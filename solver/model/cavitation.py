@@ -29,7 +29,8 @@ import numpy as np
 
 from .._jit import entry, jit, leaf
 from .dopri import (A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
-                    B1, B3, B4, B5, B6, C2, C3, C4, C5, E1, E3, E4, E5, E6, E7)
+                    B1, B3, B4, B5, B6, C2, C3, C4, C5, E1, E3, E4, E5, E6, E7, illinois,
+                    trial)
 
 __all__ = ["cavity_fraction", "separation_force", "departure", "speed_at", "restitution",
            "exact_for"]
@@ -197,21 +198,12 @@ def _step_to_closing(lnx, u, t, h, u_hi, t_hi, k1u, k1t, stokes, pi, sigma):
     for _ in range(_EVENT_ITERATIONS):
         if hi - lo <= 4e-16 * max(1.0, abs(lnx)):
             break
-        s = hi - f_hi * (hi - lo) / (f_hi - f_lo)
-        if not lo < s < hi:
-            s = 0.5 * (lo + hi)
+        s = trial(lo, hi, f_lo, f_hi)
         u_s, t_s, _, _, _, _, _ = _rk_step(lnx, u, t, s, k1u, k1t, stokes, pi, sigma)
-        f_s = _closing(lnx + s, u_s, pi)
-        if f_s >= 0.0:
-            hi, f_hi, u_hi, t_hi = s, f_s, u_s, t_s
-            if side == 1:
-                f_lo *= 0.5
-            side = 1
-        else:
-            lo, f_lo = s, f_s
-            if side == -1:
-                f_hi *= 0.5
-            side = -1
+        lo, hi, f_lo, f_hi, side = illinois(lo, hi, f_lo, f_hi, side, s,
+                                            _closing(lnx + s, u_s, pi))
+        if side == 1:
+            u_hi, t_hi = u_s, t_s
     return hi, u_hi, t_hi
 
 

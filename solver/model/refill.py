@@ -44,14 +44,16 @@ import numpy as np
 from .._jit import entry, jit, leaf
 from .cavitation import cavity_fraction
 from .dopri import (A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
-                    B1, B3, B4, B5, B6, C2, C3, C4, C5, E1, E3, E4, E5, E6, E7)
+                    B1, B3, B4, B5, B6, C2, C3, C4, C5, E1, E3, E4, E5, E6, E7, illinois,
+                    trial)
 
 __all__ = ["REACHED", "CLOSED", "GROWS", "STOPPED", "outer_integral", "front_source", "force",
            "departure", "speed_at", "void_volume", "exact_for"]
 
 # How a departure ended (``_integrate``)
 REACHED, CLOSED, GROWS, STOPPED, TOO_MANY = 0, 1, 2, 3, -1
-RTOL, ATOL = 1e-10, 1e-14  # on (U, T); q's error against RTOL times the cavity's extent at the start
+# on (U, T); q's error against RTOL times the cavity's extent at the start
+RTOL, ATOL = 1e-10, 1e-14
 _MAX_STEPS = 100_000
 _EVENT_ITERATIONS = 100
 # A face is reached once the front is this fraction of q's error scale (RTOL times the cavity's
@@ -163,25 +165,15 @@ def _step_to_face(lnx, u, t, q, h, q_hi, u_hi, t_hi, face, k1, stokes, pi, theta
     model/cavitation.py locates the Reynolds cavity's closing), until the front is within
     ``q_tol`` of the face or to the rounding of ``ln X``; returns ``s`` and ``U, T`` there."""
     lo, hi, side = 0.0, h, 0
-    f_lo, f_hi = q - face, q_hi - face
+    f_lo, f_hi = face - q, face - q_hi  # the event function, at or past the face where >= 0
     for _ in range(_EVENT_ITERATIONS):
-        if hi - lo <= 4e-16 * max(1.0, abs(lnx)) or -f_hi <= q_tol:
+        if hi - lo <= 4e-16 * max(1.0, abs(lnx)) or f_hi <= q_tol:
             break
-        s = hi - f_hi * (hi - lo) / (f_hi - f_lo)
-        if not lo < s < hi:
-            s = 0.5 * (lo + hi)
+        s = trial(lo, hi, f_lo, f_hi)
         u_s, t_s, q_s, _, _, _, _ = _step(lnx, u, t, q, s, k1, stokes, pi, theta, x_rel)
-        f_s = q_s - face
-        if f_s <= 0.0:
-            hi, f_hi, u_hi, t_hi = s, f_s, u_s, t_s
-            if side == 1:
-                f_lo *= 0.5
-            side = 1
-        else:
-            lo, f_lo = s, f_s
-            if side == -1:
-                f_hi *= 0.5
-            side = -1
+        lo, hi, f_lo, f_hi, side = illinois(lo, hi, f_lo, f_hi, side, s, face - q_s)
+        if side == 1:
+            u_hi, t_hi = u_s, t_s
     return hi, u_hi, t_hi
 
 
