@@ -11,7 +11,7 @@ import pytest
 from scipy.integrate import quad, solve_ivp
 
 from solver import Physics, collide, pieces
-from solver.model import cavitation, refill
+from solver.model import cavitation, refill, rigid
 
 
 @pytest.mark.parametrize("x, q", [(1.0, 0.3), (2.0, 19.0), (1.0, 9.999), (1.0, 10.001),
@@ -205,6 +205,22 @@ def test_where_the_refill_would_grow_the_coupled_phase_runs_on(monkeypatch):
     full = _coupled_until_full(physics, monkeypatch)
     for name in ("e_wet", "ln_x_e_x1", "v_r", "void_volume_max", "tau_release", "steps"):
         assert getattr(ran_on, name) == getattr(full, name), name
+
+
+def test_a_speed_at_x_ref_the_refill_cannot_give_is_the_classic_departures(monkeypatch):
+    """Where speed_at answers None (its run to x_ref grew or stopped, while the departure's
+    closed), e_wet is the classic departure's from the release, as before the refill departure:
+    one line of physics instead of an exception."""
+    physics = Physics(cavitation="jfo", **SCENES[0])
+    with monkeypatch.context() as m:
+        m.setattr(refill, "speed_at", lambda *args: None)
+        result = collide(physics)
+    coupled = result.series["phase"] == 1
+    x, v = result.series["X"][coupled][-1], result.series["V"][coupled][-1]
+    x_ref = result.x_ref_x0 * physics.x_start
+    classic = rigid.restitution_of_speed(rigid.departure_speed(x, v, physics.St, x_ref), physics,
+                                         x_ref)
+    assert x < x_ref and result.e_wet == classic
 
 
 def test_a_compressible_liquid_keeps_the_coupled_phase_until_full():
