@@ -199,8 +199,9 @@ def _refill_departs(physics):
 def _floor_departure(physics, x, v, t, lost, film):
     """The rigid departure with the floor from the release state, until the cavity closes: the
     Reynolds condition's (model/cavitation.py), or a JFO cavity's refill (``_refill_departure``).
-    Its series: the force ``-U/(X + s_c)``, the axis at the floor while the cavity ``R_c = sqrt(2
-    s_c)`` is open, the energy lost (viscous and to the void) from the kinetic energy."""
+    The Reynolds departure's series: the force ``-U/(X + s_c)``, the axis at the floor while the
+    cavity ``R_c = sqrt(2 s_c)`` is open, the energy lost (viscous and to the void) from the
+    kinetic energy."""
     if v >= 0.0:
         return None
     if _refill_departs(physics):
@@ -218,9 +219,9 @@ def _floor_departure(physics, x, v, t, lost, film):
 
 def _refill_departure(physics, x, v, t, lost, film):
     """A JFO cavity's refill departure (model/refill.py) from the release state ``film``; None
-    where the film is full there (the classic departure), RUN_ON where the cavity would grow or
-    the spheres stop with it open. Its series as ``_floor_departure``'s, with the void the
-    cavity's cells leave empty."""
+    where the film is full there (the classic departure), RUN_ON where the cavity would grow, the
+    spheres stop with it open or its steps run out. Its series as the Reynolds departure's, with
+    the refill's force (``refill.force``) and the void the cavity's cells leave empty."""
     code, x_end, u_end, t_end, path = refill.departure(x, -v, t, physics.St, physics.Pi,
                                                        film.s_face, film.theta)
     if code != refill.CLOSED:
