@@ -1,6 +1,6 @@
 """The rigid departure of a mass-conserving (JFO) film whose cavity is still open at the release:
 the cavity refills from its outer edge, and the spheres move as the film it leaves pulls them
-(docs/model.md, "Cavitation").
+(docs/model.md, "Cavitation": "The refill departure (JFO)").
 
 At the release the surfaces are rigid again (``H = X + s``, ``s = R^2/2``) and separate at
 ``U = -V > 0``. Then:
@@ -25,8 +25,9 @@ At the release the surfaces are rigid again (``H = X + s``, ``s = R^2/2``) and s
   ``s``, fills the void ``H_q - c(q)`` it reaches, ``dq/dT = U (s0 - q) / (H_q - c(q))``. The
   cavity refills while ``s0 < q``; ``s0 = q`` is the Reynolds condition (model/cavitation.py),
   where the front stalls; ``s0 > q`` would make it grow again, with cells cavitating full: a
-  history this departure does not follow (``GROWS``: the coupled phase then runs on until the
-  film is full again, as it did before solver 1.19.0).
+  history this departure does not follow (``GROWS``; and ``STOPPED`` where the spheres stop with
+  the cavity open: the coupled phase then runs on until the film is full again, as it did
+  before solver 1.19.0).
 
 So the departure is an ODE in ``(U, T, q)`` over ``ln X``: ``dU/d ln X = X F/(St U)``, ``dT/d ln X
 = X/U``, ``dq/d ln X = X (dq/dT)/U``. Each cell's content is constant, so its right-hand side is
