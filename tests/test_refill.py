@@ -207,6 +207,28 @@ def test_where_the_refill_would_grow_the_coupled_phase_runs_on(monkeypatch):
         assert getattr(ran_on, name) == getattr(full, name), name
 
 
+def test_spheres_that_stop_with_the_cavity_open_run_the_coupled_phase_on(monkeypatch):
+    """St 3, eps 1e-2, Pi 1e-4 (standard): released at X 7.2 with U 0.14, the spheres would stop
+    at X 17 with the cavity still open (the refill departure answers STOPPED; measured), so the
+    collision is the coupled phase run until the film is full, to the bit."""
+    physics = Physics(St=3.0, eps=1e-2, Pi=1e-4, cavitation="jfo")
+    codes = []
+    real = refill.departure
+
+    def recorded(*args, **kwargs):
+        answer = real(*args, **kwargs)
+        codes.append(answer[0])
+        return answer
+
+    with monkeypatch.context() as m:
+        m.setattr(refill, "departure", recorded)
+        ran_on = collide(physics)
+    assert codes == [refill.STOPPED]
+    full = _coupled_until_full(physics, monkeypatch)
+    for name in ("e_wet", "ln_x_e_x1", "v_r", "void_volume_max", "tau_release", "steps"):
+        assert getattr(ran_on, name) == getattr(full, name), name
+
+
 def test_a_speed_at_x_ref_the_refill_cannot_give_is_the_classic_departures(monkeypatch):
     """Where speed_at answers None (its run to x_ref grew or stopped, while the departure's
     closed), e_wet is the classic departure's from the release, as before the refill departure:
