@@ -31,6 +31,7 @@ __all__ = ["Piece", "PIECES", "RUN_ON", "CAVITY_REACH", "WIDEST_CAVITY", "SLIP_R
 # What a piece's ``depart`` answers where its departure does not hold from the release state
 # and the coupled phase must run on until the film is full again (``events.RELAXED_FULL``;
 # shortcuts.run_on): a JFO cavity that would grow again, or spheres that stop with it open
+# (the time loop asks the same where the phase would end and runs on itself: a safety net)
 RUN_ON = "run on"
 
 

@@ -86,6 +86,7 @@ def plan(physics) -> Shortcuts:
 
 def run_on(shortcuts: Shortcuts) -> Shortcuts:
     """The plan where the departure piece's own departure does not hold from the release state
-    (its ``depart`` answered ``pieces.RUN_ON``): the coupled phase runs on until the film is full
-    again, and the classic departure follows; the piece still reads ``e``."""
+    (its ``depart`` answered ``pieces.RUN_ON``; the time loop has asked it already where the
+    phase ended, so this is a safety net, not seen in use): the coupled phase is solved again
+    until the film is full, and the classic departure follows; the piece still reads ``e``."""
     return replace(shortcuts, end_event=RELAXED_FULL, departure_piece=None)

@@ -208,25 +208,34 @@ def test_where_the_refill_would_grow_the_coupled_phase_runs_on(monkeypatch):
 
 
 def test_spheres_that_stop_with_the_cavity_open_run_the_coupled_phase_on(monkeypatch):
-    """St 3, eps 1e-2, Pi 1e-4 (standard): released at X 7.2 with U 0.14, the spheres would stop
-    at X 17 with the cavity still open (the refill departure answers STOPPED; measured), so the
-    collision is the coupled phase run until the film is full, to the bit."""
+    """St 3, eps 1e-2, Pi 1e-4 (standard): where the coupled phase would end (released at X 7.2
+    with U 0.14), the spheres would stop at X 17 with the cavity still open (the refill
+    departure answers STOPPED; measured). The time loop asks ``refill.closes`` there and runs on
+    until the film is full, in the same solve (no second one: ``collision.run_on`` is not
+    called), so the collision is the coupled phase run until full, to the bit."""
+    import solver.collision as collision
+
     physics = Physics(St=3.0, eps=1e-2, Pi=1e-4, cavitation="jfo")
-    codes = []
-    real = refill.departure
-
-    def recorded(*args, **kwargs):
-        answer = real(*args, **kwargs)
-        codes.append(answer[0])
-        return answer
-
+    reruns = []
+    real = collision.run_on
     with monkeypatch.context() as m:
-        m.setattr(refill, "departure", recorded)
+        m.setattr(collision, "run_on", lambda plan: reruns.append(plan) or real(plan))
         ran_on = collide(physics)
-    assert codes == [refill.STOPPED]
+    assert reruns == []
+    coupled = ran_on.series["phase"] == 1
+    assert ran_on.series["cavity_radius"][coupled][-1] == 0.0  # full at the coupled phase's end
     full = _coupled_until_full(physics, monkeypatch)
     for name in ("e_wet", "ln_x_e_x1", "v_r", "void_volume_max", "tau_release", "steps"):
         assert getattr(ran_on, name) == getattr(full, name), name
+
+
+def test_closes_is_the_departures_first_pass():
+    """``refill.closes`` (what the time loop asks) answers as ``departure`` does: CLOSED for the
+    test's release state, and not where the front starts inside the Reynolds edge (GROWS)."""
+    x_rel, u0, stokes, pi = RELEASE
+    assert refill.closes(x_rel, u0, 0.0, stokes, pi, FACES, THETAS)
+    assert not refill.closes(x_rel, u0, 0.0, stokes, pi, FACES[:3], THETAS[:3])
+    assert refill.closes(x_rel, u0, 0.0, stokes, pi, FACES, np.ones(8))
 
 
 def test_a_speed_at_x_ref_the_refill_cannot_give_is_the_classic_departures(monkeypatch):

@@ -23,7 +23,9 @@ RELAXED = 1
 RELAXED_FULL = 2
 # The same as RELAXED, but with a cavity open only once the spheres separate: a JFO film's rigid
 # departure with its cavity's memory (model/refill.py) starts from spheres apart; approaching,
-# the coupled phase runs on.
+# the coupled phase runs on. Where it happens the loop asks whether that departure refills the
+# cavity (model/step.py: ``departure_holds``); where it does not, the phase goes on as
+# RELAXED_FULL (integration/stepper.py).
 RELAXED_APART = 3
 # what a film may answer instead of its active radius (model/step.py, ``record``): the motion has
 # ended (a rough film at rest on its asperities), or the phase must go on whatever the event

@@ -47,7 +47,7 @@ from ..model import step as model
 from ..model.kind import LOG_CODE, holds_asked
 from ..model.state import Step, array_record
 from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
-from .events import reached
+from .events import RELAXED_APART, RELAXED_FULL, reached
 from .linalg import MAX_SLOTS, lowrank_prepare, lowrank_solve, lu_factor, lu_solve, matvec
 
 # status codes of the loop (solver/observables.py: STATUS)
@@ -222,6 +222,17 @@ def _rows(rows, cols):
     NaN, never uninitialised memory (it had stored a rough film's cavity radius as 6e-314 and
     619, different from run to run)."""
     return filled((rows, cols), np.nan)
+
+
+@jit
+def _grown(rows, series, p_hist, w_hist, theta_hist, save_profiles):
+    """The series and the profiles (``integrate``) at twice ``rows`` rows (the profiles only
+    where every row is kept): the new row count and the arrays."""
+    rows *= 2
+    if save_profiles:
+        p_hist, w_hist, theta_hist = (_grow(p_hist, rows), _grow(w_hist, rows),
+                                      _grow(theta_hist, rows))
+    return rows, _grow(series, rows), p_hist, w_hist, theta_hist
 
 
 @jit
@@ -1158,11 +1169,8 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles,
     status = RUNNING
     while True:
         if n_rows == rows:  # ---- record the accepted state (also the initial one) ----------
-            rows *= 2
-            series = _grow(series, rows)
-            if save_profiles:
-                p_hist, w_hist, theta_hist = (_grow(p_hist, rows), _grow(w_hist, rows),
-                                              _grow(theta_hist, rows))
+            rows, series, p_hist, w_hist, theta_hist = _grown(rows, series, p_hist, w_hist,
+                                                              theta_hist, save_profiles)
         wmax, r_event = _record(series[n_rows], hist.t[0], grid, phys, y0, w, h, strain,
                                 dissipated, film)
         _record_step(series[n_rows], hist, k_step, work.basis)
@@ -1173,8 +1181,11 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles,
             break
         if reached(stop_kind, stop_params, work.counters[STEPS], y0[n], y0[n + 1], wmax,
                    r_event):
-            status = OK
-            break
+            if stop_kind != RELAXED_APART or model.departure_holds(grid, y0[n], y0[n + 1],
+                                                                   hist.t[0], film, phys):
+                status = OK
+                break
+            stop_kind = RELAXED_FULL  # its departure would not hold: on until the film is full
         # ---- attempt steps until one is accepted ---------------------------------------------
         status, accepted, dt, err, set_changes = _attempt(grid, phys, control, hist, dt, film,
                                                           fac, work)

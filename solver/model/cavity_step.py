@@ -16,6 +16,7 @@ from ..physics import CAVITATION, PI, ST
 from .film import (JFO, cavity_edge, constrain, jfo_void, update_cavity, update_cavity_jfo,
                    void_work)
 from .kind import CAVITATION_CODE, asks_floor
+from .refill import closes
 
 _R_CAV, _V_VOID = SERIES_INDEX["cavity_radius"], SERIES_INDEX["void_volume"]
 
@@ -203,6 +204,16 @@ def _any(cells):
         if cells[i]:
             return True
     return False
+
+
+@hook
+def departure_holds(grid, x, v, t, film, phys):
+    """Whether the rigid departure of the accepted state ``(x, v, t)`` holds, where the coupled
+    phase would end there: for a JFO cavity open while the spheres separate, its refill
+    departure must refill it (model/refill.py, ``closes``); otherwise True."""
+    if not held(phys) or v >= 0.0 or not _any(film.cavity.active0):
+        return True
+    return closes(x, -v, t, phys[ST], phys[PI], grid.s_face, film.cavity.theta0)
 
 
 @leaf

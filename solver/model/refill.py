@@ -43,13 +43,13 @@ import math
 import numpy as np
 
 from .._jit import entry, jit, leaf
-from .cavitation import cavity_fraction
+from .cavitation import _root  # cavitation.cavity_fraction, compiled
 from .dopri import (A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
                     B1, B3, B4, B5, B6, C2, C3, C4, C5, E1, E3, E4, E5, E6, E7, illinois,
                     trial)
 
 __all__ = ["REACHED", "CLOSED", "GROWS", "STOPPED", "outer_integral", "front_source", "force",
-           "departure", "speed_at", "void_volume", "exact_for"]
+           "closes", "departure", "speed_at", "void_volume", "exact_for"]
 
 # How a departure ended (``_integrate``)
 REACHED, CLOSED, GROWS, STOPPED, TOO_MANY = 0, 1, 2, 3, -1
@@ -61,6 +61,7 @@ _EVENT_ITERATIONS = 100
 # extent) past it: the front then moves on from the face, an error far below a step's
 _FACE_TOLERANCE = 1e-3
 _SERIES_FROM = 10.0  # sig above which I is summed as a series (the closed form cancels)
+_FAR = 700.0  # in ln X, beyond any departure: U only falls, and the front must close first
 # The front's last stretch to the axis: as q -> 0, I ~ ln(X/q)/X^3, so s0 ~ 1/ln(X/q) and the
 # slope dq/d ln X has a derivative in q that grows as 1/(q ln^2): an explicit step shrinks with
 # q, and q falls by a fixed factor a step. Below _CLOSED times the axis cell's face the rest of
@@ -251,9 +252,19 @@ def _integrate(ln_from, ln_to, u, t, x_rel, stokes, pi, faces, thetas, samples, 
 
 
 def _cavity(s_face, theta, x_rel, u, pi):
+    """``_cavity_cells`` of a release state from Python: None without a cavity."""
+    faces, thetas = _cavity_cells(np.ascontiguousarray(s_face, dtype=float),
+                                  np.ascontiguousarray(theta, dtype=float), float(x_rel),
+                                  float(u), float(pi))
+    return (faces, thetas) if faces.size else None
+
+
+@entry
+@jit
+def _cavity_cells(s_face, theta, x_rel, u, pi):
     """The faces and fractions of the cells ``[0, q]`` from a release state's fractions ``theta``
     per cell (``< 1`` in a cavity; gap ``x_rel``, speed ``u``, floor ``-pi``): every cell inside
-    the outermost cavitated one (module docstring); None without a cavity.
+    the outermost cavitated one (module docstring); empty without a cavity.
 
     The outermost cell holds the front. Where it is fuller than the one inside it, the front has
     passed part of it: that part is full, the rest holds the inner cell's fraction, and the front
@@ -262,16 +273,17 @@ def _cavity(s_face, theta, x_rel, u, pi):
     front starts on that cavity's edge, with the cell's liquid inside it. Without this, the front
     started at the cell's outer face, a cell beyond where its void begins (the cavity up to 13 %
     wider at the release than the coupled phase's, at St 10, eps 1e-4, Pi 1e-6)."""
-    cavitated = np.nonzero(np.asarray(theta) < 1.0)[0]
-    if not cavitated.size:
-        return None
-    last = int(cavitated[-1])
-    faces = np.array(s_face[: last + 1], dtype=float)
-    thetas = np.minimum(np.array(theta[: last + 1], dtype=float), 1.0)
+    last = -1
+    for i in range(theta.size):
+        if theta[i] < 1.0:
+            last = i
+    faces, thetas = np.empty(last + 1), np.empty(last + 1)
+    for i in range(last + 1):
+        faces[i], thetas[i] = s_face[i], min(theta[i], 1.0)
     if last > 0 and thetas[last] > thetas[last - 1]:
         inner, outer = faces[last - 1], faces[last]
         front = _front_in_cell(inner, outer, thetas[last - 1], thetas[last], x_rel)
-        stall = cavity_fraction(pi * x_rel * x_rel / (6.0 * u)) * x_rel * (1.0 + _STALL_MARGIN)
+        stall = _root(pi * x_rel * x_rel / (6.0 * u), 0.0) * x_rel * (1.0 + _STALL_MARGIN)
         front = min(outer, max(front, stall))
         # the cell's liquid inside [inner, front]: all of it less the full part beyond the front
         liquid = thetas[last] * _rigid_gap_integral(inner, outer, x_rel) \
@@ -281,11 +293,13 @@ def _cavity(s_face, theta, x_rel, u, pi):
     return faces, thetas
 
 
+@leaf
 def _rigid_gap_integral(a, b, x_rel):
     """``Int_a^b (x_rel + s) ds``: a full rigid film's liquid over ``[a, b]``."""
     return x_rel * (b - a) + 0.5 * (b * b - a * a)
 
 
+@leaf
 def _front_in_cell(a, b, theta_in, theta_cell, x_rel):
     """The front ``q0`` in the cell ``[a, b]`` of fraction ``theta_cell`` whose part ``[q0, b]``
     is full and ``[a, q0]`` holds ``theta_in``: the same liquid, ``Int_a^q0 (x_rel + s) ds =
@@ -293,6 +307,22 @@ def _front_in_cell(a, b, theta_in, theta_cell, x_rel):
     target = (1.0 - theta_cell) / (1.0 - theta_in) * _rigid_gap_integral(a, b, x_rel)
     # x_rel (q0 - a) + (q0^2 - a^2)/2 = target: q0 = -x_rel + sqrt((x_rel + a)^2 + 2 target)
     return min(b, math.sqrt((x_rel + a) ** 2 + 2.0 * target) - x_rel)
+
+
+@jit
+def closes(x, u, t, stokes, pi, s_face, theta):
+    """Whether the refill departure from the release state ``(x, u > 0, t)`` with the cells'
+    fractions ``theta`` (outer faces ``s_face``) ends with the cavity refilled (``CLOSED``), as
+    ``departure``'s first pass decides it; True without a cavity. The time loop asks it where a
+    JFO film's coupled phase would end (integration/stepper.py, events.RELAXED_APART): where it
+    would not, the phase runs on until the film is full again, instead of being solved again."""
+    faces, thetas = _cavity_cells(s_face, theta, x, u, pi)
+    if faces.size == 0:
+        return True
+    ln0 = math.log(x)
+    code = _integrate(ln0, ln0 + _FAR, u, t, x, stokes, pi, faces, thetas, np.empty(0),
+                      np.empty((3, 0)))[0]
+    return code == CLOSED
 
 
 def departure(x_from, u_from, t_from, stokes, pi, s_face, theta, samples=40):
@@ -311,8 +341,7 @@ def departure(x_from, u_from, t_from, stokes, pi, s_face, theta, samples=40):
         return CLOSED, x_from, u_from, t_from, np.array([[x_from], [u_from], [t_from], [0.0]])
     faces, thetas = cavity
     ln0 = math.log(x_from)
-    ln_far = ln0 + 700.0  # beyond any departure: U only falls, and the front must close first
-    code, ln_c, u_c, t_c, _, _ = _integrate(ln0, ln_far, float(u_from), float(t_from),
+    code, ln_c, u_c, t_c, _, _ = _integrate(ln0, ln0 + _FAR, float(u_from), float(t_from),
                                             float(x_from), float(stokes), float(pi), faces,
                                             thetas, np.empty(0), np.empty((3, 0)))
     if code == REACHED:  # not met: U only falls, the front closes long before

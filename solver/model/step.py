@@ -49,7 +49,7 @@ from . import cavity_step, contact_step
 # the contract's answers that one piece alone changes are that piece's hooks themselves (a
 # wrapper here would cost a call and a reference count on the loop's hottest path)
 from .cavity_step import on as has_active_set  # a floor: an active set
-from .cavity_step import split_update, start_attempt, update_norm  # noqa: F401
+from .cavity_step import departure_holds, split_update, start_attempt, update_norm  # noqa: F401
 from .contact_step import (film_change, film_pressure, relaxing_deflection,  # noqa: F401
                            surface_gap, total_force)
 from .contact import HOLD, REST
