@@ -1158,7 +1158,7 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles,
     fac = _factorisation(n + 2)
     w, h, q = work.w, work.h, work.q
     y0 = hist.y[0]  # the newest accepted state: _shift writes each new one into this row
-    rows = 256
+    rows = np.int64(256)  # (as the literal, _grown and _rows compiled twice)
     series, p_hist, w_hist, theta_hist = _series(rows, n, save_profiles)
     film, strain, diss_rate = _initial_film(grid, phys, hist, work)
     dissipated = start.dissipated
@@ -1174,8 +1174,8 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles,
         wmax, r_event = _record(series[n_rows], hist.t[0], grid, phys, y0, w, h, strain,
                                 dissipated, film)
         _record_step(series[n_rows], hist, k_step, work.basis)
-        _keep_profiles(n_rows if save_profiles else 0, p_hist, w_hist, theta_hist, y0, w, film,
-                       phys)
+        _keep_profiles(n_rows if save_profiles else np.int64(0), p_hist, w_hist, theta_hist, y0,
+                       w, film, phys)
         n_rows += 1
         if status != RUNNING:
             break

@@ -29,8 +29,8 @@ import numpy as np
 
 from .._jit import entry, jit, leaf
 from .dopri import (A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
-                    B1, B3, B4, B5, B6, C2, C3, C4, C5, E1, E3, E4, E5, E6, E7, illinois,
-                    trial)
+                    B1, B3, B4, B5, B6, C2, C3, C4, C5, E1, E3, E4, E5, E6, E7,
+                    after_acceptance, after_rejection, illinois, trial)
 
 __all__ = ["cavity_fraction", "separation_force", "departure", "speed_at", "restitution",
            "exact_for"]
@@ -243,7 +243,7 @@ def _integrate(ln_from, ln_to, u, t, stokes, pi, rtol, atol, samples, path):
         scale_t = atol + rtol * max(abs(t), abs(t_new), abs(t_new - t))
         error = math.sqrt(0.5 * ((err_u / scale_u) ** 2 + (err_t / scale_t) ** 2))
         if not error <= 1.0:  # NaN too (a trial stage past U = 0)
-            h = step * max(0.2, 0.9 * error ** -0.2) if error == error else 0.2 * step
+            h = after_rejection(step, error)
             continue
         if _closing(lnx, u, pi) < 0.0 <= _closing(lnx + step, u_new, pi):
             s, u, t = _step_to_closing(lnx, u, t, step, u_new, t_new, k1u, k1t, stokes, pi,
@@ -254,7 +254,7 @@ def _integrate(ln_from, ln_to, u, t, stokes, pi, rtol, atol, samples, path):
         if landing and k < samples.size:
             path[0, k], path[1, k] = u, t
             k += 1
-        grown = step * min(10.0, 0.9 * max(error, 1e-10) ** -0.2)
+        grown = after_acceptance(step, error)
         h = max(h, grown) if landing else grown  # a landing step is no measure of the step
     return math.nan, u, t, closed, k
 

@@ -3,9 +3,11 @@ J. Comput. Appl. Math. 6 (1980) 19-26; the tableau of SciPy's RK45): the coeffic
 departures' compiled ODEs step with (model/cavitation.py, the Reynolds floor; model/refill.py, a
 JFO cavity's refill). The seventh stage is the next step's first: the slopes at the new state.
 
-Both locate an event within a step (the cavity's closing, a cell face the front reaches) by the
-Illinois variant of the false position on the step's length, each trial a step of its own
-length: ``trial`` and ``illinois`` below."""
+Both control the step the classic way (``after_rejection``, ``after_acceptance``: the error's
+fifth root, a safety factor 0.9, at most 10x larger and at most 5x smaller), and locate an event
+within a step (the cavity's closing, a cell face the front reaches) by the Illinois variant of
+the false position on the step's length, each trial a step of its own length: ``trial`` and
+``illinois`` below."""
 
 from .._jit import leaf
 
@@ -40,3 +42,16 @@ def illinois(lo, hi, f_lo, f_hi, side, s, f_s):
     if f_s >= 0.0:
         return lo, s, f_lo * 0.5 if side == 1 else f_lo, f_s, 1
     return s, hi, f_s, f_hi * 0.5 if side == -1 else f_hi, -1
+
+
+@leaf
+def after_rejection(step, error):
+    """The next trial after a step ``step`` whose scaled error ``error`` exceeded 1 (NaN: a trial
+    stage outside the ODE's domain): at most 5x shorter."""
+    return step * max(0.2, 0.9 * error ** -0.2) if error == error else 0.2 * step
+
+
+@leaf
+def after_acceptance(step, error):
+    """The next step after an accepted ``step`` with scaled error ``error``: at most 10x longer."""
+    return step * min(10.0, 0.9 * max(error, 1e-10) ** -0.2)

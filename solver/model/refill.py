@@ -45,8 +45,8 @@ import numpy as np
 from .._jit import entry, jit, leaf
 from .cavitation import _root  # cavitation.cavity_fraction, compiled
 from .dopri import (A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
-                    B1, B3, B4, B5, B6, C2, C3, C4, C5, E1, E3, E4, E5, E6, E7, illinois,
-                    trial)
+                    B1, B3, B4, B5, B6, C2, C3, C4, C5, E1, E3, E4, E5, E6, E7,
+                    after_acceptance, after_rejection, illinois, trial)
 
 __all__ = ["REACHED", "CLOSED", "GROWS", "STOPPED", "outer_integral", "front_source", "force",
            "closes", "departure", "speed_at", "void_volume", "exact_for"]
@@ -226,7 +226,7 @@ def _integrate(ln_from, ln_to, u, t, x_rel, stokes, pi, faces, thetas, samples, 
         if not error <= 1.0 or not u_new > 0.0:  # NaN too (a trial stage past U = 0)
             if not u_new > 0.0 and error <= 1.0:
                 return STOPPED, lnx, u, t, q, k
-            h = step * max(0.2, 0.9 * error ** -0.2) if error == error else 0.2 * step
+            h = after_rejection(step, error)
             continue
         if cell == 0 and q_new <= _CLOSED * faces[0]:
             return CLOSED, lnx + step, u_new, t_new, 0.0, k
@@ -246,7 +246,7 @@ def _integrate(ln_from, ln_to, u, t, x_rel, stokes, pi, faces, thetas, samples, 
         if landing and k < samples.size:
             path[0, k], path[1, k], path[2, k] = u, t, q
             k += 1
-        grown = step * min(10.0, 0.9 * max(error, 1e-10) ** -0.2)
+        grown = after_acceptance(step, error)
         h = max(h, grown) if landing else grown
     return TOO_MANY, lnx, u, t, q, k
 
