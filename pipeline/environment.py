@@ -48,12 +48,12 @@ _NOTICED = set()  # the loops (solver/integration/kinds.py: compiled_pieces) alr
 
 def _loop_name(codes) -> str:
     """A loop (its pieces, ``kinds.compiled_pieces``) as the notice names it, with its cold
-    compile in CPU seconds (benchmarks/compile.md: 11.5; 21.1-22.6; a tenth less in a quieter
+    compile in CPU seconds (benchmarks/compile.md: 11.3; 19.0-20.0; a tenth more in a busier
     hour): the classic film's copy, or the loop with every piece, which any piece runs on
     (``kinds.MOST_PIECES`` is 0)."""
     if not codes:
         return "the loop for the classic film (about 11 s on an idle core)"
-    return "the loop for every piece of physics (about 22 s on an idle core)"
+    return "the loop for every piece of physics (about 20 s on an idle core)"
 
 
 def compile_notice(stream=None, physics=None) -> str | None:
@@ -61,7 +61,7 @@ def compile_notice(stream=None, physics=None) -> str | None:
     (stderr), so that the compile is not a silent wait. ``physics``: what is about to be solved
     (``Physics`` records, mappings of their fields, or None for the classic film; None: the
     classic film alone). Each loop (solver/integration/kinds.py: the classic film's copy, the
-    loop with every piece) compiles once per solver version and cache folder, about 11 and 22 s
+    loop with every piece) compiles once per solver version and cache folder, about 11 and 20 s
     of CPU (benchmarks/compile.md; longer in wall time on a busy machine), and is announced once
     per process. Says where the cache goes. Returns the line (None: nothing to say)."""
     import sys
