@@ -23,7 +23,7 @@ from .settings import Numerics
 __all__ = ["Collision", "JSON_KEYS", "SOLVER_VERSION"]
 
 # Bump with any change that can alter numbers: stamped into every result and store.
-SOLVER_VERSION = "1.19.0"
+SOLVER_VERSION = "1.19.1"
 
 # the outer-flow reading of e_far and v_outer_start (solver/far_field.py, OuterFlow)
 OUTER_KEYS = ("outer_geometry", "x0_over_a", "x_ref_over_a", "outer_start_over_a",

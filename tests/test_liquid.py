@@ -14,6 +14,7 @@ import pytest
 from scipy import integrate
 
 from solver import Physics
+from solver.model import liquid
 from solver.model.liquid import (compression_energy, density, kink_departure,
                                  kirchhoff_difference, log_viscosity, pressure_of_kirchhoff,
                                  viscosity_ratio, volume_difference)
@@ -39,7 +40,9 @@ def test_barus_difference_has_no_cancellation_in_a_glassy_film():
     beta = 5.0
     phys = _phys(beta=beta)
     for p_lo in (0.2, 3.0, 6.0, 8.0):
-        for dp in (1e-9, 1e-6, 1e-3, 1.0):
+        # beta dp from 5e-9 to 5, the ends' ratio taken from beta dp = 1e-2 (2e-3, 4e-3: where
+        # the ratio of the ends' mobilities is the least accurate, a relative 1e-16 / (beta dp))
+        for dp in (1e-9, 1e-6, 1e-3, 2e-3, 4e-3, 1.0):
             got = kirchhoff_difference(p_lo, p_lo + dp, phys)[0]
             b, lo, hi = Decimal(beta), Decimal(p_lo), Decimal(p_lo) + Decimal(dp)
             exact = float(((-b * lo).exp() - (-b * hi).exp()) / b)
@@ -82,6 +85,37 @@ def test_barus_difference_is_exact_and_splits_at_the_kink():
     tension = _phys(beta=2.5, viscosity_in_tension="law")
     assert kirchhoff_difference(-1.0, -0.3, tension)[0] == pytest.approx(
         (math.exp(2.5) - math.exp(0.75)) / 2.5, rel=1e-13)
+
+
+def test_the_series_and_the_ends_ratio_agree_where_they_meet():
+    """``_fitted`` takes a series below ``_SERIES_SPREAD`` of ``g`` across the face and the ratio
+    of the ends' mobilities above it: value and both derivatives continuous there, the face
+    either way round."""
+    beta, p_lo = 5.0, 2.0
+    phys = _phys(beta=beta)
+    width = liquid._SERIES_SPREAD / beta
+    for flip in (False, True):
+        def face(dp):
+            ends = (p_lo + dp, p_lo) if flip else (p_lo, p_lo + dp)
+            return kirchhoff_difference(*ends, phys)
+        # 5e-9: the two points are 2e-9 apart (relative), each number's slope in the spread is of
+        # order 1; the branches themselves agree to 1e-14 (the series' truncation 2e-16, the
+        # ratio's rounding 1e-16 / 1e-2)
+        for got, want in zip(face(width * (1 + 1e-9)), face(width * (1 - 1e-9))):
+            assert got == pytest.approx(want, rel=5e-9)
+
+
+def test_a_glassy_face_passes_nothing_and_stays_finite():
+    """Both ends' mobilities below ``exp(-745)`` (a glassy lens's ``beta P``): the interval's
+    difference is 0 with finite derivatives, not ``0/0``; one end glassy: the closed form's
+    other end alone."""
+    beta = 5.0
+    phys = _phys(beta=beta)
+    assert kirchhoff_difference(200.0, 210.0, phys) == (0.0, 0.0, 0.0)
+    value, d_lo, d_hi = kirchhoff_difference(100.0, 300.0, phys)
+    assert value == pytest.approx(math.exp(-500.0) / beta, rel=1e-13)
+    assert d_lo == pytest.approx(-math.exp(-500.0), rel=1e-13)
+    assert abs(d_hi) <= 1e-13 * abs(d_lo)  # exp(-1500): 0, but for the rounding of two terms
 
 
 def test_small_beta_is_the_classic_film():

@@ -34,7 +34,7 @@ from .._jit import hook, jit, leaf
 from ..integration.linalg import matvec
 from ..physics import CAVITATION, CAVITATION_MODELS, PI, ST
 from .liquid import (compression_energy, constant_density, density, isoviscous,
-                     kirchhoff_difference, volume_difference)
+                     kirchhoff_between, mobility, volume_difference)
 from .slip import flux_factor, slips
 
 # the cavitation models' codes in the physics array (solver/physics.py: codes("cavitation"))
@@ -76,7 +76,15 @@ def face_flux(s_lo, s_hi, s_f, p_lo, p_hi, h_lo, h_hi, phys):
     -------
     q, dq_dp_lo, dq_dp_hi, dq_dh_lo, dq_dh_hi : float
     """
-    dp, ddp_lo, ddp_hi = kirchhoff_difference(p_lo, p_hi, phys)
+    return face_flux_between(s_lo, s_hi, s_f, p_lo, p_hi, mobility(p_lo, phys),
+                             mobility(p_hi, phys), h_lo, h_hi, phys)
+
+
+@leaf
+def face_flux_between(s_lo, s_hi, s_f, p_lo, p_hi, at_lo, at_hi, h_lo, h_hi, phys):
+    """``face_flux`` from the nodes' ``mobility`` (model/liquid.py; ``at_lo``, ``at_hi``), which
+    the loops over the faces compute once per node."""
+    dp, ddp_lo, ddp_hi = kirchhoff_between(p_lo, at_lo, p_hi, at_hi, phys)
     q, c, dq_dh_lo, dq_dh_hi = flux_law(s_lo, s_hi, s_f, h_lo, h_hi, dp)
     g, dg_dh_lo, dg_dh_hi = flux_factor(h_lo, h_hi, phys)  # slip at the surfaces (model/slip.py)
     return (q * g, c * g * ddp_lo, c * g * ddp_hi, dq_dh_lo * g + q * dg_dh_lo,
@@ -304,8 +312,11 @@ def face_fluxes(grid, p, h, phys, q_out):
 def general_fluxes(s, s_face, p, h, phys, q_out):
     """``face_fluxes`` through ``face_flux`` at every face (nodes ``s``, faces ``s_face``): any
     liquid law, slip. A ``leaf``, so it takes the grid's arrays rather than its record."""
+    at_hi = mobility(p[0], phys)
     for f in range(s.size - 1):
-        q_out[f] = face_flux(s[f], s[f + 1], s_face[f], p[f], p[f + 1], h[f], h[f + 1], phys)[0]
+        at_lo, at_hi = at_hi, mobility(p[f + 1], phys)
+        q_out[f] = face_flux_between(s[f], s[f + 1], s_face[f], p[f], p[f + 1], at_lo, at_hi,
+                                     h[f], h[f + 1], phys)[0]
 
 
 @jit
@@ -397,6 +408,7 @@ def jacobian(grid, phys, bh, p, theta, h, active, link, jac, dres_dh):
     jac[:, :] = 0.0
     dres_dh[:, :] = 0.0
     classic_flux = plain_flux(phys)  # pruned, with face_flux, from a copy without its pieces
+    at_hi = mobility(p[0], phys)  # each node's, once (model/liquid.py)
     for f in range(n - 1):
         if classic_flux:  # face_flux with the isoviscous drive P_hi - P_lo, decided once
             _, c, dq_dhi, dq_dhj = flux_law(s[f], s[f + 1], s_face[f], h[f], h[f + 1],
@@ -404,8 +416,9 @@ def jacobian(grid, phys, bh, p, theta, h, active, link, jac, dres_dh):
             dq_dpi = -c
             dq_dpj = c
         else:
-            _, dq_dpi, dq_dpj, dq_dhi, dq_dhj = face_flux(s[f], s[f + 1], s_face[f], p[f],
-                                                          p[f + 1], h[f], h[f + 1], phys)
+            at_lo, at_hi = at_hi, mobility(p[f + 1], phys)
+            _, dq_dpi, dq_dpj, dq_dhi, dq_dhj = face_flux_between(
+                s[f], s[f + 1], s_face[f], p[f], p[f + 1], at_lo, at_hi, h[f], h[f + 1], phys)
         # row f: -bh/area_f * (+q_f);  row f+1 (if a cell row): -bh/area_{f+1} * (-q_f)
         g = bh / area[f]
         jac[f, f] -= g * dq_dpi

@@ -21,9 +21,11 @@ What the film needs from them (model/film.py):
 - ``kirchhoff_difference``: ``Int rho_bar/mu_bar dP`` between two nodes, the pressure difference
   that drives the face flux (the generalised Kirchhoff transform). ``g = ln mu_bar - ln rho_bar``
   is taken linear in ``P`` between the nodes, so the integral is an exponential fit: exact for
-  Barus with constant density (``g = beta P``), second order otherwise; evaluated from the node
-  with the smaller ``g`` through ``expm1``, without the cancellation that ruins the reduced
-  pressure ``(1 - exp(-beta P))/beta`` as an unknown once ``beta P ~ 30``;
+  Barus with constant density (``g = beta P``), second order otherwise; evaluated relative to
+  the node with the smaller ``g``, without the cancellation that ruins the reduced pressure
+  ``(1 - exp(-beta P))/beta`` as an unknown once ``beta P ~ 30``. ``kirchhoff_between`` takes
+  each node's ``mobility`` (``exp(-g)``), so a loop over the faces takes one exponential per
+  node;
 - ``density``, for the cells' liquid content ``rho_bar theta H``;
 - ``volume_difference`` (``Int dP / rho_bar``) and ``compression_energy``: the energy terms;
 - ``pressure_of_kirchhoff``, its inverse: the pressure of a rigid film at constant density,
@@ -176,25 +178,48 @@ def _mobility_log(p, phys):
 
 
 @leaf
-def _fitted(a, b, phys):
+def mobility(p, phys):
+    """``(g, dg/dp, exp(-g))`` at the pressure ``p``, ``g = ln mu_bar - ln rho_bar``
+    (``_mobility_log``): a node's part of the faces' Kirchhoff differences, which the loops over
+    the faces (model/film.py) compute once per node rather than once per face and end."""
+    if isoviscous(phys):
+        return 0.0, 0.0, 1.0
+    g, dg = _mobility_log(p, phys)
+    return g, dg, math.exp(-g)
+
+
+# Below this spread of ``g`` across an interval, ``_fitted`` takes its series (the next terms,
+# d^6/5040 and d^6/5760, are 2e-16 of 1 here); above it the ratio of the ends' mobilities, whose
+# rounding (a few ulps) is a relative error of 1e-16/d in ``phi``: 2e-14 at most.
+_SERIES_SPREAD = 1e-2
+
+
+@leaf
+def _fitted(a, b, at_a, at_b):
     """``Int_a^b exp(-g) dP`` with ``g`` linear between ``a`` and ``b`` (on one side of 0), and its
-    derivatives in ``a`` and ``b``.
+    derivatives in ``a`` and ``b``, from ``mobility`` at each end (``at_a``, ``at_b``).
 
     ``Int = (b - a) exp(-m) phi(d)``, ``m`` the smaller of ``g(a), g(b)``, ``d = |g(b) - g(a)|``,
     ``phi(d) = (1 - e^-d)/d``; with ``psi(d) = (1 - e^-d (1 + d))/d^2`` the derivative of the
     mean ``exp(-m) phi`` is ``-exp(-m) psi`` in the larger ``g`` and ``-exp(-m)(phi - psi)`` in
-    the smaller."""
-    ga, dga = _mobility_log(a, phys)
-    gb, dgb = _mobility_log(b, phys)
-    m = min(ga, gb)
-    d = abs(gb - ga)
-    scale = math.exp(-m)
-    if d < 1e-3:  # series: the next terms are d^4/120 and d^4/144 (relative 1e-14 here)
-        phi = 1.0 - d / 2.0 + d * d / 6.0 - d * d * d / 24.0
-        psi = 0.5 - d / 3.0 + d * d / 8.0 - d * d * d / 30.0
+    the smaller. ``e^-d`` is the ends' mobilities' ratio: no exponential is taken here."""
+    ga, dga, ea = at_a
+    gb, dgb, eb = at_b
+    if ga <= gb:
+        d, scale, far = gb - ga, ea, eb
     else:
-        phi = -math.expm1(-d) / d
-        psi = (1.0 - math.exp(-d) * (1.0 + d)) / (d * d)
+        d, scale, far = ga - gb, eb, ea
+    if d < _SERIES_SPREAD:
+        phi = 1.0 - d * (1.0 / 2.0 - d * (1.0 / 6.0 - d * (1.0 / 24.0 - d * (1.0 / 120.0
+                                                                          - d / 720.0))))
+        psi = 0.5 - d * (1.0 / 3.0 - d * (1.0 / 8.0 - d * (1.0 / 30.0 - d * (1.0 / 144.0
+                                                                          - d / 840.0))))
+    elif scale > 0.0:
+        e_d = far / scale  # exp(-d); 0 where the far end's mobility underflowed
+        phi = (1.0 - e_d) / d
+        psi = (1.0 - e_d * (1.0 + d)) / (d * d)
+    else:  # both ends glassy beyond exp(-745): the interval passes nothing
+        phi, psi = 0.0, 0.0
     mean = scale * phi
     d_hi = -scale * psi  # d mean / d g of the node with the larger g
     d_lo = -scale * (phi - psi)
@@ -210,24 +235,37 @@ def _fitted(a, b, phys):
 def kirchhoff_difference(p_lo, p_hi, phys):
     """``Int_{p_lo}^{p_hi} rho_bar / mu_bar dP``, the pressure difference that drives the flux
     between two nodes, and its derivatives in ``p_lo`` and ``p_hi``: ``p_hi - p_lo`` exactly for
-    the classic film. The interval is split where the laws have a kink (``_next_kink``: 0, the
-    table's points), so each piece is an exponential fit of a smooth ``ln(mu/rho)``, exact where it
-    is linear (Barus, a table)."""
+    the classic film (``kirchhoff_between`` with each node's ``mobility``)."""
     if isoviscous(phys):
         return p_hi - p_lo, -1.0, 1.0
-    a, b = min(p_lo, p_hi), max(p_lo, p_hi)
+    return kirchhoff_between(p_lo, mobility(p_lo, phys), p_hi, mobility(p_hi, phys), phys)
+
+
+@leaf
+def kirchhoff_between(p_lo, at_lo, p_hi, at_hi, phys):
+    """``kirchhoff_difference`` from the nodes' ``mobility`` (``at_lo``, ``at_hi``), which a loop
+    over the faces computes once per node. The interval is split where the laws have a kink
+    (``_next_kink``: 0, the table's points), so each piece is an exponential fit of a smooth
+    ``ln(mu/rho)``, exact where it is linear (Barus, a table)."""
+    if isoviscous(phys):
+        return p_hi - p_lo, -1.0, 1.0
+    if p_lo <= p_hi:
+        a, at_a, b, at_b = p_lo, at_lo, p_hi, at_hi
+    else:
+        a, at_a, b, at_b = p_hi, at_hi, p_lo, at_lo
     total, d_a, d_b = 0.0, 0.0, 0.0
-    start = a
+    start, at_start = a, at_a
     while True:
         end = _next_kink(start, b, phys)
-        value, da, db = _fitted(start, end, phys)
+        at_end = at_b if end >= b else mobility(end, phys)
+        value, da, db = _fitted(start, end, at_start, at_end)
         if start == a:
             d_a = da
         total += value
         if end >= b:
             d_b = db
             break
-        start = end
+        start, at_start = end, at_end
     if p_lo <= p_hi:
         return total, d_a, d_b
     return -total, -d_b, -d_a
