@@ -105,6 +105,25 @@ def test_the_series_and_the_ends_ratio_agree_where_they_meet():
             assert got == pytest.approx(want, rel=5e-9)
 
 
+@pytest.mark.parametrize("law", [
+    dict(beta=5.0), dict(beta=5.0, viscosity_in_tension="law"),
+    dict(beta=4.0, viscosity_law="roelands", roelands_Z=0.6, roelands_PR=0.4),
+    dict(beta=2.0, density_law="dowson-higginson", dh_c1=0.6, dh_c2=1.7),
+    dict(viscosity_law="table", viscosity_table="0:1, 0.5:3, 1:20, 2:400"),
+])
+def test_the_value_alone_is_the_value_with_its_slopes(law):
+    """The residual and the error norm take ``kirchhoff_between`` without its derivatives, the
+    Jacobian with them: the same value to the bit, on either side of the series' spread, across
+    the kinks and at glassy ends."""
+    phys = _phys(**law)
+    for a, b in ((0.3, 0.3001), (0.3, 0.31), (0.3, 2.0), (-1.0, 1.5), (0.2, 1.7), (150.0, 151.0),
+                 (2.0, -0.5), (0.0, 0.7)):
+        at_a, at_b = liquid.mobility(a, phys), liquid.mobility(b, phys)
+        full = liquid.kirchhoff_between(a, at_a, b, at_b, phys, True)
+        alone = liquid.kirchhoff_between(a, at_a, b, at_b, phys, False)
+        assert alone[0] == full[0] and full == kirchhoff_difference(a, b, phys)
+
+
 def test_a_glassy_face_passes_nothing_and_stays_finite():
     """Both ends' mobilities below ``exp(-745)`` (a glassy lens's ``beta P``): the interval's
     difference is 0 with finite derivatives, not ``0/0``; one end glassy: the closed form's

@@ -77,14 +77,15 @@ def face_flux(s_lo, s_hi, s_f, p_lo, p_hi, h_lo, h_hi, phys):
     q, dq_dp_lo, dq_dp_hi, dq_dh_lo, dq_dh_hi : float
     """
     return face_flux_between(s_lo, s_hi, s_f, p_lo, p_hi, mobility(p_lo, phys),
-                             mobility(p_hi, phys), h_lo, h_hi, phys)
+                             mobility(p_hi, phys), h_lo, h_hi, phys, True)
 
 
 @leaf
-def face_flux_between(s_lo, s_hi, s_f, p_lo, p_hi, at_lo, at_hi, h_lo, h_hi, phys):
+def face_flux_between(s_lo, s_hi, s_f, p_lo, p_hi, at_lo, at_hi, h_lo, h_hi, phys, slopes):
     """``face_flux`` from the nodes' ``mobility`` (model/liquid.py; ``at_lo``, ``at_hi``), which
-    the loops over the faces compute once per node."""
-    dp, ddp_lo, ddp_hi = kirchhoff_between(p_lo, at_lo, p_hi, at_hi, phys)
+    the loops over the faces compute once per node; the pressure partials 0 unless ``slopes``
+    (``liquid.kirchhoff_between``: a residual needs the flux alone)."""
+    dp, ddp_lo, ddp_hi = kirchhoff_between(p_lo, at_lo, p_hi, at_hi, phys, slopes)
     q, c, dq_dh_lo, dq_dh_hi = flux_law(s_lo, s_hi, s_f, h_lo, h_hi, dp)
     g, dg_dh_lo, dg_dh_hi = flux_factor(h_lo, h_hi, phys)  # slip at the surfaces (model/slip.py)
     return (q * g, c * g * ddp_lo, c * g * ddp_hi, dq_dh_lo * g + q * dg_dh_lo,
@@ -316,8 +317,9 @@ def general_fluxes(s, s_face, p, h, phys, q_out):
     at_hi = mobility(p[0], phys)
     for f in range(s.size - 1):
         at_lo, at_hi = at_hi, mobility(p[f + 1], phys)
-        q_out[f] = face_flux_between(s[f], s[f + 1], s_face[f], p[f], p[f + 1], at_lo, at_hi,
-                                     h[f], h[f + 1], phys)[0]
+        dp = kirchhoff_between(p[f], at_lo, p[f + 1], at_hi, phys, False)[0]
+        q_out[f] = flux_law(s[f], s[f + 1], s_face[f], h[f], h[f + 1], dp)[0] \
+            * flux_factor(h[f], h[f + 1], phys)[0]
 
 
 @jit
@@ -419,7 +421,8 @@ def jacobian(grid, phys, bh, p, theta, h, active, link, jac, dres_dh):
         else:
             at_lo, at_hi = at_hi, mobility(p[f + 1], phys)
             _, dq_dpi, dq_dpj, dq_dhi, dq_dhj = face_flux_between(
-                s[f], s[f + 1], s_face[f], p[f], p[f + 1], at_lo, at_hi, h[f], h[f + 1], phys)
+                s[f], s[f + 1], s_face[f], p[f], p[f + 1], at_lo, at_hi, h[f], h[f + 1], phys,
+                True)
         # row f: -bh/area_f * (+q_f);  row f+1 (if a cell row): -bh/area_{f+1} * (-q_f)
         g = bh / area[f]
         jac[f, f] -= g * dq_dpi

@@ -195,9 +195,10 @@ _SERIES_SPREAD = 1e-2
 
 
 @leaf
-def _fitted(a, b, at_a, at_b):
+def _fitted(a, b, at_a, at_b, slopes):
     """``Int_a^b exp(-g) dP`` with ``g`` linear between ``a`` and ``b`` (on one side of 0), and its
-    derivatives in ``a`` and ``b``, from ``mobility`` at each end (``at_a``, ``at_b``).
+    derivatives in ``a`` and ``b`` where ``slopes`` (0 otherwise: a residual needs the value
+    alone), from ``mobility`` at each end (``at_a``, ``at_b``).
 
     ``Int = (b - a) exp(-m) phi(d)``, ``m`` the smaller of ``g(a), g(b)``, ``d = |g(b) - g(a)|``,
     ``phi(d) = (1 - e^-d)/d``; with ``psi(d) = (1 - e^-d (1 + d))/d^2`` the derivative of the
@@ -209,18 +210,23 @@ def _fitted(a, b, at_a, at_b):
         d, scale, far = gb - ga, ea, eb
     else:
         d, scale, far = ga - gb, eb, ea
+    psi = 0.0
     if d < _SERIES_SPREAD:
         phi = 1.0 - d * (1.0 / 2.0 - d * (1.0 / 6.0 - d * (1.0 / 24.0 - d * (1.0 / 120.0
                                                                           - d / 720.0))))
-        psi = 0.5 - d * (1.0 / 3.0 - d * (1.0 / 8.0 - d * (1.0 / 30.0 - d * (1.0 / 144.0
-                                                                          - d / 840.0))))
+        if slopes:
+            psi = 0.5 - d * (1.0 / 3.0 - d * (1.0 / 8.0 - d * (1.0 / 30.0 - d * (1.0 / 144.0
+                                                                              - d / 840.0))))
     elif scale > 0.0:
         e_d = far / scale  # exp(-d); 0 where the far end's mobility underflowed
         phi = (1.0 - e_d) / d
-        psi = (1.0 - e_d * (1.0 + d)) / (d * d)
+        if slopes:
+            psi = (1.0 - e_d * (1.0 + d)) / (d * d)
     else:  # both ends glassy beyond exp(-745): the interval passes nothing
-        phi, psi = 0.0, 0.0
+        phi = 0.0
     mean = scale * phi
+    if not slopes:
+        return (b - a) * mean, 0.0, 0.0
     d_hi = -scale * psi  # d mean / d g of the node with the larger g
     d_lo = -scale * (phi - psi)
     if ga <= gb:
@@ -238,15 +244,16 @@ def kirchhoff_difference(p_lo, p_hi, phys):
     the classic film (``kirchhoff_between`` with each node's ``mobility``)."""
     if isoviscous(phys):
         return p_hi - p_lo, -1.0, 1.0
-    return kirchhoff_between(p_lo, mobility(p_lo, phys), p_hi, mobility(p_hi, phys), phys)
+    return kirchhoff_between(p_lo, mobility(p_lo, phys), p_hi, mobility(p_hi, phys), phys, True)
 
 
 @leaf
-def kirchhoff_between(p_lo, at_lo, p_hi, at_hi, phys):
+def kirchhoff_between(p_lo, at_lo, p_hi, at_hi, phys, slopes):
     """``kirchhoff_difference`` from the nodes' ``mobility`` (``at_lo``, ``at_hi``), which a loop
-    over the faces computes once per node. The interval is split where the laws have a kink
-    (``_next_kink``: 0, the table's points), so each piece is an exponential fit of a smooth
-    ``ln(mu/rho)``, exact where it is linear (Barus, a table)."""
+    over the faces computes once per node; its derivatives only where ``slopes`` (0 otherwise:
+    the residual and the error norm need the value alone, the Jacobian all three). The interval
+    is split where the laws have a kink (``_next_kink``: 0, the table's points), so each piece is
+    an exponential fit of a smooth ``ln(mu/rho)``, exact where it is linear (Barus, a table)."""
     if isoviscous(phys):
         return p_hi - p_lo, -1.0, 1.0
     if p_lo <= p_hi:
@@ -258,7 +265,7 @@ def kirchhoff_between(p_lo, at_lo, p_hi, at_hi, phys):
     while True:
         end = _next_kink(start, b, phys)
         at_end = at_b if end >= b else mobility(end, phys)
-        value, da, db = _fitted(start, end, at_start, at_end)
+        value, da, db = _fitted(start, end, at_start, at_end, slopes)
         if start == a:
             d_a = da
         total += value

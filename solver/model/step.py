@@ -267,8 +267,8 @@ def _kirchhoff_errors(y_pred, y, err_fac, phys, perr, scale):
     for i in range(perr.size):
         at_y = mobility(y[i], phys)
         perr[i] = err_fac * kirchhoff_between(y_pred[i], mobility(y_pred[i], phys), y[i], at_y,
-                                              phys)[0]
-        scale[i] = kirchhoff_between(0.0, at_zero, y[i], at_y, phys)[0]
+                                              phys, False)[0]
+        scale[i] = kirchhoff_between(0.0, at_zero, y[i], at_y, phys, False)[0]
 
 
 # How many cells on either side of a cell that crossed a kink in time (``_kinks_in_time``) are
