@@ -311,9 +311,11 @@ def face_fluxes(grid, p, h, phys, q_out):
 
 @leaf
 def general_fluxes(s, s_face, p, h, phys, q_out):
-    """``face_fluxes`` through ``face_flux`` at every face (nodes ``s``, faces ``s_face``): any
-    liquid law, slip; each node's ``mobility`` taken once and passed on to the next face
-    (``face_flux_between``). A ``leaf``, so it takes the grid's arrays rather than its record."""
+    """``face_fluxes`` for any liquid law and slip (nodes ``s``, faces ``s_face``): at every face
+    ``face_flux_between``'s flux without its partials, the same to the bit (the Kirchhoff
+    difference's value alone, the flux law, the slip factor: a call less per face), each node's
+    ``mobility`` taken once and passed on to the next face. A ``leaf``, so it takes the grid's
+    arrays rather than its record."""
     at_hi = mobility(p[0], phys)
     for f in range(s.size - 1):
         at_lo, at_hi = at_hi, mobility(p[f + 1], phys)
