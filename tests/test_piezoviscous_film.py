@@ -372,3 +372,28 @@ def test_a_start_inside_the_glass_gap_starts_from_the_classic_pressure(st, eps, 
     assert c.ok, c.message
     assert math.isfinite(c.p_max) and math.isfinite(c.peak_force) and c.solidified
     assert c.energy_error < 5e-3  # as the extremes above
+
+
+@pytest.mark.parametrize("law", [
+    dict(beta=5.0), dict(beta=2.0, viscosity_in_tension="law"),
+    dict(beta=4.0, viscosity_law="roelands", roelands_Z=0.6, roelands_PR=0.4),
+    dict(beta=2.0, density_law="dowson-higginson", dh_c1=0.6, dh_c2=1.7),
+    dict(viscosity_law="table", viscosity_table="0:1, 0.5:3, 1:20, 2:400")])
+def test_the_residuals_fluxes_are_face_flux_to_the_bit(law):
+    """``face_fluxes`` (the residual's pass, the Kirchhoff fit's value alone, each node's mobility
+    once) is ``face_flux`` (with its partials, the mobilities per face) at every face, to the bit:
+    pressures across 0 and into a glassy lens."""
+    physics = Physics(St=10.0, eps=1e-4, **law)
+    phys = physics.as_array()
+    grid = scene_grid(physics.St, 1.0, resolve("standard"))
+    s = grid.s
+    n = s.size
+    rng = np.random.default_rng(7)
+    p = np.concatenate([rng.uniform(-1.0, 3.0, n // 2), 150.0 + rng.uniform(0.0, 5.0, n - n // 2)])
+    h = 1.0 + s + rng.uniform(0.0, 0.1, n)
+    q = np.empty(n - 1)
+    face_fluxes(grid.nodes(), p, h, phys, q)
+    nodes = grid.nodes()
+    expected = np.array([face_flux(s[f], s[f + 1], nodes.s_face[f], p[f], p[f + 1], h[f], h[f + 1],
+                                   phys)[0] for f in range(n - 1)])
+    assert np.array_equal(q, expected)
