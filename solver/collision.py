@@ -657,10 +657,10 @@ def _wet_restitution(physics, shortcuts, cols, x_ref, film):
     1.15.4.)
     A piece whose departure or refill the plan gives reads it its own way
     (``Piece.restitution``; ``film``, the release state's ReleaseFilm). Every rigid departure is
-    of spheres apart: where that row's mean
-    planes still overlap (``X <= 0``: surfaces whose asperities still unload) and the coupled
-    phase crosses ``x_ref``, its own speed there is read (``pieces.crossing_speed``; a departure
-    from ``X <= 0`` took ``ln X`` and raised: docs/solver.md, Versions, 1.15.3)."""
+    of spheres apart: where that row's mean planes still overlap (``X <= 0``: surfaces whose
+    asperities still unload) and the coupled phase crosses ``x_ref``, its own speed there is read
+    (``pieces.crossing_speed``; a departure from ``X <= 0`` took ``ln X`` and raised:
+    docs/solver.md, Versions, 1.15.3)."""
     x_c, v_c = cols["X"], cols["V"]
     j = len(x_c) - 1
     if x_c[j] > x_ref:

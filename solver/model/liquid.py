@@ -242,8 +242,6 @@ def kirchhoff_difference(p_lo, p_hi, phys):
     """``Int_{p_lo}^{p_hi} rho_bar / mu_bar dP``, the pressure difference that drives the flux
     between two nodes, and its derivatives in ``p_lo`` and ``p_hi``: ``p_hi - p_lo`` exactly for
     the classic film (``kirchhoff_between`` with each node's ``mobility``)."""
-    if isoviscous(phys):
-        return p_hi - p_lo, -1.0, 1.0
     return kirchhoff_between(p_lo, mobility(p_lo, phys), p_hi, mobility(p_hi, phys), phys, True)
 
 
