@@ -172,13 +172,15 @@ def main() -> None:
             harness.SolverProcess(old_tree, str(Path(tmp) / "cache-ref")) as old, \
             harness.SolverProcess(ROOT, str(Path(tmp) / "cache-new")) as new:
         harness.SolverProcess.compile_all([old, new])
+        core = harness.SolverProcess.pin_together([old, new])
         versus = versus_reference(old, new, scenes, repeats, args.accuracy)
         physics = physics_against_classic(new, physics_scenes, repeats)
     doc = harness.write_json(out.with_suffix(".json"), {
         "accuracy": args.accuracy,
         "reference": {"ref": args.ref, "commit": harness.resolve_commit(args.ref),
                       "solver_version": harness.solver_version(commit=args.ref)},
-        "rounds": repeats, "versus": versus, "physics": physics}, load_start)
+        "rounds": repeats, "pinned_core": core, "versus": versus, "physics": physics},
+        load_start)
     text = report(args.ref, versus, physics, repeats, doc, args.accuracy)
     print(text)
     out.write_text(text)

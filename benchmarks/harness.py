@@ -247,6 +247,9 @@ def describe(doc: dict) -> str:
     text = (f"solver {doc.get('solver_version', NOT_RECORDED)}, commit {short}"
             f"{' with uncommitted changes' if doc.get('dirty') is True else ''}, {doc.get('date')}, "
             f"{where}, {load_text}")
+    if doc.get("pinned_core") is not None:
+        text += (f", the two solver processes pinned together to core {doc['pinned_core']} "
+                 "(they take turns on it)")
     if isinstance(load, dict) and isinstance(m, dict) and shared(load, m["cores"]):
         text += (" (a shared machine: absolute times here are longer than on an idle one; the "
                  "results are the ratios measured within this run)")
@@ -557,6 +560,21 @@ class SolverProcess:
 
     def __enter__(self):
         return self
+
+    @staticmethod
+    def pin_together(processes) -> int | None:
+        """Pin every process to one core, the highest this one may run on, where they take
+        turns: a round's two solves then share one core's caches and clock whatever else the
+        machine runs. Returns the core, or None where the system cannot pin (no
+        ``os.sched_setaffinity``). With the other core of a 2-core host busy, the same code on
+        both sides read 0.98-1.01 pinned (per-scene medians of 15 pairs) where its unpinned
+        rounds spread 0.7-1.4 (benchmarks/README.md)."""
+        if not hasattr(os, "sched_setaffinity"):
+            return None
+        core = max(os.sched_getaffinity(0))
+        for p in processes:
+            os.sched_setaffinity(p.proc.pid, {core})
+        return core
 
     @staticmethod
     def compile_all(processes) -> None:

@@ -162,6 +162,7 @@ def measure_all(trees: dict[str, Path], keep: Path, rounds: int, noop: bool) -> 
     try:
         print("compiling both sides' solvers (at once)", flush=True)
         harness.SolverProcess.compile_all(workers.values())
+        core = harness.SolverProcess.pin_together(workers.values())
         for name in SOLVES:
             record(name, "solver", solver_sides(workers, name, errors, counts))
     finally:
@@ -169,7 +170,7 @@ def measure_all(trees: dict[str, Path], keep: Path, rounds: int, noop: bool) -> 
             w.close()
     for name, sides in startup_sides(trees, keep, cache, noop).items():
         record(name, "startup", sides)
-    return {"figures": figures, "errors": errors}
+    return {"figures": figures, "errors": errors, "pinned_core": core}
 
 
 def render(doc: dict) -> str:

@@ -4,6 +4,7 @@ carries. Nothing here times anything: speed is measured by ``make bench``, never
 
 import importlib.util
 import json
+import os
 import subprocess
 from pathlib import Path
 
@@ -179,6 +180,19 @@ def test_a_report_from_a_loaded_machine_says_its_times_are_not_results(harness):
     assert "shared" not in harness.describe(doc)
     assert "load not recorded" in harness.describe(harness.historical_provenance(
         BENCH / "accuracy.json"))
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="the system cannot pin")
+def test_the_two_solver_processes_take_turns_on_one_core_and_the_report_says_so(harness,
+                                                                                 tmp_path):
+    with harness.SolverProcess(BENCH.parent, str(tmp_path)) as a, \
+            harness.SolverProcess(BENCH.parent, str(tmp_path)) as b:
+        core = harness.SolverProcess.pin_together([a, b])
+        assert core in os.sched_getaffinity(0)
+        assert os.sched_getaffinity(a.proc.pid) == {core} == os.sched_getaffinity(b.proc.pid)
+    doc = harness.provenance([0.1, 0.1, 0.1])
+    assert "pinned" not in harness.describe(doc)
+    assert f"pinned together to core {core}" in harness.describe({**doc, "pinned_core": core})
 
 
 def test_profile_names_numba_functions_and_sums_their_specialisations():
