@@ -564,8 +564,8 @@ class SolverProcess:
     @staticmethod
     def pin_together(processes) -> int | None:
         """Pin every process to one core, the highest this one may run on, where they take
-        turns: a round's two solves then share one core's caches and clock whatever else the
-        machine runs. Returns the core, or None where the system cannot pin (no
+        turns: a round's two solves then run on the same core, and whatever else the machine
+        runs slows both alike. Returns the core, or None where the system cannot pin (no
         ``os.sched_setaffinity``). With the other core of a 2-core host busy, the same code on
         both sides read 0.98-1.01 pinned (per-scene medians of 15 pairs) where its unpinned
         rounds spread 0.7-1.4 (benchmarks/README.md)."""
