@@ -25,7 +25,8 @@ What the film needs from them (model/film.py):
   the node with the smaller ``g``, without the cancellation that ruins the reduced pressure
   ``(1 - exp(-beta P))/beta`` as an unknown once ``beta P ~ 30``. ``kirchhoff_between`` takes
   each node's ``mobility`` (``exp(-g)``), so a loop over the faces takes one exponential per
-  node;
+  node; ``kirchhoff_pressure`` is its value from 0 (the step's error scale, and the rigid film's
+  inverse below);
 - ``density``, for the cells' liquid content ``rho_bar theta H``;
 - ``volume_difference`` (``Int dP / rho_bar``) and ``compression_energy``: the energy terms;
 - ``pressure_of_kirchhoff``, its inverse: the pressure of a rigid film at constant density,
@@ -277,6 +278,15 @@ def kirchhoff_between(p_lo, at_lo, p_hi, at_hi, phys, slopes):
 
 
 @leaf
+def kirchhoff_pressure(p, at_p, at_zero, phys):
+    """The Kirchhoff pressure ``Int_0^p rho_bar/mu_bar dP`` (``kirchhoff_between``'s value) from
+    the mobilities at ``p`` and at 0 (``at_p``, ``at_zero``), which a caller that needs it at
+    many pressures takes once: the rigid film's inverse (``pressure_of_kirchhoff``) and the
+    step's error scale (model/step.py)."""
+    return kirchhoff_between(0.0, at_zero, p, at_p, phys, False)[0]
+
+
+@leaf
 def _specific_volume_integral(p, phys):
     """``Int_0^p dP / rho_bar``: ``p`` where the density is constant; for Dowson-Higginson
     (``rho_bar = (1 + b p)/(1 + c2 p)``, ``b = c1 + c2``) ``(c2/b) p + (c1/b^2) ln(1 + b p)``;
@@ -335,13 +345,14 @@ def pressure_of_kirchhoff(k, phys, out):
     doubled from ``k`` (the Kirchhoff pressure rises with ``P``, from 0 at 0). False when some
     ``k`` is negative (a film in tension: not an approach's) or lies beyond what the law reaches
     (a Kirchhoff pressure with a ceiling, ``1/beta`` for Barus: a glass gap)."""
+    at_zero = mobility(0.0, phys)
     for i in range(k.size):
         target = k[i]
         if target < 0.0:
             return False
         lo, hi = 0.0, target
         for _ in range(_DOUBLINGS):
-            if kirchhoff_difference(0.0, hi, phys)[0] >= target:
+            if kirchhoff_pressure(hi, mobility(hi, phys), at_zero, phys) >= target:
                 break
             lo, hi = hi, 2.0 * hi + 1.0
         else:
@@ -350,7 +361,7 @@ def pressure_of_kirchhoff(k, phys, out):
             mid = 0.5 * (lo + hi)
             if not lo < mid < hi:
                 break
-            if kirchhoff_difference(0.0, mid, phys)[0] < target:
+            if kirchhoff_pressure(mid, mobility(mid, phys), at_zero, phys) < target:
                 lo = mid
             else:
                 hi = mid

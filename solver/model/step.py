@@ -59,7 +59,8 @@ from .film import cell_content, compression_work, energy_rates, face_fluxes, jac
 # the gap of the rigid start, before the film's own state exists (its slots are the rigid film's
 # pressures whatever the pieces)
 from .film import gap as start_gap  # noqa: F401
-from .liquid import constant_density, isoviscous, kink_departure, kirchhoff_between, mobility
+from .liquid import (constant_density, isoviscous, kink_departure, kirchhoff_between,
+                     kirchhoff_pressure, mobility)
 from .state import new_film  # noqa: F401 (new_film: the contract's start)
 
 _W_VOID, _E_C = SERIES_INDEX["void_work"], SERIES_INDEX["E_c"]
@@ -268,7 +269,7 @@ def _kirchhoff_errors(y_pred, y, err_fac, phys, perr, scale):
         at_y = mobility(y[i], phys)
         perr[i] = err_fac * kirchhoff_between(y_pred[i], mobility(y_pred[i], phys), y[i], at_y,
                                               phys, False)[0]
-        scale[i] = kirchhoff_between(0.0, at_zero, y[i], at_y, phys, False)[0]
+        scale[i] = kirchhoff_pressure(y[i], at_y, at_zero, phys)
 
 
 # How many cells on either side of a cell that crossed a kink in time (``_kinks_in_time``) are
