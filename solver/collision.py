@@ -24,7 +24,7 @@ import numpy as np
 
 from . import extrapolation, far_field
 from ._jit import deferred_interrupt
-from .integration import kinds, stepper
+from .integration import dense, kinds
 from .integration.grid import reference_grid, scaled_grid
 from .model import liquid, rigid
 from .observables import OBSERVABLES, SERIES, STATUS, failure_message
@@ -105,20 +105,20 @@ def _peak(t, f, i, order, lowest):
     (``_parabolic_peak``); above, on each of the two steps' own interpolants, the polynomial
     interpolating the step's ``k + 1`` newest rows (the BDF's dense output, order ``k``), whose
     error follows the method's order where the parabola's goes with the step's cube. The loop's
-    own reading of an extremum inside a step (integration/stepper.py: ``_extremum_in_step``)
+    own reading of an extremum inside a step (integration/dense.py: ``extremum_in_step``)
     finds it, compiled: with numpy's polynomial fit and roots, a classic collision took 1/0.95
     its CPU time at the standard preset (docs/solver.md)."""
     if i <= 0 or i >= len(f) - 1 or max(order[i], order[i + 1]) <= 2:
         return _parabolic_peak(t, f, i)
     best_t, best_f = t[i], f[i]
     sign = 1.0 if lowest else -1.0
-    basis = np.empty((4, stepper.SLOTS))
+    basis = np.empty((4, int(max(order[i], order[i + 1])) + 1))  # the highest step's k + 1
     for end in (i, i + 1):  # the steps from row end - 1 to row end
         k = int(order[end])
         if k <= 2 or end - k < 0:
             continue
         newest_first = slice(end, end - k - 1 if end > k else None, -1)
-        value, when = stepper._extremum_in_step(
+        value, when = dense.extremum_in_step(
             np.ascontiguousarray(t[newest_first]),
             np.ascontiguousarray(f[newest_first]).reshape(k + 1, 1), 1, k, sign, basis)
         if (value < best_f) if lowest else (value > best_f):
@@ -426,7 +426,10 @@ ATTEMPT_LOG_ROWS = 100_000
 def _integrate(physics, numerics, head, shortcuts, attempt_log=False):
     """The coupled phase's grid and time loop (integration/stepper.py) from the hand-over state
     ``head`` until the shortcuts' end event (a film that refills: until it is full again): the
-    grid, then ``stepper.integrate``'s results."""
+    grid, then ``integrate``'s results, its counters by name (``COUNTERS``) and its attempt log
+    as ``Collision.attempts`` (None unless asked for), each read with the constants of the loop
+    that ran (a copy, integration/kinds.py: a classic film never imports the loop with every
+    piece)."""
     stokes, x_switch, v_switch = physics.St, head.x, head.v
     grid = scene_grid(stokes, x_switch, numerics,
                       max(p.film_width(physics) for p in pieces.PIECES),
@@ -439,7 +442,7 @@ def _integrate(physics, numerics, head, shortcuts, attempt_log=False):
     _, stop_params = rigid.release_event(numerics.release, stokes, physics)
     phys = physics.as_array()
     loop = kinds.loop_for(phys, attempt_log)  # compiled for the pieces this physics asks for
-    return (grid,) + loop.integrate(
+    code, counters, rows, p_hist, w_hist, theta_hist, log = loop.integrate(
         grid.nodes(), phys,
         loop.Start(float(head.t), float(x_switch), float(v_switch), p_init,
                    float(1.0 - v_switch**2)),
@@ -448,6 +451,9 @@ def _integrate(physics, numerics, head, shortcuts, attempt_log=False):
                      float(numerics.high_order_rtol_factor)),
         shortcuts.end_event, stop_params, numerics.save_profiles,
         ATTEMPT_LOG_ROWS if attempt_log else 0)
+    counted = {name: int(n) for name, n in zip(loop.COUNTERS, counters)}
+    attempts = _attempts(loop, log, physics.tau_per_t) if attempt_log else None
+    return grid, code, counted, rows, p_hist, w_hist, theta_hist, attempts
 
 
 def _save_profiles(result, t_c, x_c, p_hist, w_hist, theta_hist):
@@ -461,14 +467,14 @@ def _save_profiles(result, t_c, x_c, p_hist, w_hist, theta_hist):
     result.profile_x = x_c
 
 
-def _attempts(log, tau_per_t):
-    """The attempt log's rows (stepper.LOG_COLUMNS) as ``Collision.attempts``: time and step in
-    ``tau``, the codes as their names."""
-    col = {name: log[:, k] for k, name in enumerate(stepper.LOG_COLUMNS)}
-    largest = np.array(("", *stepper.LARGEST_TERMS))
+def _attempts(loop, log, tau_per_t):
+    """The attempt log's rows (the ``loop``'s ``LOG_COLUMNS``) as ``Collision.attempts``: time
+    and step in ``tau``, the codes as their names."""
+    col = {name: log[:, k] for k, name in enumerate(loop.LOG_COLUMNS)}
+    largest = np.array(("", *loop.LARGEST_TERMS))
     return {"tau": col["t"] * tau_per_t, "dtau": col["dt"] * tau_per_t,
             "order": col["order"].astype(int),
-            "outcome": np.array(stepper.ATTEMPT_OUTCOMES)[col["outcome"].astype(int)],
+            "outcome": np.array(loop.ATTEMPT_OUTCOMES)[col["outcome"].astype(int)],
             "newton": col["newton"].astype(int), "fresh_matrix": col["fresh"] != 0.0,
             "set_changes": col["set_changes"].astype(int), "error": col["error"],
             "largest": largest[np.where(np.isnan(col["largest"]), 0, col["largest"] + 1)
@@ -479,7 +485,7 @@ def _attempts(log, tau_per_t):
 def _coupled(physics, accuracy, numerics, head, x_ref_x0, attempt_log=False, shortcuts=None):
     stokes, x_start, tau_per_t = physics.St, physics.x_start, physics.tau_per_t
     shortcuts = shortcuts or plan(physics)
-    grid, code, counters, rows, p_hist, w_hist, theta_hist, log = _integrate(
+    grid, code, counters, rows, p_hist, w_hist, theta_hist, attempts = _integrate(
         physics, numerics, head, shortcuts, attempt_log)
     name = next(k for k, (c, _) in STATUS.items() if c == code)
     message = STATUS[name][1]
@@ -500,14 +506,13 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0, attempt_log=False, sho
 
     result = Collision(
         physics=physics, accuracy=accuracy, numerics=numerics, model="ehd", status=name,
-        message=message, steps=int(counters[stepper.STEPS]),
-        rejected_steps=int(counters[stepper.REJECTED]),
-        newton_iterations=int(counters[stepper.NEWTON]),
-        lu_factorizations=int(counters[stepper.LU]),
-        higher_order_steps=int(counters[stepper.HIGHER_ORDER]),
+        message=message, steps=counters["steps"], rejected_steps=counters["rejected_steps"],
+        newton_iterations=counters["newton_iterations"],
+        lu_factorizations=counters["lu_factorizations"],
+        higher_order_steps=counters["higher_order_steps"],
         tau_handover=head.t * tau_per_t, radius=grid.radius, x_ref_x0=x_ref_x0)
     if attempt_log:
-        result.attempts = _attempts(log, tau_per_t)
+        result.attempts = attempts
     if numerics.save_profiles:
         _save_profiles(result, t_c, x_c, p_hist, w_hist, theta_hist)
     if name != "ok":
@@ -518,7 +523,7 @@ def _coupled(physics, accuracy, numerics, head, x_ref_x0, attempt_log=False, sho
             setattr(result, flag, None)
         result.series = _concat(blocks)
         result.message = (f"{message} (St={stokes:g}, eps={physics.eps:g}, after "
-                          f"{counters[stepper.STEPS]} steps at tau={t_c[-1] * tau_per_t:.4g})"
+                          f"{counters['steps']} steps at tau={t_c[-1] * tau_per_t:.4g})"
                           f"{_drained(cols['H_min'])}")
         _premise_first(result, cols)
         return result
@@ -679,7 +684,7 @@ def _gap_minimum(tau, h_min, h_min_step, order, i, end):
     """The smallest gap near row ``i``, the discrete minimum of ``H_min`` over the rows before
     ``end``: at orders up to 2 the parabola's vertex on rows ``i - 1``, ``i``, ``i + 1``; above,
     the smallest gap of the loop's interpolants over the steps either side of row ``i``
-    (``H_min_step``, integration/stepper.py: ``_extremum_in_step``)."""
+    (``H_min_step``, integration/dense.py: ``extremum_in_step``)."""
     if i <= 0 or i >= end - 1:
         return h_min[i]
     if max(order[i], order[i + 1]) <= 2:
@@ -731,7 +736,7 @@ def _approach_peak_pressure(result, cols, tau, below, stop_in_step):
         result.h_axis_at_peak_pressure_x1 = float(cols["H0_at_v0"][i])
     elif 0 < i < j_app - 1 and max(order[i], order[i + 1]) > 2:
         # above order 2, the loop's interpolants of the steps either side of row i (the largest
-        # over the cells is not smooth in time; integration/stepper.py: _extremum_in_step)
+        # over the cells is not smooth in time; integration/dense.py: extremum_in_step)
         p_step = cols["P_max_step"]
         end = i + 1 if p_step[i + 1] > p_step[i] else i
         result.p_max_approach = float(p_step[end])

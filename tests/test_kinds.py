@@ -3,13 +3,17 @@ solver/model/kind.py): which copy a physics runs, what a copy shares with the so
 that a copy refuses a physics whose code it lacks, and that a copy's results are the loop's own."""
 
 import math
+import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
 from solver import Physics, collide
 from solver.integration import kinds, stepper
 from solver.model import kind
+
+REPO = Path(__file__).resolve().parents[1]
 
 # one physics per piece, alone and as the solver's tests combine them
 PHYSICS = {
@@ -53,6 +57,42 @@ def test_a_copy_holds_the_pieces_asked_and_shares_the_rest_of_the_solver():
             assert module is sys.modules["solver." + name[len("solver._loop_classic."):]], name
     assert loop.model.has_active_set is not stepper.model.has_active_set
     assert loop.holds_asked is constants.holds_asked is not kind.holds_asked
+
+
+# a classic collision in a fresh interpreter: the solver's modules it imported, and which of the
+# copy's modules are not the solver's own though not copied either
+FRESH_CLASSIC = """
+import sys
+from solver import Physics, collide
+from solver.integration import kinds
+assert collide(Physics(St=10.0, eps=1e-4), accuracy="fast").status == "ok"
+copied = {f"solver._loop_classic.{name}" for name in kinds._COPIED + kinds._PACKAGES}
+print(sorted(name for name in sys.modules if name.startswith("solver.")
+             and not name.startswith("solver._loop_")))
+print(sorted(name for name, module in sys.modules.items()
+             if name.startswith("solver._loop_classic.") and name not in copied
+             and module is not sys.modules.get("solver." + name[len("solver._loop_classic."):])))
+"""
+
+
+def test_a_classic_film_imports_no_loop_with_every_piece_and_its_copy_shares_the_rest():
+    """A process that solves only the classic film never imports the loop with every piece nor
+    the modules only it and the copies use (their dispatchers cost a warm ``ehd run`` about
+    20 ms: docs/solver.md, "Compiled code"); the copy's imports of what it does not copy are the
+    solver's own modules even where nothing had imported them before (kinds._SharedModules), so
+    the copy shares its records. In a fresh interpreter: the module list an in-process test
+    cannot see."""
+    p = subprocess.run([sys.executable, "-c", FRESH_CLASSIC], cwd=REPO, capture_output=True,
+                       text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    imported, not_shared = (eval(line) for line in p.stdout.splitlines())
+    # (model/kind.py, liquid.py and slip.py serve the solver's Python too: the rigid paths)
+    generic = {f"solver.{name}" for name in kinds._COPIED
+               if name not in ("model.kind", "model.liquid", "model.slip")}
+    assert len(generic) == 5, generic  # the loop and the film model's contract, as compiled
+    assert not generic & set(imported), sorted(generic & set(imported))
+    assert "solver.integration.dense" in imported  # the shared module the copy's loop reads
+    assert not_shared == [], not_shared
 
 
 @pytest.mark.parametrize("codes", list(PHYSICS))

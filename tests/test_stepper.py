@@ -1,4 +1,5 @@
-"""The time loop's parts (solver/integration/stepper.py), each against what it must be exactly.
+"""The time loop's parts (solver/integration/stepper.py, and the step's interpolant in
+solver/integration/dense.py), each against what it must be exactly.
 
 The whole loop is tested through collisions (closed forms, energy, convergence: test_collision.py,
 test_convergence.py); here each part on its own, where a wrong coefficient or a swapped index
@@ -8,7 +9,7 @@ would otherwise show only as more steps.
 import numpy as np
 import pytest
 
-from solver.integration import stepper
+from solver.integration import dense, stepper
 
 
 @pytest.mark.parametrize("dt, dt_prev", [(0.1, 0.1), (0.13, 0.05), (0.02, 0.3)])
@@ -92,13 +93,14 @@ def test_bdf_of_order_k_is_exact_for_polynomials_of_degree_k(order):
 
 @pytest.mark.parametrize("k", [1, 2, 3, 4, 5])
 def test_basis_values_and_slopes_are_the_lagrange_polynomials(k):
-    """``_basis`` at a point, at a node and between nodes: the values reproduce every polynomial
-    of degree ``k`` through the ``k + 1`` newest times, and the slopes its derivative."""
+    """``dense.lagrange_basis`` at a point, at a node and between nodes: the values reproduce
+    every polynomial of degree ``k`` through the ``k + 1`` newest times, and the slopes its
+    derivative."""
     values, slopes = np.empty(stepper.SLOTS), np.empty(stepper.SLOTS)
     f = lambda t: (t - 0.21) ** k + 0.5 * t  # noqa: E731
     df = lambda t: k * (t - 0.21) ** (k - 1) + 0.5  # noqa: E731
     for x in (TIMES[0], TIMES[1], 0.5 * (TIMES[0] + TIMES[1]), TIMES[0] + 0.07):
-        stepper._basis(TIMES, k, x, values, slopes)
+        dense.lagrange_basis(TIMES, k, x, values, slopes)
         # 1e-12: weights of size up to ~30 times O(1) values, a few roundings each
         assert values[:k + 1] @ f(TIMES[:k + 1]) == pytest.approx(f(x), abs=1e-12)
         assert slopes[:k + 1] @ f(TIMES[:k + 1]) == pytest.approx(df(x), abs=1e-10)
@@ -106,18 +108,19 @@ def test_basis_values_and_slopes_are_the_lagrange_polynomials(k):
 
 @pytest.mark.parametrize("k", [1, 2, 3, 4, 5])
 def test_newton_form_is_the_interpolant_and_its_derivative(k):
-    """``_divided_differences`` and ``_newton_form``, the value and slope ``_extremum_in_step``
-    reads: the polynomial of degree ``k`` through the ``k + 1`` newest times and its derivative,
-    the same as ``_basis`` gives, at the step's ends and inside it."""
+    """``dense.divided_differences`` and ``dense.newton_form``, the value and slope
+    ``dense.extremum_in_step`` reads: the polynomial of degree ``k`` through the ``k + 1`` newest
+    times and its derivative, the same as ``dense.lagrange_basis`` gives, at the step's ends and
+    inside it."""
     f = lambda t: (t - 0.21) ** k + 0.5 * t  # noqa: E731
     df = lambda t: k * (t - 0.21) ** (k - 1) + 0.5  # noqa: E731
     rows = np.array([[f(t), -3.0 * f(t)] for t in TIMES])
     coef, values, slopes = (np.empty(stepper.SLOTS) for _ in range(3))
     for x in (TIMES[0], TIMES[1], 0.5 * (TIMES[0] + TIMES[1]), TIMES[0] + 0.07):
-        stepper._basis(TIMES, k, x, values, slopes)
+        dense.lagrange_basis(TIMES, k, x, values, slopes)
         for col, scale in ((0, 1.0), (1, -3.0)):
-            stepper._divided_differences(TIMES, k, rows, col, coef)
-            value, slope = stepper._newton_form(TIMES, k, coef, x)
+            dense.divided_differences(TIMES, k, rows, col, coef)
+            value, slope = dense.newton_form(TIMES, k, coef, x)
             # 1e-12 and 1e-10, as the Lagrange basis' test above: differences of O(1) values
             # over time differences of 0.1-1, a few roundings each
             assert value == pytest.approx(scale * f(x), abs=1e-12)
@@ -128,10 +131,10 @@ def test_newton_form_is_the_interpolant_and_its_derivative(k):
 
 @pytest.mark.parametrize("k", [3, 4, 5])
 def test_extremum_in_step_finds_each_columns_interior_extremum(k):
-    """``_extremum_in_step``: over columns whose values are polynomials of degree ``k`` in time,
-    the smallest interior minimum of the last step (``TIMES[1]`` to ``TIMES[0]``) and its time,
-    to the bisection's resolution; a column monotone over the step has none; the largest value
-    with ``sign`` -1."""
+    """``dense.extremum_in_step``: over columns whose values are polynomials of degree ``k`` in
+    time, the smallest interior minimum of the last step (``TIMES[1]`` to ``TIMES[0]``) and its
+    time, to the bisection's resolution; a column monotone over the step has none; the largest
+    value with ``sign`` -1."""
     t_lo, t_hi = TIMES[1], TIMES[0]
     centres = (t_lo + 0.3 * (t_hi - t_lo), t_lo + 0.8 * (t_hi - t_lo), t_hi + 0.5)
     depths = (0.2, 0.1, -5.0)  # the third column falls all through the step: no interior minimum
@@ -141,25 +144,25 @@ def test_extremum_in_step_finds_each_columns_interior_extremum(k):
 
     rows = np.array([[column(t, c, d) for c, d in zip(centres, depths)] for t in TIMES])
     basis = np.zeros((4, stepper.SLOTS))
-    value, when = stepper._extremum_in_step(TIMES, rows, 3, k, 1.0, basis)
+    value, when = dense.extremum_in_step(TIMES, rows, 3, k, 1.0, basis)
     # the columns are (t - c)^2 (1 + (t - c)^(k-2)) + d: a minimum d at c; the second column's
     # 0.1 is the smaller interior one (the third's -5 lies beyond the step)
     assert value == pytest.approx(0.1, abs=1e-12)
     assert when == pytest.approx(centres[1], abs=1e-9)  # 2^-50 of the step, and the root's
-    value, _ = stepper._extremum_in_step(TIMES, -rows, 3, k, -1.0, basis)
+    value, _ = dense.extremum_in_step(TIMES, -rows, 3, k, -1.0, basis)
     assert value == pytest.approx(-0.1, abs=1e-12)
-    value, _ = stepper._extremum_in_step(TIMES, rows[:, 2:], 1, k, 1.0, basis)
+    value, _ = dense.extremum_in_step(TIMES, rows[:, 2:], 1, k, 1.0, basis)
     assert value == np.inf
 
 
 @pytest.mark.parametrize("k", [3, 4, 5])
 def test_dissipated_in_step_integrates_its_polynomial_exactly(k):
-    """``_dissipated_in_step``: the integral over the last step of the polynomial through the
+    """``dense.dissipated_in_step``: the integral over the last step of the polynomial through the
     ``k + 1`` newest dissipation rates, exact for degree ``k`` (Gauss-Legendre's three points
     are exact to degree 5)."""
     rate = lambda t: 1.0 + (t - 0.1) ** k  # noqa: E731
     antiderivative = lambda t: t + (t - 0.1) ** (k + 1) / (k + 1)  # noqa: E731
-    got = stepper._dissipated_in_step(TIMES.copy(), rate(TIMES), k, np.zeros((4, stepper.SLOTS)))
+    got = dense.dissipated_in_step(TIMES.copy(), rate(TIMES), k, np.zeros((4, stepper.SLOTS)))
     # 1e-13: a few roundings of O(1) values over a step of 0.1
     assert got == pytest.approx(antiderivative(TIMES[0]) - antiderivative(TIMES[1]), abs=1e-13)
 

@@ -6,9 +6,11 @@
 the modules that read model/kind.py's ``*_CODE`` constants, and every one between them and the
 loop's entry (``_COPIED``), loaded anew under a package of their own (``solver._loop_<pieces>``,
 ``solver._loop_classic`` for none) with the pieces it lacks set False before they load; every
-other module of the solver is the one already imported, so the copy shares its records, grids
-and linear algebra. numba prunes the branches of the pieces a copy lacks, and their code is
-never compiled.
+other module a copy imports is the solver's own (``_SharedModules``), so the copy shares its
+records, grids and linear algebra. numba prunes the branches of the pieces a copy lacks, and
+their code is never compiled. The loop with every piece is imported only when a physics asks for
+it: a classic film's process never builds its dispatchers (about 20 ms of a warm ``ehd run``:
+docs/solver.md, "Compiled code").
 
 Each copy has its own folder in the compile cache (``loop-<pieces>`` in ``_jit.CACHE_DIR``):
 numba names a cached kernel by its source file and function, which the copies share. A copy is
@@ -25,6 +27,9 @@ code is in no other loop.
 """
 
 import importlib
+import importlib.abc
+import importlib.util
+import os
 import sys
 import threading
 import types
@@ -33,7 +38,6 @@ import numba
 
 from .. import _jit
 from ..model import kind
-from . import stepper
 
 # the modules a copy loads anew (relative to the solver package): model/kind.py, whose constants
 # are set before the others load (they import them), and those whose compiled code reads them or
@@ -64,6 +68,8 @@ def loop_for(phys, log=False):
     ``LOG_CODE``; every piece's too)."""
     codes = compiled_pieces(phys)
     if codes == kind.CODES and not log:
+        from . import stepper  # the loop with every piece, imported when first asked for
+
         return stepper
     with _lock:
         if (codes, log) not in _loops:
@@ -87,16 +93,40 @@ def is_cached(codes) -> bool:
     numba's ``<module>.<function>-<line>.py<XY>.nbi`` in a folder named after the source's
     folder, ``<folder>_<hash of its path>``), so a solve with it loads rather than compiles."""
     import glob
-    import os
 
     folder = cache_folder(codes)
     if folder is None:
         return False
-    source, name = os.path.splitext(os.path.basename(stepper.__file__))[0], stepper.integrate
+    here = os.path.dirname(os.path.abspath(__file__))  # the loop's source: stepper.py beside this
     python = f"py{sys.version_info.major}{sys.version_info.minor}"
-    pattern = (f"{glob.escape(folder)}/{os.path.basename(os.path.dirname(stepper.__file__))}_*/"
-               f"{source}.{name.py_func.__name__}-*.{python}.nbi")
+    pattern = (f"{glob.escape(folder)}/{os.path.basename(here)}_*/"
+               f"stepper.{_ENTRY}-*.{python}.nbi")
     return bool(glob.glob(pattern))
+
+
+_ENTRY = "integrate"  # the loop's entry in stepper.py, whose cache index ``is_cached`` looks for
+
+
+class _SharedModules(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    """While a copy loads (``_load``): its import of a module it does not copy
+    (``solver._loop_<tag>.<name>``, ``<name>`` not in ``_COPIED`` or ``_PACKAGES``) is the
+    solver's own ``solver.<name>``, imported then if no one has yet; the copied modules load
+    anew from their files (None: the next finder's)."""
+
+    def __init__(self, package: str):
+        self.prefix = package + "."
+
+    def find_spec(self, fullname, path=None, target=None):
+        if not fullname.startswith(self.prefix) or \
+                fullname[len(self.prefix):] in _COPIED + _PACKAGES:
+            return None
+        return importlib.util.spec_from_loader(fullname, self)
+
+    def create_module(self, spec):
+        return importlib.import_module("solver." + spec.name[len(self.prefix):])
+
+    def exec_module(self, module):
+        pass  # the solver's own module, already executed
 
 
 def _tag(codes, log=False) -> str:
@@ -110,16 +140,11 @@ def _load(codes, log=False):
     package = types.ModuleType(name, f"The time loop compiled for {codes or 'the classic film'}.")
     package.__path__ = list(root.__path__)
     package.__package__ = name
-    shared = {}
-    for full, module in list(sys.modules.items()):
-        relative = full[len("solver."):]
-        if full.startswith("solver.") and relative not in _COPIED + _PACKAGES and \
-                not relative.startswith("_loop_"):
-            shared[f"{name}.{relative}"] = module
     sys.modules[name] = package
-    sys.modules.update(shared)
     folder = cache_folder(codes, log)
     saved = numba.config.CACHE_DIR
+    shared = _SharedModules(name)
+    sys.meta_path.insert(0, shared)
     try:
         if folder is not None:
             numba.config.CACHE_DIR = folder  # a kernel's cache locator is fixed as it is decorated
@@ -133,5 +158,6 @@ def _load(codes, log=False):
             del sys.modules[full]
         raise
     finally:
+        sys.meta_path.remove(shared)
         numba.config.CACHE_DIR = saved
     return loop

@@ -37,7 +37,6 @@ Counters: ``STEPS``, ``REJECTED``, ``NEWTON``, ``LU``, ``JACOBIANS``, ``LOWRANK`
 (``COUNTERS`` names them in that order).
 """
 
-import math
 from typing import NamedTuple
 
 import numpy as np
@@ -47,6 +46,7 @@ from ..model import step as model
 from ..model.kind import LOG_CODE, holds_asked
 from ..model.state import Step, array_record
 from ..observables import SERIES, SERIES_INDEX, STATUS_CODES
+from .dense import combine, dissipated_in_step, extremum_in_step, lagrange_basis, stop_in_step
 from .events import RELAXED_APART, RELAXED_FULL, reached
 from .linalg import MAX_SLOTS, lowrank_prepare, lowrank_solve, lu_factor, lu_solve, matvec
 
@@ -100,10 +100,6 @@ _ORDER, _H_MIN_STEP = SERIES_INDEX["order"], SERIES_INDEX["H_min_step"]
 _P_MAX_STEP, _H0_AT_P_MAX_STEP = SERIES_INDEX["P_max_step"], SERIES_INDEX["H0_at_P_max_step"]
 _H_MIN_AT_V0, _P_MAX_AT_V0 = SERIES_INDEX["H_min_at_v0"], SERIES_INDEX["P_max_at_v0"]
 _H0_AT_V0, _T_AT_V0 = SERIES_INDEX["H0_at_v0"], SERIES_INDEX["T_at_v0"]
-# Gauss-Legendre's three points on [-1, 1] and their weights: exact for polynomials of degree 5,
-# the highest order's interpolant (``_dissipated_in_step``)
-GAUSS3 = ((-math.sqrt(0.6), 5.0 / 9.0), (0.0, 8.0 / 9.0), (math.sqrt(0.6), 5.0 / 9.0))
-BISECTIONS = 50  # halvings of a step's interval to locate a cell's extremum in it (2^-50)
 
 # The attempt log (``integrate``'s ``log_rows`` > 0): one row per step attempt, these columns.
 # ``outcome``: ATTEMPT_OUTCOMES' codes; ``error``: the local error in units of the tolerance
@@ -195,8 +191,8 @@ History = array_record("History", ("y", "h", "c", "t", "r", "n", "order"),
 # error, the pressure's error scale (model/step.py: step_error); ``dres_dh`` (N, 3): the
 # Jacobian's gap partials (film.jacobian); ``a`` (SLOTS,): the step's BDF coefficients
 # (``_coefficients``); ``basis`` (4, SLOTS): the Lagrange basis of the newest states, its values
-# and slopes at a point, its slopes at the step's start and end (``_extremum_in_step``, which
-# keeps a cell's Newton coefficients in the slopes' row, ``_dissipated_in_step``); ``counters``:
+# and slopes at a point, its slopes at the step's start and end (``extremum_in_step``, which
+# keeps a cell's Newton coefficients in the slopes' row, ``dissipated_in_step``); ``counters``:
 # ``COUNTERS``; ``log`` (rows, N_LOG): the attempt log (0 rows: none kept), ``log_n`` (1,): its
 # rows written, ``own_scale`` (1,): 1 where the last local error measured the pressures against
 # ``scale``, 0 against the slots, -1 where it measured nothing (the first step; ``_local_error``).
@@ -679,142 +675,13 @@ def _record(row, t, grid, phys, y, w, h, strain, dissipated, film):
     return model.relaxing_deflection(w, wmax, film, phys), r_event
 
 
-@leaf
-def _basis(t, k, x, values, slopes):
-    """The Lagrange basis through the ``k + 1`` newest times ``t[:k + 1]`` at ``x``: its values
-    into ``values[:k + 1]`` and its slopes into ``slopes[:k + 1]`` (each slope a sum of products,
-    also at the nodes themselves)."""
-    for j in range(k + 1):
-        lj = 1.0
-        dj = 0.0
-        for m in range(k + 1):
-            if m == j:
-                continue
-            lj *= (x - t[m]) / (t[j] - t[m])
-            term = 1.0 / (t[j] - t[m])
-            for i in range(k + 1):
-                if i != j and i != m:
-                    term *= (x - t[i]) / (t[j] - t[i])
-            dj += term
-        values[j] = lj
-        slopes[j] = dj
-
-
-@leaf
-def _combine(weights, k, rows, col):
-    """``sum_j weights[j] rows[j, col]`` over the ``k + 1`` newest rows."""
-    out = 0.0
-    for j in range(k + 1):
-        out += weights[j] * rows[j, col]
-    return out
-
-
-@leaf
-def _divided_differences(t, k, rows, col, coef):
-    """The Newton form of the polynomial through ``(t[j], rows[j, col])``, ``j = 0..k``: its
-    coefficients (divided differences) into ``coef[:k + 1]``, so that it reads ``coef[0] +
-    coef[1] (x - t[0]) + coef[2] (x - t[0]) (x - t[1]) + ...`` (``_newton_form``)."""
-    for j in range(k + 1):
-        coef[j] = rows[j, col]
-    for level in range(1, k + 1):
-        for j in range(k, level - 1, -1):
-            coef[j] = (coef[j] - coef[j - 1]) / (t[j] - t[j - level])
-
-
-@leaf
-def _newton_form(t, k, coef, x):
-    """The value and the slope at ``x`` of ``_divided_differences``' polynomial, by Horner's
-    scheme on its Newton form with the derivative alongside: ``O(k)`` operations, against
-    ``_basis``'s ``O(k^3)``."""
-    value = coef[k]
-    slope = 0.0
-    for j in range(k - 1, -1, -1):
-        slope = slope * (x - t[j]) + value
-        value = value * (x - t[j]) + coef[j]
-    return value, slope
-
-
-@entry
-@leaf
-def _extremum_in_step(t, rows, cells, k, sign, basis):
-    """The extremum of ``rows[:, :cells]`` (the newest states first, times ``t``) over its
-    columns and over the last step (``t[1]`` to ``t[0]``), on the step's own interpolant: the
-    polynomial through the ``k + 1`` newest states (the BDF's dense output, order ``k``). The
-    smallest value where ``sign`` is 1, the largest where it is -1. A column that falls at the
-    step's start and rises at its end (times ``sign``) has its extremum inside, located by
-    bisection on the slope (the column's polynomial in Newton form, ``_newton_form``: through
-    ``_basis`` at every halving, this search took 21 % of a classic collision's CPU time at the
-    standard preset). Returns the extremum (inf times ``sign`` if no column has one inside the
-    step) and its time. Such a series, an extremum over the cells, is not smooth in time
-    where the cell that holds it changes (the dimple's rim moves), so a parabola through three
-    rows of it misreads it by the step's cube: at order 5 on the fast preset, ``h_m`` jumped by
-    0.7 % between neighbouring St 5 % apart, and the central gap at the peak pressure read 2 %
-    off."""
-    values, coef, at_start, at_end = basis[0], basis[1], basis[2], basis[3]
-    _basis(t, k, t[1], values, at_start)
-    _basis(t, k, t[0], values, at_end)
-    best, t_best = np.inf, t[0]
-    for i in range(cells):
-        if not (sign * _combine(at_start, k, rows, i) < 0.0 < sign * _combine(at_end, k, rows, i)):
-            continue
-        _divided_differences(t, k, rows, i, coef)
-        lo, hi = t[1], t[0]
-        for _ in range(BISECTIONS):
-            mid = 0.5 * (lo + hi)
-            if sign * _newton_form(t, k, coef, mid)[1] < 0.0:
-                lo = mid
-            else:
-                hi = mid
-        t_i = 0.5 * (lo + hi)
-        value = sign * _newton_form(t, k, coef, t_i)[0]
-        if value < best:
-            best, t_best = value, t_i
-    return sign * best, t_best
-
-
-@leaf
-def _dissipated_in_step(t, r, k, basis):
-    """The energy dissipated over the last step above order 2: the integral of the polynomial
-    through the ``k + 1`` newest dissipation rates ``r`` (at the times ``t``, the history's), by
-    Gauss-Legendre's three points (exact to degree 5), so the energy balance is closed to the
-    step's order; at orders 1 and 2 the loop keeps the trapezoidal rule."""
-    half = 0.5 * (t[0] - t[1])
-    mid = 0.5 * (t[0] + t[1])
-    total = 0.0
-    for x, weight in GAUSS3:
-        _basis(t, k, mid + x * half, basis[0], basis[1])
-        rate = 0.0
-        for j in range(k + 1):
-            rate += basis[0, j] * r[j]
-        total += weight * rate
-    return total * half
-
-
-@leaf
-def _stop_in_step(t, y, col, k, basis):
-    """The time inside the last step where column ``col`` of the states ``y`` (positive at the
-    step's start, not at its end) falls through 0 on the step's interpolant, by bisection; the
-    basis there in ``basis[0]``."""
-    lo, hi = t[1], t[0]
-    for _ in range(BISECTIONS):
-        mid = 0.5 * (lo + hi)
-        _basis(t, k, mid, basis[0], basis[1])
-        if _combine(basis[0], k, y, col) > 0.0:
-            lo = mid
-        else:
-            hi = mid
-    t_stop = 0.5 * (lo + hi)
-    _basis(t, k, t_stop, basis[0], basis[1])
-    return t_stop
-
-
 @jit
 def _record_step(row, hist, k, basis):
     """The series row's step columns: the order ``k`` of the step that ended at it (0: the first
     row); above order 2, the smallest gap and the largest film pressure over the cells and that
-    step, and the central gap when the pressure peaks (``_extremum_in_step``), and where the
+    step, and the central gap when the pressure peaks (``extremum_in_step``), and where the
     approach speed ``V`` falls through 0 inside the step, that time and the smallest gap, the
-    largest pressure and the central gap there (``_stop_in_step``; the time NaN where it does
+    largest pressure and the central gap there (``stop_in_step``; the time NaN where it does
     not). A film that rises above order 2 is smooth,
     so its pressures are the solution's own slots (model/step.py: ``smooth_in_time``). At orders
     0-2, the row's own ``H_min``, ``P_max`` and ``H0``."""
@@ -823,18 +690,18 @@ def _record_step(row, hist, k, basis):
     h_v0, p_v0, h0_v0, t_v0 = h_min, p_max, h0_at_p_max, np.nan
     if k > 2:
         cells = hist.h.shape[1]
-        h_min = min(h_min, _extremum_in_step(hist.t, hist.h, cells, k, 1.0, basis)[0])
-        p_step, t_p = _extremum_in_step(hist.t, hist.y, cells, k, -1.0, basis)
+        h_min = min(h_min, extremum_in_step(hist.t, hist.h, cells, k, 1.0, basis)[0])
+        p_step, t_p = extremum_in_step(hist.t, hist.y, cells, k, -1.0, basis)
         if p_step > p_max:
-            _basis(hist.t, k, t_p, basis[0], basis[1])
-            p_max, h0_at_p_max = p_step, _combine(basis[0], k, hist.h, 0)
+            lagrange_basis(hist.t, k, t_p, basis[0], basis[1])
+            p_max, h0_at_p_max = p_step, combine(basis[0], k, hist.h, 0)
         if hist.y[1, cells + 1] > 0.0 >= hist.y[0, cells + 1]:
-            t_v0 = _stop_in_step(hist.t, hist.y, cells + 1, k, basis)
+            t_v0 = stop_in_step(hist.t, hist.y, cells + 1, k, basis)
             h_v0, p_v0 = np.inf, -np.inf
             for i in range(cells):
-                h_v0 = min(h_v0, _combine(basis[0], k, hist.h, i))
-                p_v0 = max(p_v0, _combine(basis[0], k, hist.y, i))
-            h0_v0 = _combine(basis[0], k, hist.h, 0)
+                h_v0 = min(h_v0, combine(basis[0], k, hist.h, i))
+                p_v0 = max(p_v0, combine(basis[0], k, hist.y, i))
+            h0_v0 = combine(basis[0], k, hist.h, 0)
     row[_H_MIN_STEP] = h_min
     row[_P_MAX_STEP] = p_max
     row[_H0_AT_P_MAX_STEP] = h0_at_p_max
@@ -1201,7 +1068,7 @@ def integrate(grid, phys, start, control, stop_kind, stop_params, save_profiles,
         control, factor = _control_from_now(control, hist, factor, film, phys)
         strain_new, diss_new = model.energies(grid, phys, y0, w, h, q, film)
         hist.r[0] = diss_new
-        dissipated += (_dissipated_in_step(hist.t, hist.r, k_step, work.basis) if k_step > 2
+        dissipated += (dissipated_in_step(hist.t, hist.r, k_step, work.basis) if k_step > 2
                        else 0.5 * (diss_rate + diss_new) * dt)
         strain, diss_rate = strain_new, diss_new
         dt *= factor
