@@ -505,9 +505,18 @@ def executable() -> int:
     done by ``main``, which tests and scripts call in a process that goes on."""
     code = main()
     try:
+        # the command is done and its exit code decided: a Ctrl-C or SIGTERM from now on (one
+        # pressed again, a batch system's late signal) is ignored, not raised into a weakref
+        # callback of the collection below or the interpreter's teardown, which printed
+        # "Exception ignored in ... KeyboardInterrupt" after the line (a hostile review: a
+        # sweep stopped by four Ctrl-C, 2 of 4 tries)
+        import signal
+
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
         gc.collect()
         gc.freeze()
-    except KeyboardInterrupt:  # after main restored the handlers: the command is done
+    except KeyboardInterrupt:  # one that came before the signals were ignored
         pass
     return code
 

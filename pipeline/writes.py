@@ -10,8 +10,10 @@ Every output of ``ehd`` (a sweep store's temporary layout, its journal and lock,
   ``os.replace`` only once it is complete (a file or a directory, e.g. a ``.zarr`` store);
 - :func:`write_all` writes several files all or none (``ehd examples``, a DEM export);
 - :func:`guarded_dir` guards a folder that a plotting function fills with several files, each
-  announced by :func:`claim`: on a failure, every claimed file that was written is removed (a
-  half-written figure is worse than none: the next run draws it again), and nothing else.
+  announced by :func:`claim`, which hands back a temporary name to write it to: the files move
+  into place together once the command has written them all; on a failure (Ctrl-C included)
+  the temporaries are removed and the folder holds what it held before, the figures of an
+  earlier run included.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from pathlib import Path
 from .errors import WriteError, describe_os_error
 
 __all__ = ["writing", "atomic_path", "temporary_paths", "write_all", "guarded_dir", "claim",
-           "write_error"]
+           "retire", "write_error"]
 
 
 def write_error(exc: OSError, what: str, path=None) -> WriteError:
@@ -184,32 +186,41 @@ def write_all(contents: dict, what: str) -> list[Path]:
     return [path for _, path in pending]
 
 
-def _stamp(path: Path):
-    try:
-        st = path.lstat()
-    except OSError:
-        return None
-    return (st.st_mtime_ns, st.st_size, st.st_ino)
-
-
 class _Claims:
-    """What the code inside one open ``guarded_dir`` said it writes: each file with its state
-    before (None: it did not exist), and the folders that did not exist, made for them."""
+    """What the code inside one open ``guarded_dir`` said it writes: each file with the
+    temporary it is written to (a hidden name beside it, its suffix kept), and the folders that
+    did not exist, made for them."""
 
     def __init__(self, folder: Path):
         self.files: dict = {}
+        self.retired: list[Path] = []
         self.folders = [p for p in (folder, *folder.parents) if not p.exists()]
 
-    def add(self, path: Path) -> None:
+    def add(self, path: Path) -> Path:
         self.folders += [p for p in path.parents if not p.exists() and p not in self.folders]
-        self.files.setdefault(path, _stamp(path))
+        return self.files.setdefault(
+            path, path.with_name(f".{path.stem}.tmp-{os.getpid()}{path.suffix}"))
+
+    def target(self, filename):
+        """The claimed file whose temporary is ``filename`` (an error's), else ``filename``."""
+        if filename is None:
+            return None
+        named = Path(filename).absolute()
+        return next((path for path, tmp in self.files.items() if tmp == named), filename)
+
+    def commit(self) -> None:
+        """Remove the retired files, then move every temporary into place, in the order claimed
+        (renames: no new space)."""
+        for path in self.retired:
+            _remove(path)
+        for path, tmp in self.files.items():
+            os.replace(tmp, path)
 
     def undo(self) -> None:
-        """Remove every claimed file that was written, then the folders made for them that are
-        empty (a user's file inside keeps its folder)."""
-        for path, before in self.files.items():
-            if _stamp(path) != before and not (path.is_dir() and not path.is_symlink()):
-                _remove(path)
+        """Remove every temporary still there, then the folders made for them that are empty
+        (a user's file inside keeps its folder)."""
+        for tmp in self.files.values():
+            _remove(tmp)
         for path in sorted(self.folders, key=lambda p: -len(p.parts)):  # innermost first
             try:
                 path.rmdir()
@@ -221,34 +232,49 @@ class _Claims:
 _CLAIMS: list[_Claims] = []
 
 
-def claim(path) -> None:
+def claim(path) -> Path:
     """The running command is about to write the file ``path`` (a figure, a table, a stamp)
-    into a folder that ``guarded_dir`` guards: should the command fail, that file is removed if
-    it was written, and the folders made for it if they are empty. Nothing else in the folder
-    is ever touched (a file the user changed meanwhile stays). A no-op outside a guarded_dir."""
+    into a folder that ``guarded_dir`` guards: returns the name to write it to, a temporary
+    that replaces ``path`` once the command completes (should it fail, the temporary is removed
+    and ``path`` stays as it was). ``path`` itself outside a guarded_dir. Write it in the format
+    its own name says (the temporary keeps the suffix; matplotlib: ``format=``)."""
     if _CLAIMS:
-        _CLAIMS[-1].add(Path(path).absolute())
+        return _CLAIMS[-1].add(Path(path).absolute())
+    return Path(path)
+
+
+def retire(path) -> None:
+    """The file ``path`` (one the command wrote in an earlier run, which this run replaces with
+    no file) is removed once the command completes, before the claimed files move into place;
+    now outside a guarded_dir."""
+    if _CLAIMS:
+        _CLAIMS[-1].retired.append(Path(path).absolute())
+    else:
+        _remove(Path(path))
 
 
 @contextmanager
 def guarded_dir(folder, what: str):
-    """A folder filled by code that writes files in place, each announced by ``claim``: on an
-    ``OSError`` (or any failure, Ctrl-C and SIGTERM included), remove every claimed file that
-    was written, and the folders made for them (and for ``folder``) that are left empty, then
-    raise (``WriteError`` for an ``OSError``). Files the command did not claim are never
-    touched: the first version removed every file that changed under ``folder`` while it ran,
-    the user's included (a file edited in a subfolder of ``--plot DIR`` during the plot was
-    deleted by a SIGTERM)."""
+    """A folder filled by code that writes files, each announced by ``claim`` and written to
+    the temporary name it returns: once the block completes, every temporary replaces its file
+    (``os.replace``, in the order claimed); on an ``OSError`` (or any failure, Ctrl-C and
+    SIGTERM included) the temporaries are removed, and the folders made for them (and for
+    ``folder``) that are left empty, then it raises (``WriteError`` for an ``OSError``). The
+    files in place are never touched on a failure: an interrupted ``ehd figures`` had removed
+    the figures it had redrawn so far, the earlier run's with them (a hostile review); the first
+    version removed every file that changed under ``folder`` while it ran, the user's included
+    (a file edited in a subfolder of ``--plot DIR`` during the plot was deleted by a SIGTERM)."""
     folder = Path(folder).absolute()
     claims = _Claims(folder)
     _CLAIMS.append(claims)
     try:
         yield folder
+        claims.commit()
     except BaseException as exc:
         claims.undo()
         if isinstance(exc, OSError):
             _quiet_asyncio()
-            raise write_error(exc, what, exc.filename or folder) from None
+            raise write_error(exc, what, claims.target(exc.filename) or folder) from None
         raise
     finally:
         _CLAIMS.remove(claims)

@@ -23,7 +23,7 @@ from dataclasses import replace
 import numpy as np
 
 from . import extrapolation, far_field
-from ._jit import deferred_interrupt
+from .interrupts import deferred_interrupt
 from .integration import dense, kinds
 from .integration.grid import reference_grid, scaled_grid
 from .model import liquid, rigid

@@ -691,7 +691,7 @@ def test_a_real_ctrl_c_during_the_compiled_solve_is_exit_130_one_line(tmp_path):
     """Ctrl-C while the compiled time loop runs its first call in a process (the kernels loaded
     from a warm cache): raised inside it, where numba converts the results back to Python
     objects, it killed ``ehd run`` with a segmentation fault (exit -11, every time at 0.5-2 s);
-    it is taken once the loop returns (solver._jit.deferred_interrupt): exit 130, one line."""
+    it is taken once the loop returns (solver.interrupts.deferred_interrupt): exit 130, one line."""
     (tmp_path / "run.py").write_text(REAL_CTRL_C.format(repo=str(REPO)))
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
     subprocess.run([sys.executable, "run.py", "compile"], cwd=tmp_path, env=env, check=True)
@@ -1036,13 +1036,17 @@ def test_run_save_replaces_an_old_file_only_when_complete(ws, capsys, monkeypatc
     assert [p.name for p in ws.iterdir() if "r.nc" in p.name] == ["r.nc"]
 
 
-@pytest.mark.parametrize("argv, target", [
+# the commands that draw figures into a folder, and the function that draws them
+FIGURE_COMMANDS = [
     (["run", "--St", "5", "--eps", "0.01", "--accuracy", "fast", "--plot", "figs/run"],
      "pipeline.plots.scene_plots.plot_scene"),
     (["figures", "s.zarr", "--out", "figs/sweep"], "pipeline.plots.sweep_maps.update_figures"),
     (["restitution", str(REPO / "examples" / "glass_beads_water.toml"), "--n", "2", "--accuracy",
       "fast", "--plot", "figs/restitution"], "pipeline.plots.restitution_plot.plot_restitution"),
-])
+]
+
+
+@pytest.mark.parametrize("argv, target", FIGURE_COMMANDS)
 def test_figures_on_a_full_disk_leave_nothing_new(ws, capsys, monkeypatch, argv, target):
     import importlib
 
@@ -1053,8 +1057,8 @@ def test_figures_on_a_full_disk_leave_nothing_new(ws, capsys, monkeypatch, argv,
         from pipeline.writes import claim
 
         folder.mkdir(parents=True, exist_ok=True)
-        claim(folder / "fig.png")  # as every writer of a guarded folder does
-        (folder / "fig.png").write_bytes(b"\x89PNG")  # one figure half written
+        # as every writer of a guarded folder does: to the name claim hands back
+        claim(folder / "fig.png").write_bytes(b"\x89PNG")  # one figure half written
         _enospc()
 
     monkeypatch.setattr(importlib.import_module(module), name, half)
@@ -1062,6 +1066,74 @@ def test_figures_on_a_full_disk_leave_nothing_new(ws, capsys, monkeypatch, argv,
     code, _, err = ehd(capsys, *argv)
     _assert_full_disk_line(code, err)
     assert _leftovers(ws, before) == []
+
+
+@pytest.mark.parametrize("argv, target", FIGURE_COMMANDS)
+def test_an_interrupted_redraw_keeps_the_figures_of_the_last_run(ws, capsys, monkeypatch, argv,
+                                                                 target):
+    """Ctrl-C while a command redraws the figures of an earlier run into the same folder: the
+    earlier figures and the stamp stay as they were, and no temporary is left (a hostile review
+    found an interrupted ``ehd figures`` had removed the figures it had redrawn so far, the
+    earlier run's with them: 19 files became 11)."""
+    import importlib
+
+    module, name = target.rsplit(".", 1)
+    folder = ws / argv[-1]
+    folder.mkdir(parents=True)
+    earlier = {folder / "fig.png": b"earlier png", folder / "fig.pdf": b"earlier pdf",
+               folder / ".sweep-figures.sha256": b"{}"}
+    for path, data in earlier.items():
+        path.write_bytes(data)
+
+    def interrupted(*a, **k):
+        from pipeline.writes import claim
+
+        claim(folder / "fig.png").write_bytes(b"\x89PNG redrawn")  # one figure redrawn
+        raise KeyboardInterrupt  # Ctrl-C before the next
+
+    monkeypatch.setattr(importlib.import_module(module), name, interrupted)
+    code, _, err = ehd(capsys, *argv)
+    assert code == 130, err
+    assert {p: p.read_bytes() for p in folder.iterdir()} == earlier
+
+
+def test_a_scene_plot_leaves_no_figure_of_an_earlier_scene_it_does_not_draw(ws, capsys):
+    """``--plot DIR`` reused: a scene without a dimple (St 0.5) after one with (St 5) leaves no
+    ``dimple`` figure, a rigid scene (eps 1e-6) no profiles, and a file of another name stays
+    (a hostile review found the earlier scene's dimple beside the later scene's figures)."""
+    (ws / "figs").mkdir()
+    (ws / "figs" / "notes.txt").write_text("the user's")
+    drawn = []
+    for st, eps in (("5", "0.01"), ("0.5", "0.01"), ("2", "1e-6")):
+        code, _, err = ehd(capsys, "run", "--St", st, "--eps", eps, "--accuracy", "fast",
+                           "--plot", "figs")
+        assert code == 0, err
+        drawn.append(sorted(p.stem for p in (ws / "figs").glob("*.png")))
+    assert drawn == [["deformation", "dimple", "energy", "gap", "motion", "pressure"],
+                     ["deformation", "energy", "gap", "motion", "pressure"],
+                     ["energy", "motion"]]
+    assert sorted(p.name for p in (ws / "figs").iterdir() if p.suffix not in (".png", ".pdf")) \
+        == ["notes.txt"]
+
+
+def test_a_complete_redraw_replaces_the_figures_and_retires_the_last_runs_own(ws, capsys):
+    """A redraw that completes moves its figures into place together; a figure the last render
+    drew and this one does not (named in the last render's stamp) goes, and no temporary stays.
+    The stand-in store's figures drawn twice: the second time with a stale name in the stamp."""
+    from pipeline.plots.stamp import STAMP_NAME, read_stamp
+
+    code, _, err = ehd(capsys, "figures", "s.zarr", "--out", "figs")
+    assert code == 0, err
+    drawn = sorted(p.name for p in (ws / "figs").iterdir())
+    stamp = ws / "figs" / STAMP_NAME
+    data = read_stamp(ws / "figs")
+    (ws / "figs" / "fig99_gone.png").write_bytes(b"drawn by an earlier render")
+    stamp.write_text(json.dumps({**data, "fingerprint": "changed", "store_state": None,
+                                 "files": data["files"] + ["fig99_gone.png"]}))
+    code, _, err = ehd(capsys, "figures", "s.zarr", "--out", "figs")
+    assert code == 0, err
+    assert sorted(p.name for p in (ws / "figs").iterdir()) == drawn
+    assert read_stamp(ws / "figs")["fingerprint"] != "changed"
 
 
 def _can_mount_tmpfs(path) -> bool:

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from pipeline.errors import EXIT_TERMINATED, Terminated
-from solver._jit import deferred_interrupt
+from solver.interrupts import deferred_interrupt
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -183,14 +183,9 @@ def test_a_ctrl_c_python_dropped_is_raised_after_the_scene_that_finished(kind, c
 
 def test_a_sweep_whose_ctrl_c_python_dropped_is_exit_130_and_keeps_its_scenes(
         tmp_path, capsys, monkeypatch, python_ctrl_c):
-    import functools
-
-    import pipeline.sweeps.run as run_module
     from pipeline import open_results
-    from pipeline.cli import main
-    from pipeline.errors import EXIT_INTERRUPTED
     from pipeline.sweeps.journal import pending_journal
-    from tests.test_pipeline import fake_solve, sweep_text
+    from tests.test_pipeline import fake_solve
 
     solved = []
 
@@ -200,15 +195,7 @@ def test_a_sweep_whose_ctrl_c_python_dropped_is_exit_130_and_keeps_its_scenes(
             _drop_a_ctrl_c()
         return fake_solve(physics, accuracy, overrides)
 
-    monkeypatch.setattr(run_module, "run_sweep", functools.partial(
-        run_module.run_sweep, solve=dropping, warm_up=False))
-    (tmp_path / "f.toml").write_text(sweep_text([1.0, 2.0, 5.0], [1e-2, 1e-3], store="f.zarr"))
-    monkeypatch.chdir(tmp_path)
-    code = main(["sweep", "f.toml", "--executor", "serial"])
-    err = capsys.readouterr().err
-    assert code == EXIT_INTERRUPTED, err
-    assert "Traceback" not in err and "Exception ignored" not in err
-    assert "interrupted" in err.strip().splitlines()[-1]
+    _interrupted_sweep(dropping, tmp_path, capsys, monkeypatch)
     assert len(solved) == 3  # stopped after the scene during which Ctrl-C came, not at the end
     with open_results(tmp_path / "f.zarr") as ds:
         stored = int((ds["status"].values != 0).sum())
@@ -252,3 +239,79 @@ def test_ehd_keeps_an_ignored_ctrl_c_ignored_and_puts_every_handler_back():
         assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+def test_a_ctrl_c_pressed_again_during_the_merge_waits_for_it(tmp_path, capsys, monkeypatch):
+    """Ctrl-C stops a sweep and its finished scenes are merged into the store; a second Ctrl-C
+    that comes during that merge waits until it is done (``SweepStore.flush`` under
+    ``deferred_interrupt``): exit 130, one line, every finished scene in the store and no
+    journal left. A hostile review pressed Ctrl-C four times: the merge was cut short (the 240
+    finished scenes waited in the journal for the next run) and, in 2 of 4 tries, Python
+    printed a traceback."""
+    from pipeline import open_results
+    from pipeline.sweeps import store as store_module
+    from pipeline.sweeps.journal import pending_journal
+    from tests.test_pipeline import fake_solve
+
+    solved = []
+
+    def stopped(physics, accuracy, overrides):
+        if len(solved) == 3:
+            raise KeyboardInterrupt  # the first Ctrl-C, during the fourth scene
+        solved.append(physics)
+        return fake_solve(physics, accuracy, overrides)
+
+    flush = store_module.SweepStore.flush
+    merges = []
+
+    def pressed_again(self, force=False):
+        if self._dirty:
+            merges.append(len(self._dirty))
+            os.kill(os.getpid(), signal.SIGINT)  # the second Ctrl-C, as the merge starts
+        flush(self, force)
+
+    monkeypatch.setattr(store_module.SweepStore, "flush", pressed_again)
+    _interrupted_sweep(stopped, tmp_path, capsys, monkeypatch)
+    assert merges, "no merge saw the second Ctrl-C"
+    assert not pending_journal(tmp_path / "f.zarr")  # merged, not left to the next run
+    with open_results(tmp_path / "f.zarr") as ds:
+        assert int((ds["status"].values != 0).sum()) == len(solved) == 3
+
+
+def test_the_executable_ignores_a_signal_once_the_command_is_done(monkeypatch):
+    """After the command (its exit code decided), ``executable`` ignores Ctrl-C and SIGTERM:
+    one pressed again was raised inside a weakref callback of the last collection and Python
+    printed "Exception ignored in ... KeyboardInterrupt" after ehd's line."""
+    import pipeline.cli as cli
+
+    monkeypatch.setattr(cli, "main", lambda: 130)
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        assert cli.executable() == 130
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        assert signal.getsignal(signal.SIGTERM) is signal.SIG_IGN
+        os.kill(os.getpid(), signal.SIGINT)  # nothing raised: the process would just end
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
+def _interrupted_sweep(solve, tmp_path, capsys, monkeypatch) -> None:
+    """A serial sweep of 6 stand-in scenes solved by ``solve``, which a Ctrl-C stops: asserts
+    exit 130 with ``ehd``'s one line last and no traceback."""
+    import functools
+
+    import pipeline.sweeps.run as run_module
+    from pipeline.cli import main
+    from pipeline.errors import EXIT_INTERRUPTED
+    from tests.test_pipeline import sweep_text
+
+    monkeypatch.setattr(run_module, "run_sweep", functools.partial(
+        run_module.run_sweep, solve=solve, warm_up=False, progress=None))
+    (tmp_path / "f.toml").write_text(sweep_text([1.0, 2.0, 5.0], [1e-2, 1e-3], store="f.zarr"))
+    monkeypatch.chdir(tmp_path)
+    code = main(["sweep", "f.toml", "--executor", "serial"])
+    err = capsys.readouterr().err
+    assert code == EXIT_INTERRUPTED, err
+    assert "Traceback" not in err and "Exception ignored" not in err
+    assert err.strip().splitlines()[-1].startswith("ehd sweep: interrupted")

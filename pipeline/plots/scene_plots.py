@@ -20,7 +20,8 @@ import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..writes import claim
+from . import SCENE_FIGURES, figure_files
+from ..writes import claim, retire
 
 __all__ = ["plot_scene", "save_figure", "profile_rows", "plot_profiles", "plot_motion",
            "plot_energy", "plot_dimple", "radial_extent", "si_scales", "STYLE", "LABELS"]
@@ -101,10 +102,9 @@ def save_figure(fig, out_dir, stem: str) -> list[Path]:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = [out / f"{stem}.png", out / f"{stem}.pdf"]
-    for path in paths:
-        claim(path)  # removed again if the command fails (writes.guarded_dir)
-    fig.savefig(paths[0], metadata=_PNG_META)
-    fig.savefig(paths[1], metadata=_PDF_META)
+    for path, metadata in zip(paths, (_PNG_META, _PDF_META)):
+        # a temporary, moved into place once the command completes (writes.guarded_dir)
+        fig.savefig(claim(path), format=path.suffix[1:], metadata=metadata)
     return paths
 
 
@@ -326,4 +326,9 @@ def plot_scene(collision, out_dir, *, title: str = "", prefix: str = "",
             plot_dimple(ax, c, scales=scales)
             ax.set_title(_title(c, title) + ": dimple close-up", fontsize=9)
             written += save_figure(fig, out_dir, prefix + "dimple")
+    for stale in figure_files(prefix + stem for stem in SCENE_FIGURES):
+        # a scene figure this scene has none of (a rigid scene's profiles, a dimple that did not
+        # form): an earlier scene's, drawn into the same folder, goes as the new ones come
+        if Path(out_dir, stale) not in written and Path(out_dir, stale).is_file():
+            retire(Path(out_dir, stale))
     return written

@@ -35,6 +35,7 @@ scenes not run are left grey.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -45,7 +46,7 @@ from solver.physics import Physics
 from ..sweeps.analysis import (EXPERIMENT_REFERENCE, EXPERIMENT_ST_C, critical_stokes,
                                critical_stokes_csv, planes, valid)
 from ..sweeps.config import physics_from_json
-from ..writes import claim
+from ..writes import claim, retire
 
 __all__ = ["render_all", "update_figures", "fingerprint", "FIGURES", "axis_figures", "AXES"]
 
@@ -92,19 +93,16 @@ def render_all(ds, out) -> list:
                 _footer(fig, plane, extra)
                 for fmt in FORMATS:
                     path = out / f"{name}{_suffix(extra)}.{fmt}"
-                    claim(path)
-                    fig.savefig(path, format=fmt, dpi=DPI, metadata=_METADATA[fmt])
+                    fig.savefig(claim(path), format=fmt, dpi=DPI, metadata=_METADATA[fmt])
                     paths.append(path)
         for name, draw in axis_figures(ds):
             fig = draw()
             for fmt in FORMATS:
                 path = out / f"{name}.{fmt}"
-                claim(path)
-                fig.savefig(path, format=fmt, dpi=DPI, metadata=_METADATA[fmt])
+                fig.savefig(claim(path), format=fmt, dpi=DPI, metadata=_METADATA[fmt])
                 paths.append(path)
     csv_path = out / CSV_NAME
-    claim(csv_path)
-    csv_path.write_text(critical_stokes_csv(critical_stokes(ds)))
+    claim(csv_path).write_text(critical_stokes_csv(critical_stokes(ds)))
     paths.append(csv_path)
     return paths
 
@@ -153,14 +151,18 @@ def update_figures(ds, out, store=None, state=None) -> tuple[list, bool]:
                                      for f in FORMATS] + [out / CSV_NAME]
     if read_stamp(out).get("fingerprint") == key and all(p.is_file() for p in expected):
         if state is not None:  # the same figures: record the store's file state for next time
-            claim(stamp)
-            stamp.write_text(stamp_text(key, state, expected))
+            claim(stamp).write_text(stamp_text(key, state, expected))
         return expected, False
     out.mkdir(parents=True, exist_ok=True)
-    stamp.unlink(missing_ok=True)  # a render cut short must not leave a valid stamp behind
+    # a render cut short must not leave a valid stamp behind (in a guarded_dir the old figures
+    # and stamp stay as they were); the figures of the last render that this one does not draw
+    # (a store that gained an axis names them anew) go with it
+    for name in read_stamp(out).get("files") or []:
+        if isinstance(name, str) and out / os.path.basename(name) not in expected:
+            retire(out / os.path.basename(name))
+    retire(stamp)
     paths = render_all(ds, out)
-    claim(stamp)
-    stamp.write_text(stamp_text(key, state, expected))
+    claim(stamp).write_text(stamp_text(key, state, expected))
     return paths, True
 
 

@@ -39,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
+from solver.interrupts import deferred_interrupt
 from solver.observables import MODEL_CODES, STATUS_CODES
 from solver.physics import Physics
 
@@ -338,14 +339,17 @@ class SweepStore:
             except BaseException:
                 # also on Ctrl-C or an error: everything finished so far is merged; if this
                 # flush fails too (a full disk), the journal still holds it for the next run,
-                # and the first failure is the one reported
+                # and the first failure is the one reported. A Ctrl-C pressed again meanwhile
+                # waits for the merge (it had cut it short, leaving the scenes to the next run)
                 try:
-                    self.flush()
+                    with deferred_interrupt():
+                        self.flush()
                 except Exception:  # noqa: BLE001
                     pass
                 raise
             else:
-                self.flush()
+                with deferred_interrupt():
+                    self.flush()
         finally:
             self._close_journal()
             self._release_lock()
