@@ -282,6 +282,43 @@ def test_export_dem_refuses_a_store_without_finished_scenes(tmp_path, capsys):
     assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
 
 
+def test_export_dem_says_in_one_line_what_waits_in_the_journal(tmp_path, capsys):
+    """A store whose last scenes are in its journal (a killed sweep): the export of what is in
+    the store says in one line on stderr that they are not in it, without Python's warning
+    (a hostile review saw ``commands.py:151: UserWarning: ...`` and its source line); with
+    nothing in the store yet, the refusal counts them."""
+    from pipeline.sweeps.store import SweepStore
+    from tests.test_pipeline import fake_solve, make_sweep
+
+    sweep = make_sweep(tmp_path, [5.0, 10.0, 20.0, 50.0, 100.0], [1e-2, 1e-4])
+    with SweepStore.open(sweep, flush_seconds=1e9) as st:
+        cells = st.cells(sweep)
+        for k, cell in enumerate(cells):
+            st.record(cell, fake_solve(st.scene(cell), "fast", {}), now=0.0)
+            if k == len(cells) - 3:
+                st.flush()  # 8 in the store, the last 2 only in the journal:
+        st._dirty.clear()  # the kill, before their merge
+        st._close_journal()
+    capsys.readouterr()
+    assert main(["export-dem", str(sweep.store), "--out", str(tmp_path / "o")]) == 0
+    out, err = capsys.readouterr()
+    assert "wrote 8 rows" in out
+    notes = [line for line in err.splitlines() if "journal" in line]
+    assert len(notes) == 1 and notes[0].startswith("ehd export-dem: note: ")
+    assert "holds 2 finished scenes of an interrupted sweep" in notes[0]
+    assert "Warning" not in err
+    empty = make_sweep(tmp_path, [5.0, 10.0], [1e-2], name="e.zarr")
+    with SweepStore.open(empty, flush_seconds=1e9) as st:
+        st.record(st.cells(empty)[0], fake_solve(st.scene(st.cells(empty)[0]), "fast", {}),
+                  now=0.0)
+        st._dirty.clear()
+        st._close_journal()
+    capsys.readouterr()
+    line = _one_error_line(capsys, 2, main(["export-dem", str(empty.store), "--out",
+                                            str(tmp_path / "o2")]))
+    assert "no finished (ok) scene in the store (its journal holds 1 finished scene)" in line
+
+
 def test_export_dem_refuses_a_store_where_nothing_rebounds(tmp_path, capsys):
     # eps 1e-2 sticks below St ~ 8: nothing to fit
     store = _tiny_store(tmp_path / "s.zarr", [0.5, 1.0, 2.0])

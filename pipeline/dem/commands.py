@@ -231,7 +231,7 @@ def cmd_export_dem(args) -> int:
 
     from .conventions import DEM_KINDS
     from .export import (EXPORT_FILES, InvalidExport, export_files, progress_to_stderr,
-                         scene_rows, store_rows, write_files)
+                         scene_rows, write_files)
 
     _progress = progress_to_stderr("export-dem")
 
@@ -246,26 +246,7 @@ def cmd_export_dem(args) -> int:
         raise UsageError(f"{args.path}: no such store or scene file")
     _check_input_flags(args, path.is_dir())
     if path.is_dir():
-        from pipeline import open_results
-        from pipeline.sweeps.commands import opening_store
-
-        ds = opening_store(str(path), open_results, "export-dem takes a sweep store or a "
-                           "scene file")
-        if "St" not in ds.dims or "eps" not in ds.dims:
-            raise UsageError(f"{args.path}: export-dem needs a store with St and eps axes")
-        if "e_wet" not in ds:
-            raise UsageError(f"{args.path}: the store has no e_wet (made before solver 1.4.0); "
-                             "rerun the sweep")
-        rows = store_rows(ds, args.density_ratio)
-        if not rows:
-            raise UsageError(f"{args.path}: no finished (ok) scene in the store; run "
-                             "ehd sweep on it first (ehd status shows what is done)")
-        check_rows(rows, args.kind, args.path)  # before the solves between the rows
-        if fit_range:
-            extra, skipped = store_check_rows(ds, rows, fit_range, args.density_ratio, _progress)
-            rows = sorted(rows + extra, key=lambda r: (r["group"], r["St"]))
-            for s in skipped:
-                print(f"skipped: {s}")
+        rows = _store_rows(args, path, fit_range, _progress)
     else:
         scene = _scene(str(path), args.materials)
         factors = np.geomspace(0.1, 10.0, args.n)
@@ -305,6 +286,52 @@ def cmd_export_dem(args) -> int:
     print(f"wrote {len(rows)} rows: " + ", ".join(str(p) for p in paths))
     _print_removed(removed)
     return 0
+
+
+def _store_rows(args, path: Path, fit_range, progress) -> list:
+    """The rows of the export of the sweep store at ``path``: its finished scenes (refused in
+    one line when there are none or the store lacks St, eps or e_wet) and, with ``fit_range``,
+    the checks between them; one line on stderr when finished scenes still wait in its journal
+    (they are not in the export), not ``open_results``' Python warning with its file and line
+    (a hostile review)."""
+    import sys
+    import warnings
+
+    from pipeline import open_results
+    from pipeline.cli import UsageError
+    from pipeline.sweeps.commands import opening_store
+    from pipeline.sweeps.journal import _journal_path, pending_journal
+    from pipeline.sweeps.store import UnmergedScenes
+
+    from .export import store_rows
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UnmergedScenes)  # said below, in one line
+        ds = opening_store(str(path), open_results, "export-dem takes a sweep store or a "
+                           "scene file")
+    pending = pending_journal(path)
+    if "St" not in ds.dims or "eps" not in ds.dims:
+        raise UsageError(f"{args.path}: export-dem needs a store with St and eps axes")
+    if "e_wet" not in ds:
+        raise UsageError(f"{args.path}: the store has no e_wet (made before solver 1.4.0); "
+                         "rerun the sweep")
+    rows = store_rows(ds, args.density_ratio)
+    waiting = f"{pending} finished scene{'s' if pending != 1 else ''}"
+    if not rows:
+        waiting = f" (its journal holds {waiting})" if pending else ""
+        raise UsageError(f"{args.path}: no finished (ok) scene in the store{waiting}; run "
+                         "ehd sweep on it first (ehd status shows what is done)")
+    if pending:
+        print(f"ehd export-dem: note: {_journal_path(path)} holds {waiting} of an interrupted "
+              "sweep, not yet in the store and not in this export; run the sweep again to "
+              "merge them", file=sys.stderr)
+    check_rows(rows, args.kind, args.path)  # before the solves between the rows
+    if fit_range:
+        extra, skipped = store_check_rows(ds, rows, fit_range, args.density_ratio, progress)
+        rows = sorted(rows + extra, key=lambda r: (r["group"], r["St"]))
+        for s in skipped:
+            print(f"skipped: {s}")
+    return rows
 
 
 def _print_removed(removed) -> None:

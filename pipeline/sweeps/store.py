@@ -67,6 +67,12 @@ class StoreBusy(EhdError, RuntimeError):
     """Another process is writing the store."""
 
 
+class UnmergedScenes(UserWarning):
+    """``open_results``: finished scenes of an interrupted sweep wait in the store's journal,
+    not yet in the store (the next ``ehd sweep`` merges them). ``ehd`` commands that read a
+    store say so in one line of their own instead (``ehd status`` counts them)."""
+
+
 def unnamed(path) -> bool:
     """Whether ``path`` names a folder by its place (``.``, ``..``, ``/``): never a store, whose
     lock, journal and copies are named after it."""
@@ -150,7 +156,7 @@ def open_results(path, check: bool = True, **open_kwargs):
     if n:
         warnings.warn(f"{n} finished scenes of an interrupted sweep are in {_journal_path(path)} "
                       "and not yet in the store; run the sweep again to merge them",
-                      stacklevel=2)
+                      UnmergedScenes, stacklevel=2)
     return ds
 
 
