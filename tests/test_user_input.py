@@ -405,6 +405,39 @@ def test_an_unknown_material_or_fluid_suggests_the_near_name(capsys, monkeypatch
     one_error_line(err, "fluid.name", "did you mean 'water'?")
 
 
+def test_a_materials_file_with_other_tables_is_refused_naming_the_key(tmp_path, capsys):
+    """A misspelt ``[material.x]`` table, or a scene file given as ``--materials``, was read as a
+    file of no materials (exit 0 for ``--list-materials``; a scene then named an unknown
+    material, pointing at itself): now one line names the key and the table it is near."""
+    bad = tmp_path / "mine.toml"
+    bad.write_text('[material.my_glass]\nyoungs_modulus = "63 GPa"\n')
+    code, _, err = ehd(capsys, "scene", "--materials", str(bad), "--list-materials")
+    assert code == EXIT_USAGE
+    one_error_line(err, "mine.toml", "'material' (did you mean 'materials'?)")
+    code, _, err = ehd(capsys, "scene", SANDSTONE, "--materials", SANDSTONE)
+    assert code == EXIT_USAGE
+    one_error_line(err, "unknown table or key 'body1'", "[materials.NAME]")
+
+
+def test_for_dry_without_out_is_refused_as_cfd_dem_is(capsys, monkeypatch):
+    """``--for`` chooses what the DEM export writes: given without ``--out`` it would do
+    nothing, ``--for dry`` (the default's value) too, which was accepted."""
+    no_solve(monkeypatch)
+    for kind in ("dry", "cfd-dem"):
+        code, _, err = ehd(capsys, "restitution", SANDSTONE, "--for", kind)
+        assert code == EXIT_USAGE
+        one_error_line(err, f"--for {kind}", "give --out DIR too")
+
+
+def test_an_x0_beyond_the_default_outer_start_names_x0(capsys, monkeypatch):
+    """x0 at 2 a with the default outer start (1 a): the line names x0 and its fix, not the
+    outer start the scene never gave."""
+    no_solve(monkeypatch)
+    code, _, err = ehd(capsys, "scene", SANDSTONE, "--x0-over-a", "2")
+    assert code == EXIT_USAGE
+    one_error_line(err, "x0_over_a = ", "give a smaller x0_over_a, or an outer_start beyond it")
+
+
 def _rough_sweep(roughness, eps="[1e-4, 1e-2]", extra=""):
     return (f'name = "rough"\nstore = "rough.zarr"\n[grid]\nSt = [5.0, 20.0]\neps = {eps}\n'
             f"roughness = {roughness}\n{extra}\n[numerics]\naccuracy = \"fast\"\n")

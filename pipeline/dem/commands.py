@@ -198,14 +198,18 @@ def _num(v) -> float:
     return math.nan if v == "" else float(v)
 
 
-def _check_kind(kind: str) -> None:
+def _check_kind(args) -> bool:
+    """``--for``: one of ``DEM_KINDS``, ``dry`` where it is left out (``args.kind`` set so);
+    returns whether it was given."""
     from pipeline.cli import UsageError
 
     from .conventions import DEM_KINDS
 
-    if kind not in DEM_KINDS:
-        raise UsageError(f"--for {kind!r}: give one of {', '.join(DEM_KINDS)} (dry: LIGGGHTS or "
-                         "YADE without fluid coupling; cfd-dem: resolved CFD-DEM)")
+    given, args.kind = args.kind is not None, args.kind or "dry"
+    if args.kind not in DEM_KINDS:
+        raise UsageError(f"--for {args.kind!r}: give one of {', '.join(DEM_KINDS)} (dry: "
+                         "LIGGGHTS or YADE without fluid coupling; cfd-dem: resolved CFD-DEM)")
+    return given
 
 
 def _check_input_flags(args, store: bool) -> None:
@@ -238,7 +242,7 @@ def cmd_export_dem(args) -> int:
     check_output_dir("--out", args.out, EXPORT_FILES)  # before any solve
     check_accuracy(args.accuracy)
     fit_range = _fit_range(args)
-    _check_kind(args.kind)
+    _check_kind(args)
     if not args.path.strip():
         raise UsageError("STORE_OR_SCENE: empty path; give a sweep store (.zarr) or a scene file")
     path = Path(args.path)
@@ -340,13 +344,13 @@ def _print_removed(removed) -> None:
               + ", ".join(str(p) for p in removed))
 
 
-def _check_path_flags(args) -> None:
-    """UsageError for ``ehd restitution`` flags that would do nothing (``--for`` or
-    ``--allow-invalid`` without ``--out``, a point repeated, a range of one point) or whose
-    path has no factors (not finite positive, or an impossible ``--n``)."""
+def _check_path_flags(args, kind_given: bool) -> None:
+    """UsageError for ``ehd restitution`` flags that would do nothing (``--for``, even ``--for
+    dry``, or ``--allow-invalid`` without ``--out``, a point repeated, a range of one point) or
+    whose path has no factors (not finite positive, or an impossible ``--n``)."""
     from pipeline.cli import UsageError
 
-    inert = [f for f, on in (("--for " + args.kind, args.kind != "dry"),
+    inert = [f for f, on in (("--for " + args.kind, kind_given),
                              ("--allow-invalid", args.allow_invalid)) if on]
     if inert and not args.out:  # they choose what the export writes: without one, nothing
         raise UsageError(f"{' and '.join(inert)} choose{'s' if len(inert) == 1 else ''} what "
@@ -378,8 +382,7 @@ def cmd_restitution(args) -> int:
         raise UsageError("--range draws each e's range as a band on the figure: give --plot DIR "
                          "too")
     check_accuracy(args.accuracy)
-    _check_kind(args.kind)
-    _check_path_flags(args)
+    _check_path_flags(args, _check_kind(args))
     scene = _scene(args.scene, args.materials)
     factors = np.geomspace(args.start, args.stop, args.n)
     try:
@@ -487,7 +490,7 @@ def register(sub) -> None:
 def _add_export_flags(p) -> None:
     """``--for`` and ``--allow-invalid``: which e the exported laws realise, and whether rows
     that all fail the validity checks may still be exported."""
-    p.add_argument("--for", dest="kind", default="dry", metavar="{dry,cfd-dem}",
+    p.add_argument("--for", dest="kind", default=None, metavar="{dry,cfd-dem}",
                    help="the kind of DEM code: dry (default; LIGGGHTS or YADE without fluid "
                         "coupling) realises e_far, the whole loss the fluid causes, at the "
                         "approach speed at x_ref; cfd-dem (resolved CFD-DEM) realises e_wet at "

@@ -331,6 +331,24 @@ def read_toml(path, what: str = "materials file", error=MaterialError) -> dict:
         raise error(f"cannot read {what} {str(path)!r}: {exc.strerror}") from None
 
 
+MATERIALS_SECTIONS = ("materials", "fluids", "pairs")  # a materials file's tables
+
+
+def _check_sections(data: dict, where: str) -> None:
+    """MaterialError when a materials file holds anything but its three tables: ``[material.x]``
+    (a typo) or a scene file given as one was read as a file of no materials, and the scene then
+    named an unknown material, pointing at the scene instead of the file (a hostile review)."""
+    from ..errors import did_you_mean
+
+    unknown = sorted(set(data) - set(MATERIALS_SECTIONS))
+    if unknown:
+        names = ", ".join(repr(k) + did_you_mean(k, MATERIALS_SECTIONS) for k in unknown[:4])
+        raise MaterialError(f"{where}: unknown table or key {names}"
+                            f"{' and more' if len(unknown) > 4 else ''}: a materials file holds "
+                            "only [materials.NAME], [fluids.NAME] and [pairs.NAME] tables "
+                            "(docs/scenes.md, \"Materials and fluids\")")
+
+
 def user_table_paths(environ=None) -> list[Path]:
     """User materials files that exist in the documented places (see the module docstring)."""
     env = os.environ if environ is None else environ
@@ -356,7 +374,9 @@ def load_table(extra_files=(), *, user_files: bool = True, environ=None,
     paths = list(user_table_paths(environ)) if user_files else []
     paths += [Path(p) for p in extra_files]
     for path in paths:
-        table.add(read_toml(path), str(path))
+        data = read_toml(path)
+        _check_sections(data, str(path))
+        table.add(data, str(path))
     if inline is not None:
         table.add(*inline)
     table.check_pairs()

@@ -237,6 +237,11 @@ def _outer(data, a, x0):
     def q(v):
         return f"{format_quantity(v, 'm')} = {v / a:.4g} a"
 
+    if start is None and not x0 < s:  # the default outer start: x0 is what is out of place
+        x0_name = "x0_over_a" if "x0_over_a" in data else "x0"
+        raise SceneError(f"{x0_name} = {q(x0)}: the close stage must start inside the outer "
+                         f"start (default {q(s)}): give a smaller {x0_name}, or an outer_start "
+                         f"beyond it (up to {q(MAX_OVER_A * a)})")
     if not x0 < s <= MAX_OVER_A * a:
         raise SceneError(f"{start_name} = {q(s)}: the outer start must lie beyond the start of "
                          f"the close stage x0 = {q(x0)}, in ({q(x0)}, {q(MAX_OVER_A * a)}]")

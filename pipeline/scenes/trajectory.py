@@ -28,7 +28,9 @@ _FLAGS = ("release_gap", "release_gap_over_a", "release_speed", "drag_law")
 
 def add_trajectory_flags(parser) -> None:
     """The ``--trajectory FILE`` flag and the release's flags of ``ehd scene``."""
-    g = parser.add_argument_group("whole trajectory (docs/scenes.md, 'The whole trajectory')")
+    g = parser.add_argument_group(
+        "whole trajectory (docs/scenes.md, 'The whole trajectory'); a release flag alone runs "
+        "it too, without the CSV: v0 is then the speed the release arrives with")
     g.add_argument("--trajectory", metavar="FILE", default=None,
                    help="compute the whole trajectory from the release and write it as CSV "
                         "(t_s, gap_m, speed_m_per_s, phase); adds e_observed and "

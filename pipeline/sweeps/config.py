@@ -367,6 +367,9 @@ def _axis(where: str, name: str, spec) -> tuple:
 def _number(where, name, v) -> float:
     """A number of a grid axis (its group decides whether inf is allowed: Pi = inf is the
     classic film)."""
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or math.isnan(v):
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise ConfigError(f"{where}: grid.{name} must be a number, got {v!r}")
+    if math.isnan(v):
+        raise ConfigError(f"{where}: grid.{name} must be a number, got nan (not a number): "
+                          "remove it from the list")
     return float(v)
