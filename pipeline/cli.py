@@ -298,7 +298,13 @@ class _OneLine(argparse.ArgumentParser):
     (argparse prints the whole usage first: 18 lines for ``ehd run --St abc``), exit 2. Every
     command's parser is one too (``add_subparsers`` makes its parsers of this class)."""
 
+    stray = None  # the top level's: a command's flag given before any command (``ehd --St 10``)
+
     def error(self, message):
+        if self.stray is not None:
+            self.exit(2, f"{self.prog}: error: {self.stray} is no flag of ehd itself: name the "
+                         f"command first, ehd COMMAND {self.stray} ... (the commands: ehd "
+                         "--help; a command's flags: ehd COMMAND --help)\n")
         self.exit(2, f"{self.prog}: error: {message} (the flags: {self.prog} --help)\n")
 
 
@@ -366,7 +372,11 @@ def _parser(argv=None) -> argparse.ArgumentParser:
     parser.add_argument("--version", action=_Version,
                         help="print the package and solver version and exit")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    chosen = _chosen_command(sys.argv[1:] if argv is None else argv)
+    argv = sys.argv[1:] if argv is None else argv
+    chosen = _chosen_command(argv)
+    if argv and argv[0].startswith("-") and argv[0].split("=")[0] not in ("-h", "--help",
+                                                                          "--version"):
+        parser.stray = argv[0].split("=")[0]
     parser.chosen = None  # the chosen command's parser, built in full
     for name, (module, help_line) in COMMANDS.items():
         if name == chosen:

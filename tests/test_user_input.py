@@ -438,6 +438,16 @@ def test_an_x0_beyond_the_default_outer_start_names_x0(capsys, monkeypatch):
     one_error_line(err, "x0_over_a = ", "give a smaller x0_over_a, or an outer_start beyond it")
 
 
+def test_a_commands_flag_before_the_command_says_to_name_the_command(capsys):
+    """``ehd --St 10`` read 10 as the command ("invalid choice: '10'"): now one line saying
+    that the flag belongs after a command."""
+    code, _, err = ehd(capsys, "--St", "10")
+    assert code == EXIT_USAGE
+    one_error_line(err, "--St is no flag of ehd itself", "ehd COMMAND --St")
+    code, _, err = ehd(capsys, "--version")  # ehd's own flags are untouched
+    assert code == 0 and not err
+
+
 def _rough_sweep(roughness, eps="[1e-4, 1e-2]", extra=""):
     return (f'name = "rough"\nstore = "rough.zarr"\n[grid]\nSt = [5.0, 20.0]\neps = {eps}\n'
             f"roughness = {roughness}\n{extra}\n[numerics]\naccuracy = \"fast\"\n")

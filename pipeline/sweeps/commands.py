@@ -164,6 +164,8 @@ def cmd_status(args) -> int:
 
     import numpy as np
 
+    from solver.physics import Physics
+
     from ..errors import EXIT_DAMAGED
     from .analysis import PlaneError, planes
     from .journal import pending_journal
@@ -216,6 +218,7 @@ def cmd_status(args) -> int:
     cells = np.argwhere(failed)
     for cell in cells[:20]:
         physics = {**fixed, **{d: float(ds[d].values[i]) for d, i in zip(dims, cell)}}
+        physics = {n: physics[n] for n in Physics.names() if n in physics}  # as ehd sweep's
         print(f"  failed: {format_physics(physics)} {names[int(status[tuple(cell)])]}: "
               f"{ds['message'].values[tuple(cell)]}")
     if len(cells) > 20:
