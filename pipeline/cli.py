@@ -669,12 +669,17 @@ class _Stdout:
 def _negative_values(argv: list) -> list:
     """``--Pi -inf`` as ``--Pi=-inf``: argparse takes a value that starts with '-' and is not
     a plain negative number (``-inf``, ``-1e3``, ``-nan``) for an unknown option ("expected one
-    argument"); joined to its flag, the value reaches the check that names it."""
+    argument"); joined to its flag, the value reaches the check that names it. A plain one
+    (``-1``, ``-0.5``) argparse reads itself, and stays apart: joined, the first of a flag's
+    two values (``--fit-range -1 10``) left it one short ("expected 2 arguments")."""
+    import re
+
     out = []
     for token in argv:
         prev = out[-1] if out else ""
         if (token.startswith("-") and prev.startswith("--") and "=" not in prev
-                and prev != "--" and _is_number(token)):
+                and prev != "--" and _is_number(token)
+                and not re.fullmatch(r"-\d+|-\d*\.\d+", token)):  # argparse's own pattern
             out[-1] = f"{prev}={token}"
         else:
             out.append(token)

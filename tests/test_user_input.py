@@ -448,6 +448,18 @@ def test_a_commands_flag_before_the_command_says_to_name_the_command(capsys):
     assert code == 0 and not err
 
 
+def test_a_negative_first_value_of_a_two_value_flag_reaches_its_check(capsys, monkeypatch):
+    """``--fit-range -1 10``: the -1 was joined to its flag (``--fit-range=-1``, as ``--Pi -inf``
+    must be) and argparse said "expected 2 arguments"; now the range's own line."""
+    no_solve(monkeypatch)
+    code, _, err = ehd(capsys, "export-dem", SANDSTONE, "--fit-range", "-1", "10")
+    assert code == EXIT_USAGE
+    one_error_line(err, "--fit-range -1 10: give 0 <= LO < HI")
+    code, _, err = ehd(capsys, "run", "--St", "-inf", "--eps", "0.01")  # still joined
+    assert code == EXIT_USAGE
+    one_error_line(err, "must be finite, got -inf")
+
+
 def _rough_sweep(roughness, eps="[1e-4, 1e-2]", extra=""):
     return (f'name = "rough"\nstore = "rough.zarr"\n[grid]\nSt = [5.0, 20.0]\neps = {eps}\n'
             f"roughness = {roughness}\n{extra}\n[numerics]\naccuracy = \"fast\"\n")
