@@ -115,6 +115,7 @@ class _SharedModules(importlib.abc.MetaPathFinder, importlib.abc.Loader):
 
     def __init__(self, package: str):
         self.prefix = package + "."
+        self.own_specs = {}  # the copy's name -> the solver module's own spec
 
     def find_spec(self, fullname, path=None, target=None):
         if not fullname.startswith(self.prefix) or \
@@ -123,10 +124,15 @@ class _SharedModules(importlib.abc.MetaPathFinder, importlib.abc.Loader):
         return importlib.util.spec_from_loader(fullname, self)
 
     def create_module(self, spec):
-        return importlib.import_module("solver." + spec.name[len(self.prefix):])
+        module = importlib.import_module("solver." + spec.name[len(self.prefix):])
+        self.own_specs[spec.name] = module.__spec__
+        return module
 
     def exec_module(self, module):
-        pass  # the solver's own module, already executed
+        # the solver's own module, already executed; the import system has just set its
+        # ``__spec__`` to the copy's (the one attribute it sets on a module that has one): its own
+        # back, or the module would name itself after the copy (importlib.reload, -m)
+        module.__spec__ = self.own_specs.pop(module.__spec__.name)
 
 
 def _tag(codes, log=False) -> str:
