@@ -130,24 +130,26 @@ def _check_halves(numerics: Numerics) -> None:
 
 def resolve(accuracy: str = "standard", **overrides) -> Numerics:
     """The preset ``accuracy`` with explicit overrides applied and checked."""
-    if accuracy not in PRESETS:
+    import numpy as np
+
+    if not isinstance(accuracy, str) or accuracy not in PRESETS:
         raise ValueError(f"accuracy must be one of {sorted(PRESETS)}, got {accuracy!r}")
     numerics = PRESETS[accuracy]
     clean = {}
     for name, value in overrides.items():
         if value is None:
             continue
-        if name == "save_profiles":
+        if name in ("save_profiles", "extrapolate"):  # from a sweep file too: "no" is not False
+            if not isinstance(value, (bool, np.bool_)):  # numpy's too
+                raise ValueError(f"{name} must be true or false, got {value!r}")
             clean[name] = bool(value)
-            continue
-        if name == "extrapolate":  # from a sweep file too: "false" is not False
-            if not isinstance(value, bool):
-                raise ValueError(f"extrapolate must be true or false, got {value!r}")
-            clean[name] = value
             continue
         if name not in _BOUNDS:
             valid = sorted([*_BOUNDS, "save_profiles", "extrapolate"])
             raise ValueError(f"unknown numerical setting {name!r}; valid settings: {valid}")
+        if isinstance(value, (bool, np.bool_, str)):
+            # true is 1 and "1e-4" a number to float(): max_order = true ran BDF1 unannounced
+            raise ValueError(f"{name} must be a number, got {value!r}")
         lo, hi = _BOUNDS[name]
         v = _check_number(name, value, lo, hi, open_lo=name not in ("stretch",))
         if name in _WHOLE:
@@ -164,4 +166,9 @@ def resolve(accuracy: str = "standard", **overrides) -> Numerics:
             "the coupled solution hands back only once the deformation has relaxed below the "
             "level at which it took over"
         )
+    if clean:  # the grid these settings make (a preset's is known to be fine)
+        from .integration.radii import reference_radii
+
+        reference_radii(numerics.n_inner, numerics.axis_ratio, numerics.axis_extent,
+                        numerics.stretch, numerics.outer_extent, numerics.max_rel)
     return numerics

@@ -6,9 +6,12 @@ import re
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from solver import JSON_KEYS, collide
+from solver.integration.radii import MAX_NODES, reference_radii
+from solver.settings import resolve
 
 
 @pytest.mark.parametrize("stokes, eps, needle", [
@@ -47,6 +50,42 @@ def test_bad_numerics():
                            ("four", "high_order_rtol_factor must be a number")):
         with pytest.raises(ValueError, match=needle):
             collide(5, 0.01, high_order_rtol_factor=factor)
+
+
+def test_numerics_take_numbers_and_flags_only_true_or_false():
+    """``max_order = true`` (a bool is 1 to ``float``) ran BDF1 unannounced and moved v_r, and
+    ``rtol = "1e-4"`` (a string) passed; ``save_profiles = "no"`` read as True (a hostile
+    review). numpy's numbers and bools are what they say."""
+    for kw, needle in ((dict(max_order=True), "max_order must be a number, got True"),
+                       (dict(rtol="1e-4"), "rtol must be a number, got '1e-4'"),
+                       (dict(save_profiles="no"), "save_profiles must be true or false"),
+                       (dict(extrapolate=1), "extrapolate must be true or false"),
+                       (dict(accuracy=["fast"]), "accuracy must be one of")):
+        with pytest.raises(ValueError, match=re.escape(needle)):
+            resolve(**{"accuracy": "fast", **kw})
+    assert resolve("fast", rtol=np.float64(1e-4), n_inner=np.int64(40)).n_inner == 40
+    assert resolve("fast", extrapolate=np.True_).extrapolate is True
+
+
+def test_a_grid_too_large_for_memory_is_refused_and_an_axis_zone_to_1_ends_there():
+    """``stretch = 1`` with ``outer_extent = 1e4`` asked for a 6.9 TiB elastic matrix (a raw
+    MemoryError); ``axis_extent = 1`` (in its range) stepped past the inner region's end, whose
+    last cell came out negative, and the grid's outer loop never ended (a hostile review)."""
+    with pytest.raises(ValueError, match=f"more than {MAX_NODES} nodes"):
+        resolve("fast", stretch=1.0, outer_extent=1e4)
+    for ratio in (0.1, 0.011, 0.5):
+        r = reference_radii(32, ratio, 1.0, 1.25, 30.0, 0.3)
+        assert np.all(np.diff(r) > 0) and r[-1] >= 30.0 and 1.0 in r
+        inner = np.diff(r[r <= 1.0])
+        # the refined zone's cells grow towards the uniform size 1/32 and it ends at 1 within
+        # half a cell: its last cell is between half and one and a half of the one before it
+        assert inner.max() <= 1.5 / 32 and 0.5 * inner[-2] <= inner[-1] <= 1.5 * inner[-2]
+    preset = resolve("fast")  # a preset's grid, as it always was: the zone ends before 1
+    r = reference_radii(preset.n_inner, preset.axis_ratio, preset.axis_extent, preset.stretch,
+                        preset.outer_extent, preset.max_rel)
+    uniform = np.diff(r[(r >= 0.5) & (r <= 1.0)])  # the linspace to 1 after the zone
+    assert np.all(np.diff(r) > 0) and np.allclose(uniform, uniform[0], rtol=1e-9)
+    assert abs(uniform[0] * 32 - 1.0) < 0.05  # the zone's end rounded to whole cells of 1/32
 
 
 def _ehd(*args):

@@ -23,6 +23,7 @@ import numpy as np
 from .._jit import entry, jit
 from ..model.elasticity import force_weights, influence_matrix
 from ..model.state import array_record
+from .radii import reference_radii
 
 __all__ = ["RadialGrid", "Nodes", "reference_grid", "scaled_grid", "SHAPE_WIDTH"]
 
@@ -64,37 +65,11 @@ def _as_nodes(s, s_face, area, weight, influence):
     return Nodes(s, s_face, area, weight, influence)
 
 
-def _reference_nodes(n_inner: int, axis_ratio: float, axis_extent: float, stretch: float,
-                     outer_extent: float, max_rel: float):
-    """Nodes in reference units (inner region [0, 1]).
-
-    - Inner region: cells of size ``1/n_inner``, refined towards the axis inside
-      ``R < axis_extent``, where the size grows linearly from ``axis_ratio / n_inner`` at the
-      axis: during rebound the tension pinches the film at the axis into a narrow cone whose
-      tip sets the minimum gap.
-    - Outer region: cell sizes growing by ``stretch``, capped at ``max_rel * R``, up to
-      ``outer_extent``.
-    """
-    h_edge = 1.0 / n_inner
-    nodes = [0.0]
-    if axis_ratio < 1.0 and axis_extent > 0.0:
-        while nodes[-1] < axis_extent:
-            r = nodes[-1]
-            nodes.append(r + h_edge * (axis_ratio + (1.0 - axis_ratio) * r / axis_extent))
-    m = max(1, int(np.ceil((1.0 - nodes[-1]) / h_edge - 0.5)))
-    nodes.extend(np.linspace(nodes[-1], 1.0, m + 1)[1:])
-    h = nodes[-1] - nodes[-2]
-    while nodes[-1] < outer_extent:
-        h = min(h * stretch, max_rel * nodes[-1])
-        nodes.append(nodes[-1] + h)
-    return np.array(nodes)
-
-
 @lru_cache(maxsize=16)
 def reference_grid(n_inner: int, axis_ratio: float, axis_extent: float, stretch: float,
                    outer_extent: float, max_rel: float) -> RadialGrid:
     """Grid with its inner region on ``[0, 1]`` (cached: the elastic matrix is the cost)."""
-    radius = _reference_nodes(n_inner, axis_ratio, axis_extent, stretch, outer_extent, max_rel)
+    radius = reference_radii(n_inner, axis_ratio, axis_extent, stretch, outer_extent, max_rel)
     s = 0.5 * radius**2
     s_face = 0.5 * (s[1:] + s[:-1])
     area = np.empty_like(s)
