@@ -1116,6 +1116,21 @@ def test_a_scene_plot_leaves_no_figure_of_an_earlier_scene_it_does_not_draw(ws, 
         == ["notes.txt"]
 
 
+def test_figures_of_a_store_with_a_plane_of_no_finished_scene(ws, capsys):
+    """Two sweeps into one store on other axes (Pi and beta) leave planes in which no scene
+    ran: their figures say so instead of failing to log-scale no data (a hostile review: exit 70,
+    matplotlib's traceback)."""
+    for pi, beta in ((1e-2, 0.0), (1e-3, 1.0)):
+        text = sweep_text([10.0, 20.0], [1e-2], store="m.zarr")
+        (ws / "m.toml").write_text(text.replace("[grid]\n",
+                                                f"[grid]\nPi = [{pi}]\nbeta = [{beta}]\n"))
+        code, _, err = ehd(capsys, "sweep", "m.toml", "--executor", "serial")
+        assert code == 0, err
+    code, out, err = ehd(capsys, "figures", "m.zarr", "--out", "figs")
+    assert code == 0, err
+    assert (ws / "figs" / "fig13_closest_approach_Pi=0.001_beta=0.png").is_file()
+
+
 def test_a_complete_redraw_replaces_the_figures_and_retires_the_last_runs_own(ws, capsys):
     """A redraw that completes moves its figures into place together; a figure the last render
     drew and this one does not (named in the last render's stamp) goes, and no temporary stays.

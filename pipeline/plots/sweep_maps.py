@@ -248,8 +248,11 @@ def _curves(ds, y, ax, ylabel, *, logy=False, title=""):
     for i in range(eps.size - 1, -1, -1):
         ax.plot(St, y[i], color=colors[i], lw=1.3, marker="o", ms=2.0, label=_eps_label(eps[i]))
     ax.set_xscale("log")
-    if logy:
+    if logy and np.any(np.isfinite(y) & (y > 0)):  # a plane with no finished scene has none
         ax.set_yscale("log")
+    if not np.isfinite(y).any():
+        ax.text(0.5, 0.5, "no finished scene in this plane", transform=ax.transAxes,
+                ha="center", va="center", color="0.4")
     ax.set_xlabel(r"Stokes number $St = m v_0 / (6 \pi \mu a^2)$")
     ax.set_ylabel(ylabel)
     ax.set_title(title)
