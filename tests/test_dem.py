@@ -668,3 +668,18 @@ def test_a_path_table_says_where_the_physics_changes(capsys):
     assert notes == ["physics: classic film; sticks", "", "physics: jfo cavitation"]
     _print_rows([row("jfo cavitation"), row("jfo cavitation", sticks=True)], [])
     assert "physics" not in capsys.readouterr().out
+
+
+def test_the_restitution_table_names_a_premise_failure(capsys):
+    """A ``start_deformed`` row keeps its numbers (solver/collision.py reports them) but the
+    table says the model's premise fails there: it read as an ordinary result beside
+    ``ehd scene``'s "the solve failed" for the same scene (a hostile review)."""
+    from pipeline.dem.commands import _print_rows
+
+    row = {"St": 0.011, "St_L": 0.0066, "eps": 0.0069, "v0_m_s": 0.1, "approach_speed_m_s": 48.45,
+           "e_wet": 0.398, "e_far": 0.0, "sticks": False, "physics": "classic film",
+           "warning_checks": "", "status": "start_deformed"}
+    _print_rows([row, {**row, "status": "ok"}], [])
+    premise, ordinary = capsys.readouterr().out.splitlines()[1:]
+    assert "start_deformed: the model's premise fails here" in premise
+    assert "start_deformed" not in ordinary

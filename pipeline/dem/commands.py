@@ -100,7 +100,10 @@ def _print_rows(rows, skipped):
             "sticks in e_far (dry DEM)" if far != "" and far == 0.0 else ""
         physics = f"physics: {r['physics']}" if changes and r["physics"] != before else ""
         before = r["physics"]
-        note = "; ".join(part for part in (physics, verdict) if part)
+        # a premise failure keeps its numbers (solver/collision.py) but is no ordinary row
+        premise = "start_deformed: the model's premise fails here (status in the CSV)" \
+            if r["status"] == "start_deformed" else ""
+        note = "; ".join(part for part in (physics, premise, verdict) if part)
         if r["warning_checks"]:
             note = (note + "; " if note else "") + "warnings: " + r["warning_checks"] + " (see CSV)"
         approach = "-" if r["approach_speed_m_s"] == "" else f"{r['approach_speed_m_s']:.4g}"
