@@ -93,6 +93,12 @@ INERT_RULES = (
     (("beta",), "viscosity_law", None, lambda v: v != "constant",
      "is the pressure dependence of the viscosity, and {ctl} is constant",
      "give {ctl} auto, barus or roelands"),
+    # a table replaces the laws of beta (solver.Physics: "auto" is the table where one is
+    # given); the constant law is the rule above's
+    (("beta",), ("viscosity_law", "viscosity_table"), None,
+     lambda law, table: law == "constant" or not table or law in ("barus", "roelands"),
+     "is the Barus and Roelands laws' pressure-viscosity group, and {ctl} give the viscosity "
+     "by a table", "leave the {viscosity_table} out for a law of beta"),
     (("viscosity_law",), "beta", lambda v: v in ("barus", "roelands"), lambda v: v > 0.0,
      "needs the pressure-viscosity group, and {ctl} is 0", "give {ctl} > 0"),
     (("roelands_Z", "roelands_PR"), "viscosity_law", None, lambda v: v == "roelands",

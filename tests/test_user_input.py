@@ -569,6 +569,23 @@ def test_run_law_in_tension_with_a_constant_viscosity_is_exit_2(capsys, monkeypa
                    "--viscosity-table")
 
 
+def test_beta_beside_a_viscosity_table_is_exit_2(capsys, monkeypatch, ws):
+    """A table gives the viscosity (``auto`` reads it): ``--beta`` then does nothing, and was
+    accepted and reported with the table's result; a sweep's beta axis beside a table stored
+    the same v_r at every beta (a hostile review)."""
+    no_solve(monkeypatch)
+    code, out, err = ehd(capsys, "run", "--St", "5", "--eps", "0.01", "--beta", "1",
+                         "--viscosity-table", "0:1, 1:2")
+    assert code == EXIT_USAGE and out == ""
+    one_error_line(err, "--beta 1", "by a table", "leave --beta out")
+    (ws / "t.toml").write_text(
+        'name = "t"\nstore = "t.zarr"\n[grid]\nSt = [5.0]\neps = [0.01]\nbeta = [0.0, 1.0]\n'
+        '[physics]\nviscosity_table = "0:1, 1:2"\n[numerics]\naccuracy = "fast"\n')
+    code, _, err = ehd(capsys, "sweep", "t.toml")
+    assert code == EXIT_USAGE and "beta" in err and "table" in err, err
+    assert not (ws / "t.zarr").exists()
+
+
 @pytest.mark.parametrize("args, law", [
     (["--beta", "1"], "barus"),
     (["--viscosity-table", "0:1, 1:3"], "table"),
