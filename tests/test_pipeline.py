@@ -337,6 +337,25 @@ def test_store_is_locked_against_a_second_writer(tmp_path):
     run(sweep)  # released afterwards
 
 
+def test_figures_of_a_store_whose_every_scene_failed_say_so_and_open_results_takes_kwargs(
+        tmp_path, capsys):
+    """A store whose scenes all ran and failed: ``ehd figures`` says so and where to read why
+    (it said "no finished scene yet ... run its sweep first" of a sweep that had run). And
+    ``open_results(path, consolidated=False)`` passes the keyword on to ``open_zarr`` as its
+    docstring says (it raised "got multiple values for keyword argument")."""
+    from pipeline.cli import main
+
+    FAILING.update({3.0, 5.0})
+    sweep = make_sweep(tmp_path, [2.0, 3.0, 5.0], [1e-2])
+    run(sweep)
+    capsys.readouterr()
+    assert main(["figures", str(sweep.store), "--out", str(tmp_path / "figs")]) == 2
+    err = capsys.readouterr().err
+    assert "no scene that finished ok (all 3 that ran failed)" in err and "ehd status" in err
+    ds = open_results(sweep.store, consolidated=False, chunks=None)
+    assert set(ds["status"].values.ravel().tolist()) == {STATUS_CODES["max_steps"]}
+
+
 def test_open_results_on_a_missing_store(tmp_path):
     with pytest.raises(FileNotFoundError, match="no sweep store"):
         open_results(tmp_path / "nothing.zarr")

@@ -275,6 +275,11 @@ def cmd_figures(args) -> int:
                            "figures drawn from it: run its sweep again (ehd sweep SWEEP_FILE) to "
                            "repair it (damaged cells are computed again)")
     if not (checked["status"].values == STATUS_CODES["ok"]).any():
+        failed = int((checked["status"].values >= 2).sum())
+        if failed:  # it ran: every scene failed (ehd status lists them with their reasons)
+            raise UsageError(f"store {args.store} holds no scene that finished ok (all {failed} "
+                             "that ran failed): nothing to draw; ehd status lists them with "
+                             "their reasons")
         raise UsageError(f"store {args.store} holds no finished scene yet: nothing to draw; run "
                          "its sweep first (ehd sweep SWEEP_FILE)")
     try:  # the store as read and checked above: one read per command

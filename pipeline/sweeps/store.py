@@ -145,7 +145,7 @@ def open_results(path, check: bool = True, **open_kwargs):
             read_root(path)
         try:
             with zarr_warnings():
-                ds = xr.open_zarr(path, consolidated=True, **open_kwargs)
+                ds = xr.open_zarr(path, **{"consolidated": True, **open_kwargs})
             break
         except Exception:  # noqa: BLE001 - a re-layout swapped the store after the check
             if attempt + 1 < READ_TRIES and changed_since(path, before):
