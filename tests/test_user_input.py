@@ -745,13 +745,15 @@ def test_export_dem_user_errors_are_exit_2(ws, tmp_path, capsys, make, keyword):
 @pytest.mark.parametrize("spec, keyword", [
     ("roughness = {start = 0.0, stop = 1.0, num = 3}", "cannot reach 0"),
     ("roughness = {start = 0.1, stop = 0.0, num = 3}", "cannot reach 0"),
-], ids=["start-0", "stop-0"])
-def test_a_log_range_from_zero_is_exit_2(ws, capsys, spec, keyword):
+    ("Pi = {start = 1e-3, stop = inf, num = 3}", "cannot reach inf"),  # numpy's warning, then
+    ("Pi = {start = inf, stop = inf, num = 1}", "cannot reach inf"),  # "repeated values" before
+], ids=["start-0", "stop-0", "stop-inf", "both-inf"])
+def test_a_log_range_from_zero_or_to_inf_is_exit_2(ws, capsys, spec, keyword):
     (ws / "z.toml").write_text(f'store = "z.zarr"\n[grid]\nSt = [5.0]\n{spec}\n'
                                "[physics]\neps = 0.01\n")
     code, _, err = ehd(capsys, "sweep", "z.toml", "--executor", "serial")
     assert code == EXIT_USAGE
-    one_error_line(err, "grid.roughness", keyword, "as a list")
+    one_error_line(err, f"grid.{spec.split()[0]}", keyword, "as a list")
 
 
 @pytest.mark.parametrize("numerics, keyword", [

@@ -346,6 +346,10 @@ def _axis(where: str, name: str, spec) -> tuple:
             raise ConfigError(f"{where}: grid.{name} = {{start = {start:g}, stop = {stop:g}, ...}}"
                               " is log-spaced and cannot reach 0: give the values as a list "
                               f"({name} = [0.0, ...]), or a start > 0")
+        if math.isinf(start) or math.isinf(stop):  # a group that takes inf (Pi: no floor)
+            raise ConfigError(f"{where}: grid.{name} = {{start = {start:g}, stop = {stop:g}, ...}}"
+                              " is log-spaced and cannot reach inf: give the values as a list "
+                              f"({name} = [..., inf]), or finite ends")
         if spec["num"] == 1 and start != stop:
             raise ConfigError(f"{where}: grid.{name} = {{start = {start:g}, stop = {stop:g}, num = "
                               f"1}} is one value but two ends: give num >= 2, or the one value as "
