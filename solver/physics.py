@@ -72,7 +72,7 @@ class Group:
         if self.table:
             return format_table(parse_table(value, label))
         if self.choices:
-            if value not in self.choices:
+            if not isinstance(value, str) or value not in self.choices:  # an array too
                 raise ValueError(f"{label} must be one of {list(self.choices)}, got {value!r}")
             return value
         try:
@@ -81,6 +81,10 @@ class Group:
             v = float(value)
         except (TypeError, ValueError):
             raise ValueError(f"{label} must be a number, got {value!r}") from None
+        except OverflowError:  # an int beyond any float: 10**400
+            raise ValueError(f"{label} is a number beyond a float's range, outside its valid "
+                             f"range {'[' if self.closed_lo else '('}{self.lo:g}, {self.hi:g}]"
+                             ) from None
         if math.isnan(v) or (math.isinf(v) and not (self.allow_inf and v > 0)):
             raise ValueError(f"{label} must be finite{' or inf' if self.allow_inf else ''}, "
                              f"got {value!r}")

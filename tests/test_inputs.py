@@ -88,6 +88,18 @@ def test_a_grid_too_large_for_memory_is_refused_and_an_axis_zone_to_1_ends_there
     assert abs(uniform[0] * 32 - 1.0) < 0.05  # the zone's end rounded to whole cells of 1/32
 
 
+def test_odd_python_values_get_the_groups_own_message():
+    """An int beyond any float raised OverflowError, an array where a choice goes numpy's
+    "truth value of an array is ambiguous" (a hostile review): each is the group's ValueError."""
+    from solver import Physics
+
+    with pytest.raises(ValueError, match=re.escape("St (Stokes number) is a number beyond")):
+        Physics(St=10**400, eps=0.01)
+    with pytest.raises(ValueError, match="cavitation .* must be one of"):
+        Physics(St=10.0, eps=0.01, Pi=1.0, cavitation=np.array(["jfo", "off"]))
+    assert Physics(St=10.0, eps=0.01, Pi=1.0, cavitation=np.str_("jfo")).cavitation == "jfo"
+
+
 def _ehd(*args):
     return subprocess.run([sys.executable, "-m", "pipeline.cli", *args], capture_output=True,
                           text=True, timeout=300)

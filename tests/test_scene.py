@@ -748,3 +748,18 @@ def test_settling_two_equal_spheres_is_refused_for_the_right_reason():
 
     with pytest.raises(ValueError, match="equal ones together and never closer"):
         load_scene(str(EXAMPLES / "glass_beads_water.toml"), {"approach_speed": "settling"})
+
+
+def test_run_scene_of_a_scene_given_v0_0_says_what_to_give():
+    """``dataclasses.replace(scene, v0=0.0)`` (the pattern of examples/scene_in_python.py) made
+    ``run_scene`` fail formatting its own message ("unsupported format string passed to
+    NoneType"): now a ValueError that says to give a positive v0."""
+    import dataclasses
+    from pathlib import Path
+
+    from pipeline.scenes.commands import load_scene
+
+    scene = load_scene(str(Path(__file__).resolve().parents[1] / "examples"
+                           / "glass_beads_water.toml"))
+    with pytest.raises(ValueError, match="v0 = 0: the spheres never reach x0.*positive v0"):
+        run_scene(dataclasses.replace(scene, v0=0.0), accuracy="fast")

@@ -251,6 +251,9 @@ def run_scene(scene: Scene, accuracy: str = "standard", sensitivity_solves: bool
     from ..environment import compile_notice
 
     if scene.stops_outside:  # no film collision to solve (a ZeroDivisionError before)
+        if scene.approach_speed is None:  # v0 = 0 given (dataclasses.replace), not the outer flow's
+            raise ValueError("v0 = 0: the spheres never reach x0, and there is no collision to "
+                             "solve; give a positive v0 (a speed in m/s, or with its units)")
         raise ValueError(f"the outer flow stops the spheres before x0 (approach speed "
                          f"{scene.approach_speed:.4g} m/s): they stick without a film collision; "
                          "stopped_result(scene) gives the report ehd scene prints for it")
