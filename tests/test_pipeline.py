@@ -359,6 +359,9 @@ def test_figures_of_a_store_whose_every_scene_failed_say_so_and_open_results_tak
 def test_open_results_on_a_missing_store(tmp_path):
     with pytest.raises(FileNotFoundError, match="no sweep store"):
         open_results(tmp_path / "nothing.zarr")
+    # '/' raised "PosixPath('/') has an empty name" (a hostile review)
+    with pytest.raises(FileNotFoundError, match="root folder: no sweep store"):
+        open_results("/")
 
 
 # ---- crash safety -------------------------------------------------------------------------------

@@ -133,6 +133,10 @@ def open_results(path, check: bool = True, **open_kwargs):
     from .integrity import POLL_SECONDS, READ_TRIES, changed_since, manifest_token
 
     path = Path(path)
+    if unnamed(path):  # '/', '.', '..': a store is read by its own name (ehd status does so too)
+        path = Path(os.path.realpath(path))
+        if unnamed(path):
+            raise FileNotFoundError(f"{str(path)!r} is the root folder: no sweep store there")
     for attempt in range(READ_TRIES):
         before = manifest_token(path)
         if check:
