@@ -660,7 +660,7 @@ def test_a_path_table_says_where_the_physics_changes(capsys):
     def row(physics, sticks=False):
         return {"St": 1.0, "St_L": 1.0, "eps": 1e-4, "v0_m_s": 0.1, "approach_speed_m_s": 0.2,
                 "e_wet": 0.0 if sticks else 0.5, "e_far": 0.0 if sticks else 0.4,
-                "sticks": sticks, "warning_checks": "", "physics": physics}
+                "sticks": sticks, "warning_checks": "", "physics": physics, "status": "ok"}
 
     _print_rows([row("classic film", sticks=True), row("classic film"), row("jfo cavitation")],
                 [])
