@@ -588,6 +588,10 @@ def test_cli_sweep_status_and_exit_codes(tmp_path, capsys):
     assert main(["sweep", str(path), "--executor", "serial"]) == 3
     out = capsys.readouterr().out
     assert "failed           1" in out and "rigid-only       1" in out and "--retry-failed" in out
+    # retried, it fails again (the same numerics): the summary no longer advises a retry
+    assert main(["sweep", str(path), "--executor", "serial", "--retry-failed"]) == 3
+    out = capsys.readouterr().out
+    assert "--retry-failed" not in out and "failed again on this retry" in out
     assert main(["status", str(tmp_path / "f.zarr")]) == 0
     out = capsys.readouterr().out
     assert "max_steps 1" in out and "St=20" in out and "done           1" in out

@@ -48,6 +48,7 @@ class Summary:
     done: int = 0  # stored as ok
     failed: int = 0  # stored as failed (this run or before)
     premise_failed: int = 0  # of those, start_deformed: the model's premise, the same on a retry
+    retried: bool = False  # this run reran the failed scenes (--retry-failed)
     not_run: int = 0  # still missing (an interrupted run)
     repaired: int = 0  # damaged cells found when the store was opened (recomputed if in the grid)
     repaired_coords: tuple = ()  # damaged coordinates rewritten from the store's copy
@@ -95,7 +96,10 @@ class Summary:
         if self.premise_failed:
             lines.append(f"  {self.premise_failed} of the failed are start_deformed: eps is not "
                          "small for their St, the model's premise (a retry gives the same)")
-        if self.failed > self.premise_failed:
+        if self.failed > self.premise_failed and self.retried:  # a solve gives the same again
+            lines.append("  these failed again on this retry, as the same numerics will each "
+                         "time: ehd status lists their reasons")
+        elif self.failed > self.premise_failed:
             lines.append("  rerun only the failed scenes with --retry-failed")
         return "\n".join(lines)
 
@@ -162,7 +166,7 @@ def run_sweep(sweep, *, store=None, runner: str | None = DEFAULT_RUNNER, workers
         runner_kw["connect_seconds"] = connect_seconds
     with SweepStore.open(sweep, store, add_sweep=add_sweep, **kwargs) as st:
         summary = Summary(name=sweep.name, store=st.shown, shape=sweep.shape,
-                          axes=sweep.axis_names)
+                          axes=sweep.axis_names, retried=bool(retry_failed))
         cells, todo = _plan(st, sweep, summary, retry_failed, progress)
         if todo and sweep.fast_path and solve is solve_scene:
             solve = _master_solve(sweep, progress)
