@@ -188,8 +188,8 @@ def write_all(contents: dict, what: str) -> list[Path]:
 
 class _Claims:
     """What the code inside one open ``guarded_dir`` said it writes: each file with the
-    temporary it is written to (a hidden name beside it, its suffix kept), and the folders that
-    did not exist, made for them."""
+    temporary it is written to (``temporary_paths``), and the folders that did not exist, made
+    for them."""
 
     def __init__(self, folder: Path):
         self.files: dict = {}
@@ -198,8 +198,7 @@ class _Claims:
 
     def add(self, path: Path) -> Path:
         self.folders += [p for p in path.parents if not p.exists() and p not in self.folders]
-        return self.files.setdefault(
-            path, path.with_name(f".{path.stem}.tmp-{os.getpid()}{path.suffix}"))
+        return self.files.setdefault(path, temporary_paths(path)[0])
 
     def target(self, filename):
         """The claimed file whose temporary is ``filename`` (an error's), else ``filename``."""
@@ -236,8 +235,8 @@ def claim(path) -> Path:
     """The running command is about to write the file ``path`` (a figure, a table, a stamp)
     into a folder that ``guarded_dir`` guards: returns the name to write it to, a temporary
     that replaces ``path`` once the command completes (should it fail, the temporary is removed
-    and ``path`` stays as it was). ``path`` itself outside a guarded_dir. Write it in the format
-    its own name says (the temporary keeps the suffix; matplotlib: ``format=``)."""
+    and ``path`` stays as it was). ``path`` itself outside a guarded_dir. Name the format when
+    writing it (matplotlib: ``format=``): the temporary's name does not end in ``path``'s."""
     if _CLAIMS:
         return _CLAIMS[-1].add(Path(path).absolute())
     return Path(path)

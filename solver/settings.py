@@ -128,9 +128,15 @@ def _check_halves(numerics: Numerics) -> None:
             f"{numerics.max_rel:g})")
 
 
+# the settings that shape the radial grid (integration/radii.py: reference_radii's arguments)
+_GRID = ("n_inner", "axis_ratio", "axis_extent", "stretch", "outer_extent", "max_rel")
+
+
 def resolve(accuracy: str = "standard", **overrides) -> Numerics:
     """The preset ``accuracy`` with explicit overrides applied and checked."""
     import numpy as np
+
+    from .physics import is_real_number
 
     if not isinstance(accuracy, str) or accuracy not in PRESETS:
         raise ValueError(f"accuracy must be one of {sorted(PRESETS)}, got {accuracy!r}")
@@ -147,7 +153,7 @@ def resolve(accuracy: str = "standard", **overrides) -> Numerics:
         if name not in _BOUNDS:
             valid = sorted([*_BOUNDS, "save_profiles", "extrapolate"])
             raise ValueError(f"unknown numerical setting {name!r}; valid settings: {valid}")
-        if isinstance(value, (bool, np.bool_, str)):
+        if not is_real_number(value):
             # true is 1 and "1e-4" a number to float(): max_order = true ran BDF1 unannounced
             raise ValueError(f"{name} must be a number, got {value!r}")
         lo, hi = _BOUNDS[name]
@@ -166,9 +172,8 @@ def resolve(accuracy: str = "standard", **overrides) -> Numerics:
             "the coupled solution hands back only once the deformation has relaxed below the "
             "level at which it took over"
         )
-    if clean:  # the grid these settings make (a preset's is known to be fine)
+    if clean.keys() & set(_GRID):  # the grid these settings make (a preset's is known fine)
         from .integration.radii import reference_radii
 
-        reference_radii(numerics.n_inner, numerics.axis_ratio, numerics.axis_extent,
-                        numerics.stretch, numerics.outer_extent, numerics.max_rel)
+        reference_radii(*(getattr(numerics, name) for name in _GRID))
     return numerics

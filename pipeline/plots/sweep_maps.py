@@ -149,7 +149,8 @@ def update_figures(ds, out, store=None, state=None) -> tuple[list, bool]:
     expected = [out / f"{n}{_suffix(extra)}.{f}" for extra, _ in planes(ds) for n in FIGURES
                 for f in FORMATS] + [out / f"{n}.{f}" for n, _ in axis_figures(ds)
                                      for f in FORMATS] + [out / CSV_NAME]
-    if read_stamp(out).get("fingerprint") == key and all(p.is_file() for p in expected):
+    last = read_stamp(out)
+    if last.get("fingerprint") == key and all(p.is_file() for p in expected):
         if state is not None:  # the same figures: record the store's file state for next time
             claim(stamp).write_text(stamp_text(key, state, expected))
         return expected, False
@@ -157,7 +158,7 @@ def update_figures(ds, out, store=None, state=None) -> tuple[list, bool]:
     # a render cut short must not leave a valid stamp behind (in a guarded_dir the old figures
     # and stamp stay as they were); the figures of the last render that this one does not draw
     # (a store that gained an axis names them anew) go with it
-    for name in read_stamp(out).get("files") or []:
+    for name in last.get("files") or []:
         if isinstance(name, str) and out / os.path.basename(name) not in expected:
             retire(out / os.path.basename(name))
     retire(stamp)

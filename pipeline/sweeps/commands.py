@@ -138,17 +138,11 @@ def opening_store(store: str, open_fn,
     """``open_fn(store)`` with its failures as one line (exit 2): a missing store or a folder
     that is none says so, with ``fix``; any other unreadable one "cannot be opened as an ehd
     sweep store"; an ``EhdError`` (a damaged store: exit 5) passes unchanged."""
-    import os
-
     from ..errors import EhdError, UsageError
-    from .store import unnamed
+    from .store import named_store
 
-    if unnamed(store):  # '.' inside a store: read the store by its own name
-        store = os.path.realpath(store)
-        if unnamed(store):
-            raise UsageError(f"{store!r} is the root folder, not a sweep store; {fix}")
     try:
-        return open_fn(store)
+        return open_fn(str(named_store(store)))  # '.' inside a store: the store by its name
     except EhdError:
         raise
     except FileNotFoundError as exc:

@@ -79,6 +79,17 @@ def unnamed(path) -> bool:
     return Path(path).name in ("", "..")
 
 
+def named_store(path) -> Path:
+    """``path`` by its own name: a store named by its place (``.``, ``..``, inside it) is read as
+    the folder it names; FileNotFoundError where that is the root folder."""
+    path = Path(path)
+    if unnamed(path):
+        path = Path(os.path.realpath(path))
+        if unnamed(path):
+            raise FileNotFoundError(f"{str(path)!r} is the root folder: no sweep store there")
+    return path
+
+
 def _lock_path(path: Path) -> Path:
     path = Path(os.path.realpath(path))
     return path.with_name(path.name + ".lock")
@@ -132,11 +143,7 @@ def open_results(path, check: bool = True, **open_kwargs):
 
     from .integrity import POLL_SECONDS, READ_TRIES, changed_since, manifest_token
 
-    path = Path(path)
-    if unnamed(path):  # '/', '.', '..': a store is read by its own name (ehd status does so too)
-        path = Path(os.path.realpath(path))
-        if unnamed(path):
-            raise FileNotFoundError(f"{str(path)!r} is the root folder: no sweep store there")
+    path = named_store(path)
     for attempt in range(READ_TRIES):
         before = manifest_token(path)
         if check:
